@@ -1,0 +1,120 @@
+//! Flags as typed by the user: parsed and checked, no I/O.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use deepfield::field::{Channel, ChannelSet};
+use deepfield::num::Decimal;
+
+/// Escape-time and distance-estimate renderer for the Mandelbrot and Julia sets.
+#[derive(Debug, Parser)]
+#[command(name = "deepfield", version, about, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a scene to PNG (and optionally its raw data to EXR).
+    Render(Box<RenderArgs>),
+}
+
+/// `deepfield render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene to render: a TOML scene file, or a PNG written by deepfield (its embedded scene).
+    /// Without one, flags alone describe the scene (default: the whole Mandelbrot set).
+    pub scene: Option<PathBuf>,
+    /// Output PNG (default: the scene's name with .png, in the current folder).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Also write the raw per-pixel data as OpenEXR (channels: see --channels).
+    #[arg(long, value_name = "FILE")]
+    pub exr: Option<PathBuf>,
+    /// Formula.
+    #[arg(long, value_parser = ["mandelbrot", "julia"])]
+    pub formula: Option<String>,
+    /// Julia parameter c, as RE,IM (decimal strings); implies --formula julia.
+    #[arg(long, value_name = "RE,IM", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub julia_c: Option<[String; 2]>,
+    /// View centre, as RE,IM (decimal strings, any precision).
+    #[arg(long, value_name = "RE,IM", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub center: Option<[String; 2]>,
+    /// Zoom: the image height spans 4/ZOOM of the plane.
+    #[arg(long, value_name = "Z", value_parser = parse_decimal, conflicts_with = "radius")]
+    pub zoom: Option<String>,
+    /// Half the image height in the plane (= 2/zoom).
+    #[arg(long, value_name = "R", value_parser = parse_decimal)]
+    pub radius: Option<String>,
+    /// Image size in pixels, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Maximum iterations (1 ..= 4294967294).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=u32::MAX as u64 - 1))]
+    pub max_iter: Option<u64>,
+    /// Escape radius (>= 2).
+    #[arg(long, value_name = "R", value_parser = parse_escape)]
+    pub escape_radius: Option<f64>,
+    /// Supersampling: N x N samples per pixel, averaged in linear light (1 ..= 16).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=16))]
+    pub aa: Option<u64>,
+    /// Worker threads (default: one per core). Output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Engine: auto picks the cheapest exact enough for the view.
+    #[arg(long, value_parser = ["auto", "f64"])]
+    pub engine: Option<String>,
+    /// Palette for every layer that uses one: a built-in name or a palette file.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub palette: Option<String>,
+    /// EXR channels, comma-separated: N, NF, T, DEX, DEY, TRAPS (default N,NF,T,DEX,DEY).
+    #[arg(long, value_name = "LIST", value_parser = parse_channels)]
+    pub channels: Option<ChannelSet>,
+    /// PNG bits per channel.
+    #[arg(long, value_parser = ["8", "16"])]
+    pub bits: Option<String>,
+    /// Print engine, precision, pixels, iterations, time and speed when done.
+    #[arg(long)]
+    pub stats: bool,
+    /// Write the same statistics as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_decimal(s: &str) -> Result<String, String> {
+    Decimal::parse(s).map(|d| d.text().to_string()).map_err(|e| e.to_string())
+}
+
+fn parse_pair(s: &str) -> Result<[String; 2], String> {
+    let (re, im) = s.split_once(',').ok_or_else(|| format!("`{s}` is not RE,IM (two numbers separated by a comma)"))?;
+    Ok([parse_decimal(re)?, parse_decimal(im)?])
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not WIDTHxHEIGHT with both between 1 and {}", deepfield::scene::MAX_SIDE);
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    let max = deepfield::scene::MAX_SIDE as u32;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn parse_escape(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(r) if r.is_finite() && (2.0..=1e150).contains(&r) => Ok(r),
+        _ => Err(format!("`{s}` is not an escape radius between 2 and 1e150")),
+    }
+}
+
+fn parse_channels(s: &str) -> Result<ChannelSet, String> {
+    s.split(',').filter(|p| !p.trim().is_empty()).map(|p| p.parse::<Channel>()).collect()
+}

@@ -1,0 +1,67 @@
+//! The command line: what the user typed ([`args`]), turned into scenes and runs.
+//!
+//! Two layers, as in ripgrep: [`args`] is pure parsing and validation of flags (no I/O);
+//! [`render`] builds the scene and the output writers from them and runs the library.
+//! Errors carry an exit code: 2 for bad input of any kind (flags, scene files, missing
+//! files, unwritable outputs, a view the engines cannot address), 1 for failures while
+//! working, 130 for a cancelled run. `main` prints `error: {:#}` and never panics on input.
+
+mod args;
+mod render;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+/// A failure with the exit code it maps to.
+#[derive(Debug)]
+pub enum Failure {
+    /// Bad input: exit code 2.
+    Input(anyhow::Error),
+    /// Failure while working: exit code 1.
+    Runtime(anyhow::Error),
+    /// Cancelled by the user: exit code 130.
+    Cancelled,
+}
+
+impl Failure {
+    fn input(e: impl Into<anyhow::Error>) -> Self {
+        Failure::Input(e.into())
+    }
+}
+
+/// Entry point of the binary.
+pub fn main() -> ExitCode {
+    let cli = match args::Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    let result = match cli.command {
+        args::Command::Render(r) => render::run(*r),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Runtime(e)) => {
+            if is_broken_pipe(&e) {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+        Err(Failure::Cancelled) => {
+            eprintln!("cancelled; no output was written");
+            ExitCode::from(130)
+        }
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}

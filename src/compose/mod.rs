@@ -1,0 +1,210 @@
+//! Layer stacks: colourings composited in order with tiny-skia, then downsampled.
+//!
+//! Blending happens where tiny-skia blends: on premultiplied 8-bit sRGB-encoded pixels,
+//! with the separable and non-separable modes of the W3C compositing spec (as CSS and
+//! image editors blend). A stack of a single opaque "normal" layer needs no blending and
+//! stays in linear f32 end to end, which is what keeps 16-bit PNGs truly 16-bit. The final
+//! downsampling of supersampled pixels always averages in linear light.
+
+use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
+
+use crate::coloring::Coloring;
+use crate::field::{Needs, Planes};
+use crate::palette::color::{linear_to_srgb, srgb_to_linear};
+use crate::trap::Trap;
+
+/// How a layer combines with what is below it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BlendMode {
+    /// Source over.
+    #[default]
+    Normal,
+    /// Multiply.
+    Multiply,
+    /// Screen.
+    Screen,
+    /// Overlay.
+    Overlay,
+    /// Darken.
+    Darken,
+    /// Lighten.
+    Lighten,
+    /// Difference.
+    Difference,
+    /// Soft light.
+    SoftLight,
+    /// Hard light.
+    HardLight,
+    /// Colour dodge.
+    ColorDodge,
+    /// Colour burn.
+    ColorBurn,
+    /// Exclusion.
+    Exclusion,
+    /// Additive.
+    Plus,
+}
+
+impl BlendMode {
+    fn skia(self) -> tiny_skia::BlendMode {
+        use tiny_skia::BlendMode as B;
+        match self {
+            BlendMode::Normal => B::SourceOver,
+            BlendMode::Multiply => B::Multiply,
+            BlendMode::Screen => B::Screen,
+            BlendMode::Overlay => B::Overlay,
+            BlendMode::Darken => B::Darken,
+            BlendMode::Lighten => B::Lighten,
+            BlendMode::Difference => B::Difference,
+            BlendMode::SoftLight => B::SoftLight,
+            BlendMode::HardLight => B::HardLight,
+            BlendMode::ColorDodge => B::ColorDodge,
+            BlendMode::ColorBurn => B::ColorBurn,
+            BlendMode::Exclusion => B::Exclusion,
+            BlendMode::Plus => B::Plus,
+        }
+    }
+}
+
+/// A colouring with its blend mode and opacity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layer {
+    /// What it paints.
+    pub coloring: Coloring,
+    /// How it blends.
+    pub blend: BlendMode,
+    /// Its opacity in [0, 1].
+    pub opacity: f32,
+}
+
+/// An ordered stack of layers over an opaque background.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stack {
+    /// Bottom first.
+    pub layers: Vec<Layer>,
+    /// Background colour, linear RGB.
+    pub background: [f32; 3],
+}
+
+impl Stack {
+    /// Everything the layers read.
+    pub fn needs(&self, traps: &[Trap]) -> Needs {
+        let mut needs = Needs::default();
+        for l in &self.layers {
+            let n = l.coloring.needs(traps);
+            needs.nf |= n.nf;
+            needs.t |= n.t;
+            needs.de |= n.de;
+        }
+        needs.traps = traps.to_vec();
+        needs
+    }
+
+    /// Composites the stack for every sample: opaque linear RGB.
+    pub fn composite(&self, planes: &Planes, aa: u32) -> Vec<[f32; 3]> {
+        let bg = self.background;
+        if let [layer] = self.layers.as_slice()
+            && layer.blend == BlendMode::Normal
+            && layer.opacity == 1.0
+        {
+            return layer
+                .coloring
+                .paint(planes, aa)
+                .into_iter()
+                .map(|c| {
+                    let t = 1.0 - c[3];
+                    [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t]
+                })
+                .collect();
+        }
+        let (w, h) = (planes.width as u32, planes.rows as u32);
+        let Some(mut base) = Pixmap::new(w, h) else {
+            return vec![bg; planes.len()];
+        };
+        let bg8 = tiny_skia::Color::from_rgba(linear_to_srgb(bg[0]), linear_to_srgb(bg[1]), linear_to_srgb(bg[2]), 1.0)
+            .unwrap_or(tiny_skia::Color::BLACK);
+        base.fill(bg8);
+        let mut layer_pixmap = Pixmap::new(w, h).expect("same size as the base");
+        for layer in &self.layers {
+            let colours = layer.coloring.paint(planes, aa);
+            for (dst, c) in layer_pixmap.pixels_mut().iter_mut().zip(&colours) {
+                *dst = to_premultiplied_srgb8(*c);
+            }
+            let paint = PixmapPaint {
+                opacity: layer.opacity,
+                blend_mode: layer.blend.skia(),
+                quality: tiny_skia::FilterQuality::Nearest,
+            };
+            base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
+        }
+        base.pixels()
+            .iter()
+            .map(|p| {
+                let c = p.demultiply();
+                [
+                    srgb_to_linear(c.red() as f32 / 255.0),
+                    srgb_to_linear(c.green() as f32 / 255.0),
+                    srgb_to_linear(c.blue() as f32 / 255.0),
+                ]
+            })
+            .collect()
+    }
+}
+
+/// Linear premultiplied RGBA to tiny-skia's premultiplied sRGB-encoded bytes.
+fn to_premultiplied_srgb8(c: [f32; 4]) -> PremultipliedColorU8 {
+    let a = c[3].clamp(0.0, 1.0);
+    if a <= 0.0 {
+        return PremultipliedColorU8::TRANSPARENT;
+    }
+    let a8 = (a * 255.0).round();
+    let enc = |v: f32| ((linear_to_srgb(v / a) * a8).round()).min(a8) as u8;
+    PremultipliedColorU8::from_rgba(enc(c[0]), enc(c[1]), enc(c[2]), a8 as u8)
+        .unwrap_or(PremultipliedColorU8::TRANSPARENT)
+}
+
+/// Averages `aa x aa` blocks of samples (`width` samples per row) in linear light.
+pub fn downsample(samples: &[[f32; 3]], width: usize, aa: usize) -> Vec<[f32; 3]> {
+    if aa == 1 {
+        return samples.to_vec();
+    }
+    let rows = samples.len() / width;
+    let (ow, oh) = (width / aa, rows / aa);
+    let scale = 1.0 / (aa * aa) as f32;
+    let mut out = vec![[0.0f32; 3]; ow * oh];
+    for (j, out_row) in out.chunks_mut(ow).enumerate() {
+        for sj in 0..aa {
+            let row = &samples[(j * aa + sj) * width..][..width];
+            for (i, o) in out_row.iter_mut().enumerate() {
+                for s in &row[i * aa..i * aa + aa] {
+                    o[0] += s[0];
+                    o[1] += s[1];
+                    o[2] += s[2];
+                }
+            }
+        }
+        for o in out_row.iter_mut() {
+            *o = [o[0] * scale, o[1] * scale, o[2] * scale];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn downsample_averages_in_linear_light() {
+        let s = vec![[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        assert_eq!(downsample(&s, 2, 2), vec![[0.25, 0.25, 0.25]]);
+    }
+
+    #[test]
+    fn premultiplied_conversion_is_valid() {
+        let p = to_premultiplied_srgb8([0.1, 0.2, 0.3, 0.5]);
+        assert!(p.red() <= p.alpha() && p.alpha() == 128);
+        assert_eq!(to_premultiplied_srgb8([0.0; 4]), PremultipliedColorU8::TRANSPARENT);
+    }
+}

@@ -1,0 +1,45 @@
+//! The sample raster: which point of the plane each sample stands for (DESIGN.md convention).
+
+/// A raster of samples over a view: sample (i, j) sits at the centre of its cell,
+/// `x = cx + radius * (2(i + 0.5) - width) / height`, `y = cy - radius * (2(j + 0.5) - height) / height`.
+/// With NxN supersampling the grid is simply N times finer than the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleGrid {
+    /// View centre (rounded to f64).
+    pub center: [f64; 2],
+    /// Half the height of the view in the plane.
+    pub radius: f64,
+    /// Samples per row.
+    pub width: u32,
+    /// Sample rows.
+    pub height: u32,
+}
+
+impl SampleGrid {
+    /// The point of sample (i, j).
+    #[inline]
+    pub fn point(&self, i: u32, j: u32) -> [f64; 2] {
+        let h = self.radius / self.height as f64;
+        let ox = (2.0 * i as f64 + 1.0 - self.width as f64) * h;
+        let oy = (2.0 * j as f64 + 1.0 - self.height as f64) * h;
+        [self.center[0] + ox, self.center[1] - oy]
+    }
+
+    /// Distance between neighbouring samples in the plane.
+    pub fn spacing(&self) -> f64 {
+        2.0 * self.radius / self.height as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_centres_follow_the_convention() {
+        let g = SampleGrid { center: [0.0, 0.0], radius: 2.0, width: 4, height: 2 };
+        assert_eq!(g.point(0, 0), [-3.0, 1.0]);
+        assert_eq!(g.point(3, 1), [3.0, -1.0]);
+        assert_eq!(g.spacing(), 2.0);
+    }
+}

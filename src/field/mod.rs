@@ -1,0 +1,161 @@
+//! Per-sample raw data (N, NF, T, DEX/DEY, trap planes) and the f64 kernels that fill it.
+//!
+//! The field computes only what is asked of it ([`Needs`]): escape counts always; the final
+//! z only when NF or T is wanted (it is free once the orbit is done); the derivative only for
+//! distance estimates; traps only when a layer or channel uses them. Orbits without traps go
+//! through the vectorised kernel ([`simd`]); orbits with traps go through the scalar kernel
+//! ([`scalar`]), which shares the exact step functions so both agree bit for bit.
+
+mod grid;
+mod planes;
+pub mod quantities;
+pub mod scalar;
+pub mod simd;
+
+use std::sync::atomic::AtomicBool;
+
+pub use grid::SampleGrid;
+pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
+
+use crate::formula::Family;
+use crate::trap::Trap;
+
+/// N of a sample that never escaped within the iteration limit.
+pub const INTERIOR: u32 = u32::MAX;
+
+/// The work was cancelled before it finished.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("cancelled")]
+pub struct Cancelled;
+
+/// What one orbit ended with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    /// Escape index, or [`INTERIOR`].
+    pub n: u32,
+    /// z_n (zero for interior orbits).
+    pub z: [f64; 2],
+    /// dz_n when the derivative was tracked (zero otherwise and for interior orbits).
+    pub dz: [f64; 2],
+}
+
+impl Orbit {
+    /// The record of an orbit that never escaped.
+    pub fn interior() -> Self {
+        Self { n: INTERIOR, z: [0.0; 2], dz: [0.0; 2] }
+    }
+
+    /// Iterations a loop started at index `start` performed to reach this end.
+    pub fn iterations_from(&self, start: u32, max_iter: u32) -> u64 {
+        let end = if self.n == INTERIOR { max_iter } else { self.n };
+        end.saturating_sub(start) as u64
+    }
+}
+
+/// Parameters of the orbit loop itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbitParams {
+    /// Mandelbrot or Julia.
+    pub family: Family,
+    /// Largest iteration index examined.
+    pub max_iter: u32,
+    /// Escape radius R.
+    pub escape_radius: f64,
+    /// Track dz for distance estimates.
+    pub derivative: bool,
+}
+
+/// What the field must compute.
+#[derive(Debug, Clone, Default)]
+pub struct Needs {
+    /// Smooth iteration fraction.
+    pub nf: bool,
+    /// Final phase.
+    pub t: bool,
+    /// Distance estimate vector.
+    pub de: bool,
+    /// Orbit traps, one plane each.
+    pub traps: Vec<Trap>,
+}
+
+impl Needs {
+    /// Adds everything `other` needs.
+    pub fn merge(&mut self, other: &Needs) {
+        self.nf |= other.nf;
+        self.t |= other.t;
+        self.de |= other.de;
+        self.traps.extend(other.traps.iter().cloned());
+    }
+}
+
+/// Everything a strip computation needs to know.
+#[derive(Debug, Clone)]
+pub struct FieldParams {
+    /// The orbit loop.
+    pub orbit: OrbitParams,
+    /// The quantities to produce.
+    pub needs: Needs,
+    /// Where samples lie.
+    pub grid: SampleGrid,
+}
+
+impl FieldParams {
+    /// Builds the parameters; the derivative is tracked exactly when distance is needed.
+    pub fn new(family: Family, max_iter: u32, escape_radius: f64, needs: Needs, grid: SampleGrid) -> Self {
+        let orbit = OrbitParams { family, max_iter, escape_radius, derivative: needs.de };
+        Self { orbit, needs, grid }
+    }
+}
+
+/// Raw planes of a band of sample rows, and the iterations it took.
+#[derive(Debug, Clone)]
+pub struct Strip {
+    /// The planes, `grid.width` wide.
+    pub planes: Planes,
+    /// Iterations performed by the orbit loops (skipped samples count zero).
+    pub iterations: u64,
+}
+
+/// Computes sample rows `rows` of the grid.
+pub fn compute_strip(
+    params: &FieldParams,
+    rows: std::ops::Range<u32>,
+    cancel: &AtomicBool,
+) -> Result<Strip, Cancelled> {
+    let grid = &params.grid;
+    let width = grid.width as usize;
+    let count = width * rows.len();
+    let mut planes = Planes::new(width, rows.len(), &params.needs);
+    let mut points = Vec::with_capacity(count);
+    for j in rows {
+        for i in 0..grid.width {
+            points.push(grid.point(i, j));
+        }
+    }
+    let ln_r = params.orbit.escape_radius.ln();
+    let spacing = grid.spacing();
+    let mut orbits = vec![Orbit::interior(); count];
+    let iterations = if params.needs.traps.is_empty() {
+        simd::iterate(&params.orbit, &points, &mut orbits, cancel)?
+    } else {
+        scalar::iterate_with_traps(&params.orbit, &params.needs.traps, &points, &mut orbits, &mut planes.traps, cancel)?
+    };
+    for (k, orbit) in orbits.iter().enumerate() {
+        planes.n[k] = orbit.n;
+        if orbit.n == INTERIOR {
+            continue;
+        }
+        if params.needs.nf {
+            planes.nf[k] = quantities::smooth_fraction(orbit.z, ln_r);
+        }
+        if params.needs.t {
+            planes.t[k] = quantities::phase(orbit.z);
+        }
+        if params.needs.de {
+            let [dx, dy] = quantities::distance_vector(orbit.z, orbit.dz, spacing);
+            planes.dex[k] = dx;
+            planes.dey[k] = dy;
+        }
+    }
+    Ok(Strip { planes, iterations })
+}

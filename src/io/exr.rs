@@ -1,0 +1,260 @@
+//! Streaming OpenEXR output of the raw planes, channels named as in KF2+ / Fraktaler-3.
+//!
+//! Scan-line blocks of 16 rows, ZIP-compressed. Blocks are built and compressed by the
+//! render workers ([`ExrWriter::encode`], parallel) and written in order by a dedicated
+//! thread that owns the file, because the exr crate's block writer drives the file from a
+//! closure. The scene TOML and the engine's choice go into the header as text attributes.
+
+use std::path::Path;
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+use ::exr::block::chunk::Chunk;
+use ::exr::block::{BlockIndex, UncompressedBlock};
+use ::exr::math::Vec2;
+use ::exr::meta::attribute::{AttributeValue, ChannelDescription, SampleType, Text};
+use ::exr::meta::header::Header;
+use ::exr::meta::{BlockDescription, Headers};
+use ::exr::prelude::{Compression, LineOrder, SmallVec};
+
+use super::IoError;
+use super::atomic::{AtomicFile, Tail, TailError, take_tail_error};
+use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
+use crate::trap::Trap;
+
+/// Header attribute holding the scene TOML.
+pub const SCENE_ATTRIBUTE: &str = "deepfield.scene";
+/// Header attribute saying which engine ran and why.
+pub const ENGINE_ATTRIBUTE: &str = "deepfield.engine";
+const BLOCK_ROWS: usize = 16;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    N,
+    NF,
+    T,
+    DEX,
+    DEY,
+    TrapDistance(usize),
+    TrapColor(usize, usize),
+}
+
+/// Which channels a file holds, in the (sorted) order EXR stores them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExrLayout {
+    channels: Vec<(String, Source)>,
+}
+
+impl ExrLayout {
+    /// Channels for a channel set; trap channels (`trapK.D`, or `trapK.R/G/B/A` for bitmap
+    /// traps) are included when the set holds [`Channel::Traps`].
+    pub fn new(set: ChannelSet, traps: &[Trap]) -> Self {
+        let mut channels = Vec::new();
+        for c in set.iter() {
+            match c {
+                Channel::N => channels.push(("N".to_string(), Source::N)),
+                Channel::NF => channels.push(("NF".into(), Source::NF)),
+                Channel::T => channels.push(("T".into(), Source::T)),
+                Channel::DEX => channels.push(("DEX".into(), Source::DEX)),
+                Channel::DEY => channels.push(("DEY".into(), Source::DEY)),
+                Channel::Traps => {
+                    for (k, t) in traps.iter().enumerate() {
+                        match t {
+                            Trap::Geometric(_) => channels.push((format!("trap{k}.D"), Source::TrapDistance(k))),
+                            Trap::Bitmap(_) => {
+                                for (i, n) in ["R", "G", "B", "A"].iter().enumerate() {
+                                    channels.push((format!("trap{k}.{n}"), Source::TrapColor(k, i)));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        channels.sort_by(|a, b| a.0.cmp(&b.0));
+        Self { channels }
+    }
+
+    /// Channel names in file order.
+    pub fn names(&self) -> Vec<&str> {
+        self.channels.iter().map(|(n, _)| n.as_str()).collect()
+    }
+
+    fn header(&self, width: usize, height: usize, attributes: &[(&str, &str)]) -> Header {
+        let descs: SmallVec<[ChannelDescription; 5]> = self
+            .channels
+            .iter()
+            .map(|(name, src)| {
+                let ty = if *src == Source::N { SampleType::U32 } else { SampleType::F32 };
+                ChannelDescription::new(name.as_str(), ty, false)
+            })
+            .collect();
+        let mut header = Header::new(Text::from("deepfield"), Vec2(width, height), descs).with_encoding(
+            Compression::ZIP16,
+            BlockDescription::ScanLines,
+            LineOrder::Increasing,
+        );
+        for (k, v) in attributes {
+            header.own_attributes.other.insert(Text::from(*k), AttributeValue::Text(Text::from(*v)));
+        }
+        header
+    }
+}
+
+/// Writes the planes of a sample raster, strip by strip, top to bottom.
+pub struct ExrWriter {
+    sender: Option<mpsc::SyncSender<(usize, Chunk)>>,
+    thread: Option<JoinHandle<Result<(), String>>>,
+    tail_error: TailError,
+    file: Option<AtomicFile>,
+}
+
+/// Builds and compresses blocks for an [`ExrWriter`]; shareable across threads.
+#[derive(Debug, Clone)]
+pub struct ExrEncoder {
+    headers: Headers,
+    layout: ExrLayout,
+    width: usize,
+}
+
+impl ExrWriter {
+    /// Starts an EXR of `width` x `height` samples at `path`; returns the writer and the
+    /// encoder that prepares its blocks.
+    pub fn create(
+        path: &Path,
+        width: u32,
+        height: u32,
+        layout: ExrLayout,
+        scene_toml: &str,
+        engine: &str,
+    ) -> Result<(Self, ExrEncoder), IoError> {
+        if layout.channels.is_empty() {
+            return Err(IoError::new(path, "no channels to write (choose some with --channels)"));
+        }
+        let header = layout.header(
+            width as usize,
+            height as usize,
+            &[(SCENE_ATTRIBUTE, scene_toml), (ENGINE_ATTRIBUTE, engine)],
+        );
+        let headers: Headers = SmallVec::from_elem(header, 1);
+        let (file, out) = AtomicFile::create(path)?;
+        let (tail, tail_error) = Tail::new(out);
+        let (sender, receiver) = mpsc::sync_channel::<(usize, Chunk)>(64);
+        let thread_headers = headers.clone();
+        let thread = std::thread::spawn(move || {
+            ::exr::block::write(tail, thread_headers, true, |_meta, writer| {
+                use ::exr::block::writer::ChunksWriter;
+                for (index, chunk) in receiver {
+                    writer.write_chunk(index, chunk)?;
+                }
+                Ok(())
+            })
+            .map_err(|e| e.to_string())
+        });
+        let writer = Self { sender: Some(sender), thread: Some(thread), tail_error, file: Some(file) };
+        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+    }
+
+    /// Queues encoded blocks for writing.
+    pub fn write(&mut self, chunks: Vec<(usize, Chunk)>) -> Result<(), String> {
+        let sender = self.sender.as_ref().ok_or("EXR writer already finished")?;
+        for c in chunks {
+            if sender.send(c).is_err() {
+                return Err(self.stop().err().unwrap_or_else(|| "EXR writer stopped".into()));
+            }
+        }
+        Ok(())
+    }
+
+    fn stop(&mut self) -> Result<(), String> {
+        self.sender = None;
+        let result = match self.thread.take() {
+            Some(t) => t.join().unwrap_or_else(|_| Err("EXR writer thread panicked".into())),
+            None => Ok(()),
+        };
+        result?;
+        match take_tail_error(&self.tail_error) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Completes the file and moves it into place.
+    pub fn finish(mut self) -> Result<(), IoError> {
+        let file = self.file.take().expect("finish is called once");
+        if let Err(e) = self.stop() {
+            return Err(IoError::new(file.dest(), e));
+        }
+        file.commit_written()
+    }
+}
+
+impl Drop for ExrWriter {
+    fn drop(&mut self) {
+        // Let the writer thread end before the temporary file is removed.
+        let _ = self.stop();
+    }
+}
+
+impl ExrEncoder {
+    /// Builds and compresses the blocks of a strip whose first sample row is `row`
+    /// (a multiple of 16). Safe to call from many threads at once.
+    pub fn encode(&self, row: usize, planes: &Planes) -> Result<Vec<(usize, Chunk)>, String> {
+        let mut out = Vec::new();
+        let w = self.width;
+        for b0 in (0..planes.rows).step_by(BLOCK_ROWS) {
+            let lines = BLOCK_ROWS.min(planes.rows - b0);
+            let mut data = Vec::with_capacity(lines * w * 4 * self.layout.channels.len());
+            for line in b0..b0 + lines {
+                let r = line * w..(line + 1) * w;
+                for (_, src) in &self.layout.channels {
+                    match *src {
+                        Source::N => planes.n[r.clone()].iter().for_each(|v| data.extend_from_slice(&v.to_ne_bytes())),
+                        Source::NF => push_f32(&mut data, &planes.nf[r.clone()]),
+                        Source::T => push_f32(&mut data, &planes.t[r.clone()]),
+                        Source::DEX => push_f32(&mut data, &planes.dex[r.clone()]),
+                        Source::DEY => push_f32(&mut data, &planes.dey[r.clone()]),
+                        Source::TrapDistance(k) => match &planes.traps[k] {
+                            TrapPlane::Distance(d) => push_f32(&mut data, &d[r.clone()]),
+                            TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),
+                        },
+                        Source::TrapColor(k, i) => match &planes.traps[k] {
+                            TrapPlane::Color(c) => {
+                                c[r.clone()].iter().for_each(|p| data.extend_from_slice(&p[i].to_ne_bytes()))
+                            }
+                            TrapPlane::Distance(_) => push_f32(&mut data, &vec![0.0; w]),
+                        },
+                    }
+                }
+            }
+            let y = row + b0;
+            let block = UncompressedBlock {
+                index: BlockIndex {
+                    layer: 0,
+                    pixel_position: Vec2(0, y),
+                    pixel_size: Vec2(w, lines),
+                    level: Vec2(0, 0),
+                },
+                data,
+            };
+            let chunk = block.compress_to_chunk(&self.headers).map_err(|e| e.to_string())?;
+            out.push((y / BLOCK_ROWS, chunk));
+        }
+        Ok(out)
+    }
+}
+
+fn push_f32(data: &mut Vec<u8>, values: &[f32]) {
+    for v in values {
+        data.extend_from_slice(&v.to_ne_bytes());
+    }
+}
+
+/// The scene TOML stored in an EXR written by deepfield, if any.
+pub fn read_exr_scene(path: &Path) -> Result<Option<String>, IoError> {
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::new(path, e))?;
+    Ok(meta.headers.first().and_then(|h| match h.own_attributes.other.get(&Text::from(SCENE_ATTRIBUTE)) {
+        Some(AttributeValue::Text(t)) => Some(t.to_string()),
+        _ => None,
+    }))
+}

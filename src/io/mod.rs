@@ -1,0 +1,32 @@
+//! Files: PNG images carrying their scene, EXR raw data, bitmaps for traps, safe writes.
+//!
+//! Every output is written to a temporary file beside its destination and renamed into
+//! place only when complete ([`AtomicFile`]), so a failed or cancelled render never leaves
+//! a half-written file and never clobbers an existing one. Writers stream: they accept
+//! strips of rows in order and hold nothing more.
+
+mod atomic;
+mod bitmap;
+mod exr;
+mod png;
+
+pub use atomic::AtomicFile;
+pub use bitmap::load_bitmap;
+pub use exr::{ExrEncoder, ExrLayout, ExrWriter, read_exr_scene};
+pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene};
+
+/// An I/O failure with the path it concerns.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct IoError {
+    /// The file.
+    pub path: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl IoError {
+    pub(crate) fn new(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
+        Self { path: path.display().to_string(), message: message.to_string() }
+    }
+}

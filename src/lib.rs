@@ -1,0 +1,18 @@
+//! deepfield: escape-time and distance-estimate rasters of the Mandelbrot and Julia sets.
+//!
+//! The library is layered as DESIGN.md describes: numbers and maps at the bottom
+//! ([`num`], [`formula`]), raw per-sample data above them ([`field`], [`trap`]), colour on top
+//! of raw data ([`palette`], [`coloring`], [`compose`]), and scenes, rendering and files
+//! around it all ([`scene`], [`render`], [`io`]). The command line lives in the binary.
+
+pub mod coloring;
+pub mod compose;
+pub mod field;
+pub mod formula;
+pub mod io;
+pub mod num;
+pub mod palette;
+pub mod render;
+pub mod scene;
+pub mod source;
+pub mod trap;

@@ -1,0 +1,216 @@
+//! Rendering: a scene into ordered strips of pixels and raw planes, on a thread pool.
+//!
+//! The image is cut into strips of whole rows (tiles of full width, so that PNG and EXR
+//! writers can stream them). Strips are computed in parallel a window at a time and handed
+//! to the sink strictly in order, so memory grows with the window, not the image, and the
+//! bytes written never depend on the thread count: every sample is computed by the same
+//! code from the same inputs whichever thread runs it. The sink runs on its own thread so
+//! encoding overlaps computing. No I/O happens here; cancellation and progress come in as
+//! an atomic flag and a callback.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::compose;
+use crate::field::{self, Cancelled, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
+use crate::formula::Family;
+use crate::scene::{FamilySpec, Scene};
+
+/// Why a render did not complete.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Cancelled by the user.
+    #[error("cancelled")]
+    Cancelled,
+    /// No engine can address the view.
+    #[error("{0}")]
+    Engine(String),
+    /// The sink (an output writer) failed.
+    #[error("{0}")]
+    Sink(String),
+    /// The thread pool could not be built.
+    #[error("cannot start {0} worker threads")]
+    Threads(usize),
+}
+
+impl From<Cancelled> for RenderError {
+    fn from(_: Cancelled) -> Self {
+        RenderError::Cancelled
+    }
+}
+
+/// A band of finished output rows.
+#[derive(Debug)]
+pub struct RenderedStrip {
+    /// First output row.
+    pub row: u32,
+    /// Output rows in the strip.
+    pub rows: u32,
+    /// Output pixels, linear RGB, `width * rows` of them.
+    pub rgb: Vec<[f32; 3]>,
+    /// Raw planes of the strip's sample rows (`rows * aa` rows of `width * aa` samples).
+    pub planes: Planes,
+}
+
+/// What a render did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Stats {
+    /// Engine that ran.
+    pub engine: String,
+    /// Why it was chosen.
+    pub engine_reason: String,
+    /// Arithmetic precision of the orbit loop.
+    pub precision: String,
+    /// Instruction set the kernels ran with.
+    pub simd: String,
+    /// Output pixels.
+    pub pixels: u64,
+    /// Samples computed (pixels times aa^2).
+    pub samples: u64,
+    /// Iterations the orbit loops performed (skipped samples count zero).
+    pub iterations: u64,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// iterations / wall_seconds.
+    pub iterations_per_second: f64,
+    /// Worker threads.
+    pub threads: usize,
+}
+
+/// Options that are not part of the scene.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Options {
+    /// Worker threads (0: one per core).
+    pub threads: usize,
+    /// Raw channels wanted by an EXR output (empty: none).
+    pub exr_channels: ChannelSet,
+}
+
+/// Output rows per strip: sample rows a multiple of 16 (the EXR block height) and about
+/// 2^18 samples per strip.
+fn strip_rows(scene: &Scene) -> u32 {
+    let aa = scene.aa;
+    let unit = 16 / gcd(16, aa);
+    let per_row = (scene.width * aa * aa) as u64;
+    let want = ((1u64 << 18) / per_row.max(1)).max(1) as u32;
+    (want.div_ceil(unit) * unit).min(scene.height.div_ceil(unit) * unit)
+}
+
+fn gcd(a: u32, b: u32) -> u32 {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+/// The field parameters of a scene.
+pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
+    let mut needs: Needs = scene.stack.needs(&scene.traps);
+    needs.merge(&exr_channels.needs());
+    let family = match &scene.family {
+        FamilySpec::Mandelbrot => Family::Mandelbrot,
+        FamilySpec::Julia { c } => Family::Julia { c: [c[0].to_f64(), c[1].to_f64()] },
+    };
+    let grid = SampleGrid {
+        center: scene.center_f64(),
+        radius: scene.radius_f64(),
+        width: scene.width * scene.aa,
+        height: scene.height * scene.aa,
+    };
+    FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
+}
+
+/// Renders `scene`. Each strip goes through `prepare` on the worker that computed it (in
+/// parallel: encoding, compression), then, strictly in order, to `sink` on a writer thread.
+/// `progress` receives the number of output rows done.
+pub fn render<P: Send>(
+    scene: &Scene,
+    options: Options,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+    prepare: &(dyn Fn(&RenderedStrip) -> Result<P, String> + Sync),
+    mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
+) -> Result<Stats, RenderError> {
+    let start = Instant::now();
+    let plan = scene.engine().map_err(RenderError::Engine)?;
+    let params = field_params(scene, options.exr_channels);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads)
+        .build()
+        .map_err(|_| RenderError::Threads(options.threads))?;
+    let threads = pool.current_num_threads();
+    let rows_per = strip_rows(scene);
+    let strips: Vec<(u32, u32)> =
+        (0..scene.height).step_by(rows_per as usize).map(|r| (r, rows_per.min(scene.height - r))).collect();
+    let strip_samples = (rows_per * scene.aa) as u64 * (scene.width * scene.aa) as u64;
+    let window = ((1u64 << 23) / strip_samples.max(1)).clamp(threads as u64 * 2, 64) as usize;
+    let iterations = AtomicU64::new(0);
+    let rows_done = AtomicU64::new(0);
+    let aa = scene.aa;
+
+    let compute = |&(row, rows): &(u32, u32)| -> Result<(RenderedStrip, P), RenderError> {
+        let strip = field::compute_strip(&params, row * aa..(row + rows) * aa, cancel)?;
+        iterations.fetch_add(strip.iterations, Ordering::Relaxed);
+        let samples = scene.stack.composite(&strip.planes, aa);
+        let rgb = compose::downsample(&samples, strip.planes.width, aa as usize);
+        let done = RenderedStrip { row, rows, rgb, planes: strip.planes };
+        let prepared = prepare(&done).map_err(RenderError::Sink)?;
+        progress(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64);
+        Ok((done, prepared))
+    };
+
+    let (tx, rx) = mpsc::sync_channel::<(RenderedStrip, P)>(window);
+    let result = std::thread::scope(|s| {
+        let writer = s.spawn(move || -> Result<(), String> {
+            for (strip, prepared) in rx {
+                sink(strip, prepared)?;
+            }
+            Ok(())
+        });
+        let computed = pool.install(|| -> Result<(), RenderError> {
+            for chunk in strips.chunks(window) {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(RenderError::Cancelled);
+                }
+                let done: Vec<Result<(RenderedStrip, P), RenderError>> = chunk.par_iter().map(compute).collect();
+                for strip in done {
+                    if tx.send(strip?).is_err() {
+                        // The writer stopped early: its error is reported below.
+                        return Ok(());
+                    }
+                }
+            }
+            Ok(())
+        });
+        drop(tx);
+        let written = writer.join().unwrap_or_else(|_| Err("output writer panicked".into()));
+        computed.and(written.map_err(RenderError::Sink))
+    });
+    result?;
+    let wall = start.elapsed().as_secs_f64();
+    let its = iterations.load(Ordering::Relaxed);
+    let pixels = scene.width as u64 * scene.height as u64;
+    Ok(Stats {
+        engine: plan.name.to_string(),
+        engine_reason: plan.reason,
+        precision: "f64 (53-bit mantissa)".into(),
+        simd: simd_name(),
+        pixels,
+        samples: pixels * (aa as u64).pow(2),
+        iterations: its,
+        wall_seconds: wall,
+        iterations_per_second: if wall > 0.0 { its as f64 / wall } else { 0.0 },
+        threads,
+    })
+}
+
+/// The instruction set pulp dispatches the kernels to on this machine.
+pub fn simd_name() -> String {
+    match pulp::Arch::new() {
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        pulp::Arch::V4(_) => "AVX-512 (8 f64 lanes)".into(),
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        pulp::Arch::V3(_) => "AVX2+FMA (4 f64 lanes)".into(),
+        other => format!("{other:?}"),
+    }
+}

@@ -1,0 +1,238 @@
+//! The scene file as written: serde structures that mirror the TOML one to one.
+//!
+//! Values that validation may reject are `Spanned`, so that an error points at the value's
+//! line and column. Command-line overrides are written into this same structure with the
+//! [`CLI`] span, so one validation path serves files and flags alike, and the structure
+//! serialised back to TOML is the exact scene embedded in every PNG.
+
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use crate::coloring::Transfer;
+use crate::compose::BlendMode;
+
+/// Span marking a value that came from the command line rather than a file.
+pub const CLI: std::ops::Range<usize> = usize::MAX..usize::MAX;
+
+/// Wraps a command-line value.
+pub fn cli<T>(value: T) -> Spanned<T> {
+    Spanned::new(CLI, value)
+}
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Format version; only 1 exists.
+    pub version: Spanned<i64>,
+    /// The map.
+    #[serde(default)]
+    pub formula: FormulaRaw,
+    /// The window onto the plane.
+    #[serde(default)]
+    pub view: ViewRaw,
+    /// Iteration limits.
+    #[serde(default)]
+    pub iteration: IterationRaw,
+    /// Sampling and engine.
+    #[serde(default)]
+    pub render: RenderRaw,
+    /// Colouring layers, bottom first.
+    #[serde(default, rename = "layer", skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<Spanned<LayerRaw>>,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputRaw,
+}
+
+/// `[formula]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormulaRaw {
+    /// "mandelbrot" or "julia".
+    pub kind: Spanned<String>,
+    /// Julia parameter as decimal strings [re, im].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c: Option<Spanned<[String; 2]>>,
+}
+
+impl Default for FormulaRaw {
+    fn default() -> Self {
+        Self { kind: Spanned::new(0..0, "mandelbrot".into()), c: None }
+    }
+}
+
+/// `[view]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewRaw {
+    /// Centre as decimal strings [re, im].
+    #[serde(default = "default_center")]
+    pub center: Spanned<[String; 2]>,
+    /// Zoom: the image height spans 4 / zoom.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zoom: Option<Spanned<String>>,
+    /// Half the image height in the plane (= 2 / zoom).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<Spanned<String>>,
+    /// Image width in pixels.
+    #[serde(default = "default_width")]
+    pub width: Spanned<i64>,
+    /// Image height in pixels.
+    #[serde(default = "default_height")]
+    pub height: Spanned<i64>,
+}
+
+fn default_center() -> Spanned<[String; 2]> {
+    Spanned::new(0..0, ["-0.75".into(), "0".into()])
+}
+fn default_width() -> Spanned<i64> {
+    Spanned::new(0..0, 800)
+}
+fn default_height() -> Spanned<i64> {
+    Spanned::new(0..0, 600)
+}
+
+impl Default for ViewRaw {
+    fn default() -> Self {
+        Self { center: default_center(), zoom: None, radius: None, width: default_width(), height: default_height() }
+    }
+}
+
+/// `[iteration]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct IterationRaw {
+    /// Maximum iterations, 1 ..= 2^32 - 2.
+    #[serde(default = "default_max")]
+    pub max: Spanned<i64>,
+    /// Escape radius R (>= 2).
+    #[serde(default = "default_escape")]
+    pub escape_radius: Spanned<f64>,
+}
+
+fn default_max() -> Spanned<i64> {
+    Spanned::new(0..0, 1000)
+}
+fn default_escape() -> Spanned<f64> {
+    Spanned::new(0..0, 65536.0)
+}
+
+impl Default for IterationRaw {
+    fn default() -> Self {
+        Self { max: default_max(), escape_radius: default_escape() }
+    }
+}
+
+/// `[render]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderRaw {
+    /// Supersampling factor N (N x N samples per pixel).
+    #[serde(default = "default_aa")]
+    pub aa: Spanned<i64>,
+    /// "auto" or "f64".
+    #[serde(default = "default_engine")]
+    pub engine: Spanned<String>,
+    /// Background colour below all layers, "#rrggbb".
+    #[serde(default = "default_background")]
+    pub background: Spanned<String>,
+}
+
+fn default_aa() -> Spanned<i64> {
+    Spanned::new(0..0, 1)
+}
+fn default_engine() -> Spanned<String> {
+    Spanned::new(0..0, "auto".into())
+}
+fn default_background() -> Spanned<String> {
+    Spanned::new(0..0, "#000000".into())
+}
+
+impl Default for RenderRaw {
+    fn default() -> Self {
+        Self { aa: default_aa(), engine: default_engine(), background: default_background() }
+    }
+}
+
+/// One `[[layer]]`: the union of every kind's keys; validation rejects keys that do not
+/// apply to the layer's kind.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct LayerRaw {
+    /// "smooth", "distance", "boundary", "trap" or "bitmap".
+    pub kind: Spanned<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<Spanned<BlendMode>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opacity: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub palette: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<Spanned<Transfer>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interior: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<Spanned<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<Spanned<f64>>,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputRaw {
+    /// PNG bit depth, 8 or 16.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bits: Option<Spanned<i64>>,
+    /// EXR channels to write.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channels: Option<Spanned<Vec<String>>>,
+}
+
+impl LayerRaw {
+    /// A layer of the given kind with every option at its default.
+    pub fn of_kind(kind: &str) -> Self {
+        Self {
+            kind: Spanned::new(0..0, kind.to_string()),
+            blend: None,
+            opacity: None,
+            palette: None,
+            density: None,
+            offset: None,
+            transfer: None,
+            interior: None,
+            k: None,
+            width: None,
+            color: None,
+            shape: None,
+            center: None,
+            angle: None,
+            radius: None,
+            image: None,
+            size: None,
+            threshold: None,
+        }
+    }
+}

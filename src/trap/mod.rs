@@ -1,0 +1,69 @@
+//! Orbit traps: shapes and bitmaps the orbit is tested against while it iterates.
+//!
+//! A trap observes every z_k the kernel computes for k >= 1, up to and including the
+//! escaping value (or z_max_iter). Geometric traps keep the minimum distance of the orbit
+//! to their shape; the bitmap trap (Inigo Quilez's technique) maps z to texture coordinates
+//! and stops at the first sample whose alpha exceeds its threshold, keeping that colour.
+//! Traps cost a scalar pass per sample, so the field only runs them when a layer asks.
+
+mod bitmap;
+mod geometric;
+
+pub use bitmap::{Bitmap, BitmapTrap};
+pub use geometric::Shape;
+
+/// A trap the kernel evaluates along each orbit.
+#[derive(Debug, Clone)]
+pub enum Trap {
+    /// Minimum distance of the orbit to a shape.
+    Geometric(Shape),
+    /// First bitmap sample whose alpha exceeds the threshold.
+    Bitmap(BitmapTrap),
+}
+
+/// Per-orbit running state of one trap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TrapState {
+    /// Smallest distance so far (infinite before the first observation).
+    Distance(f64),
+    /// Colour of the first hit (linear, premultiplied RGBA), or zero while nothing hit.
+    Color {
+        /// The colour.
+        rgba: [f32; 4],
+        /// True once a sample exceeded the threshold.
+        hit: bool,
+    },
+}
+
+impl Trap {
+    /// State before the first observation.
+    pub fn initial(&self) -> TrapState {
+        match self {
+            Trap::Geometric(_) => TrapState::Distance(f64::INFINITY),
+            Trap::Bitmap(_) => TrapState::Color { rgba: [0.0; 4], hit: false },
+        }
+    }
+
+    /// Records z_k.
+    #[inline]
+    pub fn observe(&self, state: &mut TrapState, z: [f64; 2]) {
+        match (self, state) {
+            (Trap::Geometric(shape), TrapState::Distance(d)) => {
+                let e = shape.distance(z);
+                if e < *d {
+                    *d = e;
+                }
+            }
+            (Trap::Bitmap(trap), TrapState::Color { rgba, hit }) => {
+                if !*hit {
+                    let s = trap.sample(z);
+                    if s[3] > trap.threshold {
+                        *rgba = s;
+                        *hit = true;
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
