@@ -18,6 +18,13 @@ use super::args::RenderArgs;
 
 /// Runs `deepfield render`.
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
+    // Ctrl-C sets a flag the kernels poll; installed first so that no output file can
+    // exist before the handler does. Failing to install it only loses Ctrl-C handling.
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
     let scene = load_scene(&args)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
@@ -41,12 +48,6 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         None => (None, None),
     };
 
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        // Failing to install the handler (e.g. one exists already) only loses Ctrl-C handling.
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
     let bar = progress_bar(&args, scene.height as u64);
     let progress = |rows: u64| {
         if let Some(b) = &bar {

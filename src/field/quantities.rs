@@ -34,10 +34,7 @@ pub fn distance_vector(z: [f64; 2], dz: [f64; 2], spacing: f64) -> [f32; 2] {
     let wx = dz[0] * z[0] + dz[1] * z[1];
     let wy = dz[0] * z[1] - dz[1] * z[0];
     let w = wx.hypot(wy);
-    if !(w > 0.0) || !w.is_finite() {
-        return [d, 0.0];
-    }
-    [(d as f64 * wx / w) as f32, (d as f64 * wy / w) as f32]
+    if w.is_finite() && w > 0.0 { [(d as f64 * wx / w) as f32, (d as f64 * wy / w) as f32] } else { [d, 0.0] }
 }
 
 #[cfg(test)]

@@ -24,8 +24,6 @@ use crate::trap::Trap;
 
 /// Header attribute holding the scene TOML.
 pub const SCENE_ATTRIBUTE: &str = "deepfield.scene";
-/// Header attribute saying which engine ran and why.
-pub const ENGINE_ATTRIBUTE: &str = "deepfield.engine";
 const BLOCK_ROWS: usize = 16;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,8 +31,8 @@ enum Source {
     N,
     NF,
     T,
-    DEX,
-    DEY,
+    Dex,
+    Dey,
     TrapDistance(usize),
     TrapColor(usize, usize),
 }
@@ -55,8 +53,8 @@ impl ExrLayout {
                 Channel::N => channels.push(("N".to_string(), Source::N)),
                 Channel::NF => channels.push(("NF".into(), Source::NF)),
                 Channel::T => channels.push(("T".into(), Source::T)),
-                Channel::DEX => channels.push(("DEX".into(), Source::DEX)),
-                Channel::DEY => channels.push(("DEY".into(), Source::DEY)),
+                Channel::DEX => channels.push(("DEX".into(), Source::Dex)),
+                Channel::DEY => channels.push(("DEY".into(), Source::Dey)),
                 Channel::Traps => {
                     for (k, t) in traps.iter().enumerate() {
                         match t {
@@ -80,7 +78,10 @@ impl ExrLayout {
         self.channels.iter().map(|(n, _)| n.as_str()).collect()
     }
 
-    fn header(&self, width: usize, height: usize, attributes: &[(&str, &str)]) -> Header {
+    /// The header. Only one custom attribute (the scene) is used: the exr crate keeps custom
+    /// attributes in a hash map whose order varies between runs, and files must be
+    /// byte-identical run to run. The engine's choice goes into the standard `comments`.
+    fn header(&self, width: usize, height: usize, scene_toml: &str, engine: &str) -> Header {
         let descs: SmallVec<[ChannelDescription; 5]> = self
             .channels
             .iter()
@@ -94,9 +95,9 @@ impl ExrLayout {
             BlockDescription::ScanLines,
             LineOrder::Increasing,
         );
-        for (k, v) in attributes {
-            header.own_attributes.other.insert(Text::from(*k), AttributeValue::Text(Text::from(*v)));
-        }
+        header.own_attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from(scene_toml)));
+        header.own_attributes.comments = Some(Text::from(engine));
+        header.own_attributes.software_name = Some(Text::from(concat!("deepfield ", env!("CARGO_PKG_VERSION"))));
         header
     }
 }
@@ -131,11 +132,7 @@ impl ExrWriter {
         if layout.channels.is_empty() {
             return Err(IoError::new(path, "no channels to write (choose some with --channels)"));
         }
-        let header = layout.header(
-            width as usize,
-            height as usize,
-            &[(SCENE_ATTRIBUTE, scene_toml), (ENGINE_ATTRIBUTE, engine)],
-        );
+        let header = layout.header(width as usize, height as usize, scene_toml, engine);
         let headers: Headers = SmallVec::from_elem(header, 1);
         let (file, out) = AtomicFile::create(path)?;
         let (tail, tail_error) = Tail::new(out);
@@ -212,8 +209,8 @@ impl ExrEncoder {
                         Source::N => planes.n[r.clone()].iter().for_each(|v| data.extend_from_slice(&v.to_ne_bytes())),
                         Source::NF => push_f32(&mut data, &planes.nf[r.clone()]),
                         Source::T => push_f32(&mut data, &planes.t[r.clone()]),
-                        Source::DEX => push_f32(&mut data, &planes.dex[r.clone()]),
-                        Source::DEY => push_f32(&mut data, &planes.dey[r.clone()]),
+                        Source::Dex => push_f32(&mut data, &planes.dex[r.clone()]),
+                        Source::Dey => push_f32(&mut data, &planes.dey[r.clone()]),
                         Source::TrapDistance(k) => match &planes.traps[k] {
                             TrapPlane::Distance(d) => push_f32(&mut data, &d[r.clone()]),
                             TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),

@@ -137,7 +137,8 @@ pub(super) fn validate(
         "auto" => EngineChoice::Auto,
         "f64" => EngineChoice::F64,
         other => {
-            return cx.err(file.render.engine.span(), format!("unknown engine `{other}`; expected \"auto\" or \"f64\""));
+            return cx
+                .err(file.render.engine.span(), format!("unknown engine `{other}`; expected \"auto\" or \"f64\""));
         }
     };
     let bg = cx.colour(&file.render.background)?;

@@ -54,13 +54,11 @@ impl Trap {
                     *d = e;
                 }
             }
-            (Trap::Bitmap(trap), TrapState::Color { rgba, hit }) => {
-                if !*hit {
-                    let s = trap.sample(z);
-                    if s[3] > trap.threshold {
-                        *rgba = s;
-                        *hit = true;
-                    }
+            (Trap::Bitmap(trap), TrapState::Color { rgba, hit }) if !*hit => {
+                let s = trap.sample(z);
+                if s[3] > trap.threshold {
+                    *rgba = s;
+                    *hit = true;
                 }
             }
             _ => {}

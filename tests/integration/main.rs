@@ -1,1 +1,8 @@
-//! Integration tests.
+//! Integration tests: the engine against an arbitrary-precision reference, golden images,
+//! the command line, determinism and round trips. One binary, as tiny-skia does.
+
+mod accuracy;
+mod cli;
+mod golden;
+mod reference;
+mod util;

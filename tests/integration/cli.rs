@@ -1,0 +1,254 @@
+//! The command line as a user meets it: bad input, determinism, round trips, outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use super::util::scratch;
+
+fn deepfield(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_deepfield")).args(args).current_dir(dir).output().expect("run deepfield")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Files in `dir` other than the inputs the test wrote.
+fn outputs(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.ends_with(".toml"))
+        .collect();
+    v.sort();
+    v
+}
+
+const SMALL: &str = "version = 1\n[view]\ncenter = [\"-0.75\", \"0.1\"]\nzoom = \"2\"\nwidth = 64\nheight = 48\n";
+
+/// Bad input: exit code 2, a message with `needle` (and `file:line:col` where one
+/// exists), no panic, and no output file left behind.
+fn rejects(name: &str, scene: Option<&str>, extra: &[&str], needle: &str) {
+    let dir = scratch(&format!("cli-{name}"));
+    let mut args = vec!["render"];
+    if let Some(text) = scene {
+        write(&dir, "scene.toml", text);
+        args.push("scene.toml");
+    }
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", "out.png", "--exr", "out.exr"]);
+    let o = deepfield(&args, &dir);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{name}: exit code; stderr: {err}");
+    assert!(err.contains(needle), "{name}: expected `{needle}` in: {err}");
+    assert!(!err.contains("panicked"), "{name}: panic: {err}");
+    assert!(outputs(&dir).is_empty(), "{name}: left files {:?}", outputs(&dir));
+}
+
+#[test]
+fn unknown_key_names_line_and_column() {
+    rejects("unknown-key", Some("version = 1\n[view]\nwidht = 3\n"), &[], "scene.toml:3:1");
+}
+
+#[test]
+fn malformed_number_names_line_and_column() {
+    rejects("bad-number", Some("version = 1\n[view]\ncenter = [\"-0.7.5\", \"0\"]\n"), &[], "scene.toml:3:10");
+    rejects("zoom-text", Some("version = 1\n[view]\nzoom = \"deep\"\n"), &[], "scene.toml:3:8");
+    rejects("zoom-type", Some("version = 1\n[view]\nzoom = 5\n"), &[], "scene.toml:3:8");
+    rejects("zoom-flag", None, &["--zoom", "abc"], "not a decimal number");
+}
+
+#[test]
+fn zero_or_absurd_sizes_are_refused() {
+    rejects("zero-width", Some("version = 1\n[view]\nwidth = 0\n"), &[], "scene.toml:3:9");
+    rejects("huge-width", Some("version = 1\n[view]\nwidth = 100000000\n"), &[], "width must be in");
+    rejects("zero-size-flag", None, &["--size", "0x10"], "WIDTHxHEIGHT");
+    rejects(
+        "absurd-samples",
+        Some("version = 1\n[view]\nwidth = 100000\nheight = 100000\n[render]\naa = 16\n"),
+        &[],
+        "samples",
+    );
+}
+
+#[test]
+fn zero_max_iterations_are_refused() {
+    rejects("max-iter-0", Some("version = 1\n[iteration]\nmax = 0\n"), &[], "scene.toml:3:7");
+    rejects("max-iter-flag", None, &["--max-iter", "0"], "max-iter");
+}
+
+#[test]
+fn missing_files_are_refused() {
+    rejects("missing-scene", None, &["nope.toml"], "no such scene file");
+    rejects(
+        "missing-palette",
+        Some(&format!("{SMALL}[[layer]]\nkind = \"smooth\"\npalette = \"nope\"\n")),
+        &[],
+        "unknown palette `nope`",
+    );
+    rejects("missing-palette-flag", Some(SMALL), &["--palette", "nope"], "unknown palette");
+    rejects(
+        "missing-bitmap",
+        Some(&format!("{SMALL}[[layer]]\nkind = \"bitmap\"\nimage = \"nope.png\"\n")),
+        &[],
+        "cannot load bitmap",
+    );
+}
+
+#[test]
+fn unwritable_output_is_refused() {
+    let dir = scratch("cli-unwritable");
+    write(&dir, "scene.toml", SMALL);
+    let o = deepfield(&["render", "scene.toml", "-o", "no/such/dir/out.png"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("does not exist"), "{}", stderr(&o));
+    assert!(outputs(&dir).is_empty());
+}
+
+#[test]
+fn views_too_deep_for_f64_are_refused_with_a_reason() {
+    rejects(
+        "too-deep",
+        Some("version = 1\n[view]\ncenter = [\"-0.75\", \"0.1\"]\nzoom = \"1e14\"\n"),
+        &[],
+        "too deep for f64",
+    );
+}
+
+#[test]
+fn other_bad_values_are_located() {
+    rejects("bad-kind", Some("version = 1\n[formula]\nkind = \"burning-ship\"\n"), &[], "scene.toml:3:8");
+    rejects("julia-no-c", Some("version = 1\n[formula]\nkind = \"julia\"\n"), &[], "needs its parameter");
+    rejects(
+        "bad-layer-key",
+        Some(&format!("{SMALL}[[layer]]\nkind = \"smooth\"\nwidth = 2.0\n")),
+        &[],
+        "scene.toml:9:9",
+    );
+    rejects("bad-version", Some("version = 2\n"), &[], "scene.toml:1:11");
+    rejects("bad-escape", Some("version = 1\n[iteration]\nescape_radius = 1.0\n"), &[], "escape_radius");
+    rejects("bad-channel", Some(SMALL), &["--channels", "N,XYZ"], "unknown channel");
+    rejects("toml-syntax", Some("version = 1\n[view\n"), &[], "scene.toml:2:");
+}
+
+#[test]
+fn same_bytes_whatever_the_thread_count() {
+    let dir = scratch("cli-determinism");
+    let scene = format!(
+        "{SMALL}[render]\naa = 2\n[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"boundary\"\nblend = \"multiply\"\n"
+    );
+    write(&dir, "scene.toml", &scene);
+    let mut pngs = Vec::new();
+    let mut exrs = Vec::new();
+    for t in ["1", "2", "3"] {
+        let (png, exr) = (format!("t{t}.png"), format!("t{t}.exr"));
+        let o = deepfield(&["render", "scene.toml", "--threads", t, "-o", &png, "--exr", &exr], &dir);
+        assert!(o.status.success(), "{}", stderr(&o));
+        pngs.push(std::fs::read(dir.join(png)).unwrap());
+        exrs.push(std::fs::read(dir.join(exr)).unwrap());
+    }
+    assert!(pngs.windows(2).all(|w| w[0] == w[1]), "PNG bytes depend on --threads");
+    assert!(exrs.windows(2).all(|w| w[0] == w[1]), "EXR bytes depend on --threads");
+}
+
+#[test]
+fn png_round_trip_reproduces_the_image() {
+    let dir = scratch("cli-roundtrip");
+    write(&dir, "scene.toml", &format!("{SMALL}[[layer]]\nkind = \"smooth\"\npalette = \"twilight\"\n"));
+    let o =
+        deepfield(&["render", "scene.toml", "-o", "a.png", "--max-iter", "321", "--zoom", "3.5", "--bits", "16"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = deepfield(&["render", "a.png", "-o", "b.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (std::fs::read(dir.join("a.png")).unwrap(), std::fs::read(dir.join("b.png")).unwrap());
+    assert_eq!(a, b, "re-rendering the embedded scene changed the image");
+    let img = image::open(dir.join("a.png")).unwrap();
+    assert_eq!(img.color(), image::ColorType::Rgb16);
+}
+
+#[test]
+fn exr_holds_the_named_channels_and_the_scene() {
+    let dir = scratch("cli-exr");
+    write(&dir, "scene.toml", SMALL);
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png", "--exr", "a.exr", "--aa", "2"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = exr::meta::MetaData::read_from_file(dir.join("a.exr"), false).unwrap();
+    let h = &meta.headers[0];
+    let names: Vec<String> = h.channels.list.iter().map(|c| c.name.to_string()).collect();
+    assert_eq!(names, ["DEX", "DEY", "N", "NF", "T"]);
+    assert_eq!(h.layer_size.0, 128, "EXR holds every sample (64 px x aa 2)");
+    let scene = deepfield::io::read_exr_scene(&dir.join("a.exr")).unwrap().expect("scene in header");
+    assert!(scene.contains("aa = 2"), "{scene}");
+    // N read back agrees with the engine.
+    let img = exr::prelude::read_all_flat_layers_from_file(dir.join("a.exr")).unwrap();
+    let n = img.layer_data[0].channel_data.list.iter().find(|c| c.name.to_string() == "N").unwrap();
+    let exr::prelude::FlatSamples::U32(values) = &n.sample_data else { panic!("N must be u32") };
+    assert_eq!(values.len(), 128 * 96);
+    assert!(values.contains(&u32::MAX) && values.iter().any(|&v| v < 100));
+
+    let o = deepfield(&["render", "scene.toml", "-o", "b.png", "--exr", "b.exr", "--channels", "N,T"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = exr::meta::MetaData::read_from_file(dir.join("b.exr"), false).unwrap();
+    let names: Vec<String> = meta.headers[0].channels.list.iter().map(|c| c.name.to_string()).collect();
+    assert_eq!(names, ["N", "T"]);
+}
+
+#[test]
+fn stats_json_has_the_documented_keys() {
+    let dir = scratch("cli-stats");
+    write(&dir, "scene.toml", SMALL);
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png", "--stats", "--stats-json", "s.json"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("iterations/s"));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    for k in ["engine", "pixels", "iterations", "wall_seconds", "iterations_per_second"] {
+        assert!(v.get(k).is_some(), "missing {k} in {v}");
+    }
+    assert_eq!(v["pixels"], 64 * 48);
+    assert_eq!(v["engine"], "f64");
+    assert!(v["iterations"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn flags_alone_describe_a_julia_scene() {
+    let dir = scratch("cli-flags");
+    let o = deepfield(
+        &["render", "--julia-c=-0.8,0.156", "--center", "0,0", "--zoom", "1.2", "--size", "40x30", "-o", "j.png"],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let scene = deepfield::io::read_png_scene(&dir.join("j.png")).unwrap().unwrap();
+    assert!(scene.contains("kind = \"julia\"") && scene.contains("-0.8"), "{scene}");
+}
+
+#[test]
+fn ctrl_c_cancels_cleanly_and_leaves_no_file() {
+    let dir = scratch("cli-cancel");
+    // A long render: deep in seahorse valley, many iterations, big image.
+    let args = ["render", "--center=-0.7436438870371587,0.1318259042053", "--zoom", "1e8", "--max-iter", "1000000"];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_deepfield"))
+        .args(args)
+        .args(["--size", "4000x3000", "-o", "big.png", "--exr", "big.exr"])
+        .current_dir(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the outputs are open (their temporary files exist), then press Ctrl-C.
+    let start = std::time::Instant::now();
+    while !outputs(&dir).iter().any(|n| n.ends_with(".partial")) {
+        assert!(start.elapsed().as_secs() < 60, "render never opened its outputs");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(outputs(&dir).is_empty(), "left {:?}", outputs(&dir));
+}

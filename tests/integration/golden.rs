@@ -1,0 +1,142 @@
+//! Golden images, one per colouring mode, rendered through the library's render path.
+//!
+//! Tolerance: at most 0.5% of channel values may differ from the golden image by more than
+//! 2 levels (of 255), and none by more than 24. Everything is computed in IEEE arithmetic
+//! with the same operations on every machine; the slack only covers libm differences in
+//! ln/pow/atan2 between platforms. On failure the actual image is written beside the
+//! scratch folder and its path printed; `DEEPFIELD_BLESS=1 cargo test` regenerates goldens.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::sync::atomic::AtomicBool;
+
+use deepfield::field::{ChannelSet, TrapPlane};
+use deepfield::io::PngEncoder;
+use deepfield::render::{self, Options};
+
+use super::util::{scene, scratch};
+
+/// Renders a scene to 8-bit RGB bytes through the real render path.
+pub fn render_rgb8(text: &str, threads: usize) -> (u32, u32, Vec<u8>) {
+    let s = scene(text);
+    let enc = PngEncoder::new(8);
+    let out = Mutex::new(Vec::new());
+    let cancel = AtomicBool::new(false);
+    let prepare = |strip: &render::RenderedStrip| Ok(enc.encode(&strip.rgb));
+    render::render(
+        &s,
+        Options { threads, exr_channels: ChannelSet::default() },
+        &cancel,
+        &|_| {},
+        &prepare,
+        |_, bytes| {
+            out.lock().unwrap().extend_from_slice(&bytes);
+            Ok(())
+        },
+    )
+    .expect("render");
+    (s.width, s.height, out.into_inner().unwrap())
+}
+
+fn golden(name: &str, text: &str) {
+    let (w, h, actual) = render_rgb8(text, 2);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"));
+    if std::env::var_os("DEEPFIELD_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        image::save_buffer(&path, &actual, w, h, image::ColorType::Rgb8).unwrap();
+        return;
+    }
+    let expected = image::open(&path)
+        .unwrap_or_else(|e| panic!("golden {} missing ({e}); run with DEEPFIELD_BLESS=1 to create it", path.display()))
+        .to_rgb8();
+    assert_eq!(expected.dimensions(), (w, h), "{name}: size");
+    let diffs: Vec<u8> = expected.as_raw().iter().zip(&actual).map(|(a, b)| a.abs_diff(*b)).collect();
+    let over = diffs.iter().filter(|&&d| d > 2).count();
+    let worst = diffs.iter().copied().max().unwrap_or(0);
+    if over * 200 > diffs.len() || worst > 24 {
+        let dir = scratch(&format!("golden-{name}"));
+        let out = dir.join(format!("{name}.actual.png"));
+        image::save_buffer(&out, &actual, w, h, image::ColorType::Rgb8).unwrap();
+        panic!("{name}: {over} values differ by more than 2 (worst {worst}); actual image: {}", out.display());
+    }
+}
+
+const VIEW: &str = "[view]\ncenter = [\"-0.75\", \"0\"]\nzoom = \"1.5\"\nwidth = 96\nheight = 72\n";
+
+#[test]
+fn golden_smooth_iteration() {
+    golden(
+        "smooth",
+        &format!("version = 1\n{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ndensity = 0.1\n"),
+    );
+}
+
+#[test]
+fn golden_smooth_supersampled() {
+    golden(
+        "smooth-aa3",
+        &format!(
+            "version = 1\n{VIEW}[render]\naa = 3\n[[layer]]\nkind = \"smooth\"\npalette = \"fire\"\ntransfer = \"sqrt\"\ndensity = 0.3\n"
+        ),
+    );
+}
+
+#[test]
+fn golden_soft_distance() {
+    golden(
+        "distance",
+        "version = 1\n[formula]\nkind = \"julia\"\nc = [\"0\", \"1\"]\n[view]\ncenter = [\"0\", \"0\"]\nzoom = \"1.4\"\nwidth = 80\nheight = 80\n[[layer]]\nkind = \"distance\"\nk = 0.5\n",
+    );
+}
+
+#[test]
+fn golden_boundary_over_smooth_multiply() {
+    golden(
+        "boundary-multiply",
+        &format!(
+            "version = 1\n{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"ocean\"\n[[layer]]\nkind = \"boundary\"\nwidth = 1.5\ncolor = \"#202020\"\nblend = \"multiply\"\nopacity = 0.9\n"
+        ),
+    );
+}
+
+#[test]
+fn golden_geometric_trap() {
+    golden(
+        "trap-cross",
+        &format!(
+            "version = 1\n{VIEW}[[layer]]\nkind = \"trap\"\nshape = \"cross\"\ncenter = [0.0, 0.0]\nangle = 30\npalette = \"electric\"\ndensity = 2.0\n"
+        ),
+    );
+}
+
+#[test]
+fn golden_bitmap_trap() {
+    golden(
+        "bitmap-trap",
+        "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[view]\ncenter = [\"0\", \"0\"]\nzoom = \"1.3\"\nwidth = 96\nheight = 72\n[[layer]]\nkind = \"distance\"\n[[layer]]\nkind = \"bitmap\"\nimage = \"tests/fixtures/trap.png\"\nsize = 0.5\n",
+    );
+}
+
+/// The bitmap trap takes the exact texel colour of the first sample above the threshold:
+/// with `tests/fixtures/trap.png` (left half opaque red, right half transparent) covering
+/// [-2, 2]^2, every Mandelbrot pixel whose c (= z_1, the first sample) lies well inside the
+/// left half is exactly opaque red, and no pixel takes any colour but red or nothing.
+#[test]
+fn bitmap_trap_samples_the_shipped_bitmap_exactly() {
+    let text = "version = 1\n[view]\ncenter = [\"0\", \"0\"]\nradius = \"2\"\nwidth = 64\nheight = 64\n[[layer]]\nkind = \"bitmap\"\nimage = \"tests/fixtures/trap.png\"\nsize = 4.0\n";
+    let s = scene(text);
+    let params = render::field_params(&s, ChannelSet::default());
+    let strip = deepfield::field::compute_strip(&params, 0..64, &AtomicBool::new(false)).unwrap();
+    let TrapPlane::Color(c) = &strip.planes.traps[0] else { panic!("bitmap trap plane") };
+    let red = [1.0f32, 0.0, 0.0, 1.0];
+    for j in 0..64u32 {
+        for i in 0..64u32 {
+            let x = params.grid.point(i, j)[0];
+            let got = c[(j * 64 + i) as usize];
+            if x < -0.2 {
+                assert_eq!(got, red, "pixel ({i},{j}) at x = {x}");
+            }
+            assert!(got == red || got[3] == 0.0 || got[1] == 0.0 && got[2] == 0.0, "pixel ({i},{j}): {got:?}");
+        }
+    }
+}
