@@ -99,7 +99,10 @@ impl Coloring {
     pub fn paint(&self, planes: &Planes, aa: u32) -> Vec<[f32; 4]> {
         let len = planes.len();
         let px = 1.0 / aa as f64;
-        let distance = |k: usize| (planes.dex[k] as f64).hypot(planes.dey[k] as f64) * px;
+        let distance = |k: usize| {
+            let (x, y) = (planes.dex[k] as f64, planes.dey[k] as f64);
+            (x * x + y * y).sqrt() * px
+        };
         let premul = |c: [f32; 4]| [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]];
         match self {
             Coloring::Smooth { palette, density, offset, transfer, interior } => (0..len)

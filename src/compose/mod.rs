@@ -10,7 +10,7 @@ use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
 use crate::coloring::Coloring;
 use crate::field::{Needs, Planes};
-use crate::palette::color::{linear_to_srgb, srgb_to_linear};
+use crate::palette::color::{linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
 use crate::trap::Trap;
 
 /// How a layer combines with what is below it.
@@ -138,17 +138,8 @@ impl Stack {
             };
             base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
         }
-        base.pixels()
-            .iter()
-            .map(|p| {
-                let c = p.demultiply();
-                [
-                    srgb_to_linear(c.red() as f32 / 255.0),
-                    srgb_to_linear(c.green() as f32 / 255.0),
-                    srgb_to_linear(c.blue() as f32 / 255.0),
-                ]
-            })
-            .collect()
+        // The base is opaque (background first), so its pixels need no demultiplying.
+        base.pixels().iter().map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())]).collect()
     }
 }
 
@@ -158,10 +149,14 @@ fn to_premultiplied_srgb8(c: [f32; 4]) -> PremultipliedColorU8 {
     if a <= 0.0 {
         return PremultipliedColorU8::TRANSPARENT;
     }
-    let a8 = (a * 255.0).round();
-    let enc = |v: f32| ((linear_to_srgb(v / a) * a8).round()).min(a8) as u8;
-    PremultipliedColorU8::from_rgba(enc(c[0]), enc(c[1]), enc(c[2]), a8 as u8)
-        .unwrap_or(PremultipliedColorU8::TRANSPARENT)
+    let a8 = (a * 255.0 + 0.5) as u8;
+    if a8 == 255 {
+        return PremultipliedColorU8::from_rgba(linear_to_srgb8(c[0]), linear_to_srgb8(c[1]), linear_to_srgb8(c[2]), 255)
+            .unwrap_or(PremultipliedColorU8::TRANSPARENT);
+    }
+    let scale = a8 as f32 / 255.0;
+    let enc = |v: f32| ((linear_to_srgb8(v / a) as f32 * scale + 0.5) as u8).min(a8);
+    PremultipliedColorU8::from_rgba(enc(c[0]), enc(c[1]), enc(c[2]), a8).unwrap_or(PremultipliedColorU8::TRANSPARENT)
 }
 
 /// Averages `aa x aa` blocks of samples (`width` samples per row) in linear light.

@@ -26,15 +26,22 @@ pub fn phase(z: [f64; 2]) -> f32 {
 /// that length along conj(dz / z) (the gradient of the potential, away from the set).
 #[inline]
 pub fn distance_vector(z: [f64; 2], dz: [f64; 2], spacing: f64) -> [f32; 2] {
-    let abs_z = z[0].hypot(z[1]);
-    let abs_dz = dz[0].hypot(dz[1]);
+    let abs_z = norm(z);
+    let abs_dz = norm(dz);
     let d = abs_z * abs_z.ln() / abs_dz / spacing;
     let d = if d.is_finite() { (d as f32).min(DISTANCE_CAP) } else { DISTANCE_CAP };
     // conj(dz / z) has the direction of conj(dz) * z.
     let wx = dz[0] * z[0] + dz[1] * z[1];
     let wy = dz[0] * z[1] - dz[1] * z[0];
-    let w = wx.hypot(wy);
+    let w = norm([wx, wy]);
     if w.is_finite() && w > 0.0 { [(d as f64 * wx / w) as f32, (d as f64 * wy / w) as f32] } else { [d, 0.0] }
+}
+
+/// |v|, by sqrt of the squared sum unless that overflows (then `hypot`).
+#[inline]
+fn norm(v: [f64; 2]) -> f64 {
+    let s = v[0] * v[0] + v[1] * v[1];
+    if s.is_finite() { s.sqrt() } else { v[0].hypot(v[1]) }
 }
 
 #[cfg(test)]

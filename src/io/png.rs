@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::IoError;
 use super::atomic::{AtomicFile, Tail};
-use crate::palette::color::linear_to_srgb;
+use crate::palette::color::{linear_to_srgb, linear_to_srgb8};
 
 /// iTXt keyword under which the scene TOML is stored.
 pub const SCENE_KEYWORD: &str = "deepfield-scene";
@@ -22,15 +22,12 @@ pub struct PngWriter {
 #[derive(Debug, Clone)]
 pub struct PngEncoder {
     bits: u8,
-    /// Linear-light thresholds between consecutive 8-bit codes: exact rounding, no powf.
-    lut8: Vec<f32>,
 }
 
 impl PngEncoder {
     /// An encoder for `bits` (8 or 16) per channel.
     pub fn new(bits: u8) -> Self {
-        let lut8 = (0..255).map(|k| crate::palette::color::srgb_to_linear((k as f32 + 0.5) / 255.0)).collect();
-        Self { bits, lut8 }
+        Self { bits }
     }
 
     /// Encodes pixels of linear RGB (whole rows) into PNG scanline bytes.
@@ -42,7 +39,7 @@ impl PngEncoder {
                     let q = (linear_to_srgb(v) * 65535.0 + 0.5) as u16;
                     out.extend_from_slice(&q.to_be_bytes());
                 } else {
-                    out.push(self.lut8.partition_point(|&t| t <= v) as u8);
+                    out.push(linear_to_srgb8(v));
                 }
             }
         }

@@ -13,6 +13,52 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
 
+/// Tables for 8-bit sRGB codes, built once.
+struct Tables {
+    /// Linear value of each 8-bit code.
+    decode: [f32; 256],
+    /// Linear thresholds between consecutive codes (code k+1 starts at `encode[k]`).
+    encode: [f32; 255],
+    /// Code at the start of each of `BUCKETS` equal steps of [0, 1]: a search starts here
+    /// and moves up at most a couple of codes.
+    start: Vec<u8>,
+}
+
+const BUCKETS: usize = 4096;
+
+fn tables() -> &'static Tables {
+    static T: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        let encode: [f32; 255] = std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0));
+        let start = (0..=BUCKETS).map(|b| encode.partition_point(|&t| t <= b as f32 / BUCKETS as f32) as u8).collect();
+        Tables { decode: std::array::from_fn(|k| srgb_to_linear(k as f32 / 255.0)), encode, start }
+    })
+}
+
+/// Linear light of an 8-bit sRGB code (table lookup).
+#[inline]
+pub fn srgb8_to_linear(code: u8) -> f32 {
+    tables().decode[code as usize]
+}
+
+/// The 8-bit sRGB code nearest to linear value `v` (exact rounding by binary search over
+/// the code boundaries; no `powf`).
+#[inline]
+pub fn linear_to_srgb8(v: f32) -> u8 {
+    let t = tables();
+    if !(v > 0.0) {
+        return 0;
+    }
+    if v >= 1.0 {
+        return 255;
+    }
+    let mut k = t.start[(v * BUCKETS as f32) as usize] as usize;
+    while k < 255 && v >= t.encode[k] {
+        k += 1;
+    }
+    k as u8
+}
+
 /// Linear sRGB to OKLab.
 pub fn linear_to_oklab([r, g, b]: [f32; 3]) -> [f32; 3] {
     let l = 0.412_221_46 * r + 0.536_332_55 * g + 0.051_445_995 * b;
@@ -68,5 +114,14 @@ mod tests {
         assert!((w[0] - 1.0).abs() < 1e-4 && w[1].abs() < 1e-4 && w[2].abs() < 1e-4);
         assert_eq!(parse_hex("#ff8000"), Some([1.0, 128.0 / 255.0, 0.0]));
         assert_eq!(parse_hex("ff8000"), None);
+        for i in 0..=100_000 {
+            let v = i as f32 / 100_000.0;
+            assert_eq!(linear_to_srgb8(v) as usize, tables().encode.partition_point(|&t| t <= v), "{v}");
+        }
+        for code in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(code)), code);
+            let exact = (linear_to_srgb(srgb8_to_linear(code) * 1.01) * 255.0).round() as u8;
+            assert!(linear_to_srgb8(srgb8_to_linear(code) * 1.01).abs_diff(exact) <= 1);
+        }
     }
 }

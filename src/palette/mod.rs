@@ -80,7 +80,7 @@ impl Palette {
     #[inline]
     pub fn at(&self, t: f64) -> [f32; 4] {
         let u = match self.mode {
-            Mode::Repeat => t - t.floor(),
+            Mode::Repeat => t - floor(t),
             Mode::Mirror => {
                 let r = t.rem_euclid(2.0);
                 if r > 1.0 { 2.0 - r } else { r }
@@ -94,6 +94,17 @@ impl Palette {
         let (a, b) = (self.lut[i], self.lut[i + 1]);
         [a[0] + (b[0] - a[0]) * w, a[1] + (b[1] - a[1]) * w, a[2] + (b[2] - a[2]) * w, a[3] + (b[3] - a[3]) * w]
     }
+}
+
+/// floor(t) without a libm call (the crate is built for baseline x86-64, where `f64::floor`
+/// is a function call); exact for |t| < 2^62, and the palette repeats long before that.
+#[inline]
+fn floor(t: f64) -> f64 {
+    if !(t.abs() < 4.0e18) {
+        return t.floor();
+    }
+    let f = t as i64 as f64;
+    if f > t { f - 1.0 } else { f }
 }
 
 /// Exact interpolation between the stops around `t` (in [0, 1]), as linear RGBA.

@@ -90,12 +90,12 @@ pub struct Options {
 }
 
 /// Output rows per strip: sample rows a multiple of 16 (the EXR block height) and about
-/// 2^18 samples per strip.
+/// 2^16 samples per strip (small enough to balance two threads on small images).
 fn strip_rows(scene: &Scene) -> u32 {
     let aa = scene.aa;
     let unit = 16 / gcd(16, aa);
     let per_row = (scene.width * aa * aa) as u64;
-    let want = ((1u64 << 18) / per_row.max(1)).max(1) as u32;
+    let want = ((1u64 << 16) / per_row.max(1)).max(1) as u32;
     (want.div_ceil(unit) * unit).min(scene.height.div_ceil(unit) * unit)
 }
 
