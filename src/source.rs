@@ -66,7 +66,7 @@ mod tests {
         let t = "ab\ncdé\nf";
         assert_eq!(Position::of(t, 0), Position { line: 1, column: 1 });
         assert_eq!(Position::of(t, 4), Position { line: 2, column: 2 });
-        assert_eq!(Position::of(t, 8), Position { line: 2, column: 4 });
-        assert_eq!(Position::of(t, 9), Position { line: 3, column: 1 });
+        assert_eq!(Position::of(t, 7), Position { line: 2, column: 4 });
+        assert_eq!(Position::of(t, 8), Position { line: 3, column: 1 });
     }
 }
