@@ -139,7 +139,10 @@ impl Stack {
             base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
         }
         // The base is opaque (background first), so its pixels need no demultiplying.
-        base.pixels().iter().map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())]).collect()
+        base.pixels()
+            .iter()
+            .map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())])
+            .collect()
     }
 }
 
@@ -151,8 +154,13 @@ fn to_premultiplied_srgb8(c: [f32; 4]) -> PremultipliedColorU8 {
     }
     let a8 = (a * 255.0 + 0.5) as u8;
     if a8 == 255 {
-        return PremultipliedColorU8::from_rgba(linear_to_srgb8(c[0]), linear_to_srgb8(c[1]), linear_to_srgb8(c[2]), 255)
-            .unwrap_or(PremultipliedColorU8::TRANSPARENT);
+        return PremultipliedColorU8::from_rgba(
+            linear_to_srgb8(c[0]),
+            linear_to_srgb8(c[1]),
+            linear_to_srgb8(c[2]),
+            255,
+        )
+        .unwrap_or(PremultipliedColorU8::TRANSPARENT);
     }
     let scale = a8 as f32 / 255.0;
     let enc = |v: f32| ((linear_to_srgb8(v / a) as f32 * scale + 0.5) as u8).min(a8);

@@ -7,9 +7,10 @@
 //!   orbit is hidden behind the others; each vector holds `S::F64_LANES` orbits (8 with
 //!   AVX-512, 4 with AVX2, 1 in the portable fallback), chosen at run time by pulp.
 //! * Iterations run in blocks of `K` with no branch: each step only ORs "|z|^2 > R^2" into
-//!   a mask. After a block, lanes whose mask is set are replayed from the state saved at the
-//!   block start with the scalar step of [`crate::formula`] — the same IEEE operations in the
-//!   same order — so the escape index, z_n and dz_n are bit-identical to the scalar kernel.
+//!   a mask. The state is checkpointed every `STRIDE` steps; after a block, lanes whose mask
+//!   is set are replayed from the checkpoint before their escape with the scalar step of
+//!   [`crate::formula`] (the same IEEE operations in the same order), so the escape index,
+//!   z_n and dz_n are bit-identical to the scalar kernel.
 //! * A finished lane is refilled with the next sample at once, so no lane idles while
 //!   another runs long (the classic waste of "run the vector until all lanes escape").
 //! * Interior orbits are cut short exactly: a lane whose z equals, bit for bit, a value it
@@ -29,7 +30,11 @@ use crate::formula::{self, Family};
 /// Vectors in flight per thread.
 const V: usize = 4;
 /// Iterations per branch-free block.
-const K: u32 = 8;
+const K: u32 = 16;
+/// Iterations between checkpoints inside a block (a replay never runs longer than this).
+const STRIDE: u32 = 4;
+/// Checkpoints per block.
+const C: usize = (K / STRIDE) as usize;
 /// Most lanes any backend has (AVX-512: 8 f64 lanes).
 const MAX_LANES: usize = 8;
 /// Age in blocks of the first periodicity reference: orbits that escape sooner never pay
@@ -82,9 +87,10 @@ struct LaneInfo {
 
 const IDLE: usize = usize::MAX;
 
+/// Writes `value` into the lane of `v` selected by `mask`.
 #[inline(always)]
-fn lanes_mut<S: Simd>(v: &mut S::f64s) -> &mut [f64] {
-    bytemuck::cast_slice_mut(std::slice::from_mut(v))
+fn set_lane<S: Simd>(simd: S, v: &mut S::f64s, mask: S::m64s, value: f64) {
+    *v = simd.select_f64s(mask, simd.splat_f64s(value), *v);
 }
 
 /// The lanes of a mask as bits (bit l = lane l). Backends store masks either as bitmasks
@@ -149,53 +155,18 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
     let mut block: u64 = 0;
     let mut iterations: u64 = 0;
 
-    // Loads the next sample that needs iterating into lane (v, l).
-    let refill = |st: &mut State<S>,
-                  info: &mut LaneInfo,
-                  v: usize,
-                  l: usize,
-                  block: u64,
-                  cursor: &mut usize,
-                  out: &mut [Orbit]| {
-        loop {
-            if *cursor >= points.len() {
-                *info = idle;
-                lanes_mut::<S>(&mut st.x[v])[l] = 0.0;
-                lanes_mut::<S>(&mut st.y[v])[l] = 0.0;
-                lanes_mut::<S>(&mut st.cx[v])[l] = 0.0;
-                lanes_mut::<S>(&mut st.cy[v])[l] = 0.0;
-                lanes_mut::<S>(&mut st.px[v])[l] = f64::NAN;
-                return;
-            }
-            let p = *cursor;
-            *cursor += 1;
-            let point = points[p];
-            if matches!(family, Family::Mandelbrot) && formula::in_main_components(point) {
-                out[p] = Orbit::interior();
-                continue;
-            }
-            let s = family.start(point);
-            lanes_mut::<S>(&mut st.x[v])[l] = s.z[0];
-            lanes_mut::<S>(&mut st.y[v])[l] = s.z[1];
-            lanes_mut::<S>(&mut st.cx[v])[l] = s.c[0];
-            lanes_mut::<S>(&mut st.cy[v])[l] = s.c[1];
-            if DE {
-                lanes_mut::<S>(&mut st.dx[v])[l] = s.dz[0];
-                lanes_mut::<S>(&mut st.dy[v])[l] = s.dz[1];
-            }
-            lanes_mut::<S>(&mut st.px[v])[l] = f64::NAN;
-            lanes_mut::<S>(&mut st.py[v])[l] = f64::NAN;
-            *info = LaneInfo { pixel: p, start: s.n, loaded_at: block, next_save: FIRST_SAVE, deadline: 0 };
-            info.deadline = lane_deadline(info, max_iter);
-            return;
-        }
-    };
+    // One mask per lane, for writing single lanes with a blend: scalar stores into vectors
+    // that are reloaded whole stall store forwarding, a blend of whole vectors does not.
+    let iota = simd.partial_load_f64s(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0][..nl]);
+    let masks: [S::m64s; MAX_LANES] = std::array::from_fn(|l| simd.equal_f64s(iota, simd.splat_f64s(l as f64)));
 
+    let ctx = RefillCtx { points, family, max_iter, masks, idle };
     for v in 0..V {
         for l in 0..nl {
-            refill(&mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
+            refill::<S, DE>(simd, &ctx, &mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
         }
     }
+    let mut ck = Checkpoints::<S> { x: [[zero; V]; C], y: [[zero; V]; C], dx: [[zero; V]; C], dy: [[zero; V]; C] };
     let mut deadline = info.iter().map(|i| i.deadline).min().unwrap_or(u64::MAX);
 
     // Largest |c| any orbit uses decides whether escape can be tested once per block.
@@ -212,14 +183,10 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
         if cursor >= points.len() && info.iter().all(|i| i.pixel == IDLE) {
             break;
         }
-        let x0 = st.x;
-        let y0 = st.y;
-        let dx0 = st.dx;
-        let dy0 = st.dy;
         let esc = if check_each {
-            run_block::<S, DE, true>(simd, &mut st, r2v, addv)
+            run_block::<S, DE, true>(simd, &mut st, &mut ck, r2v, addv)
         } else {
-            run_block::<S, DE, false>(simd, &mut st, r2v, addv)
+            run_block::<S, DE, false>(simd, &mut st, &mut ck, r2v, addv)
         };
         block += 1;
         if block.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
@@ -247,25 +214,43 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
                 let i0 = li.start as u64 + K as u64 * (age - 1);
                 let overshoot = i0 + K as u64 > max_iter as u64;
                 if esc_bits & (1 << l) != 0 || overshoot {
-                    let z = [lanes::<S>(&x0[v])[l], lanes::<S>(&y0[v])[l]];
-                    let dz = [lanes::<S>(&dx0[v])[l], lanes::<S>(&dy0[v])[l]];
                     let c = [lanes::<S>(&st.cx[v])[l], lanes::<S>(&st.cy[v])[l]];
-                    let orbit = replay::<DE>(z, dz, c, dz_add, i0 as u32, max_iter, r2);
+                    let at = |k: usize| {
+                        let z = [lanes::<S>(&ck.x[k][v])[l], lanes::<S>(&ck.y[k][v])[l]];
+                        let dz = if DE { [lanes::<S>(&ck.dx[k][v])[l], lanes::<S>(&ck.dy[k][v])[l]] } else { [0.0; 2] };
+                        (z, dz)
+                    };
+                    // With the once-per-block test an escaped orbit stays escaped, so the escape
+                    // lies after the last checkpoint still inside the circle; otherwise scan.
+                    let first = if check_each || overshoot {
+                        0
+                    } else {
+                        (1..C).rev().find(|&k| formula::step(at(k).0, c).1 <= r2).unwrap_or(0)
+                    };
+                    let mut orbit = Orbit::interior();
+                    for k in first..C {
+                        let (z, dz) = at(k);
+                        let i = i0 as u32 + k as u32 * STRIDE;
+                        if let Some(o) = replay::<DE>(z, dz, c, dz_add, i, max_iter, r2) {
+                            orbit = o;
+                            break;
+                        }
+                    }
                     iterations += orbit.iterations_from(li.start, max_iter);
                     out[li.pixel] = orbit;
-                    refill(&mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    refill::<S, DE>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if per_bits & (1 << l) != 0 {
                     iterations += i0 + K as u64 - li.start as u64;
                     out[li.pixel] = Orbit::interior();
-                    refill(&mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    refill::<S, DE>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if block >= li.deadline {
                     // Refresh the periodicity reference (Brent: at ages 1, 2, 4, 8, ...).
                     let xs = lanes::<S>(&st.x[v])[l];
                     let ys = lanes::<S>(&st.y[v])[l];
-                    lanes_mut::<S>(&mut st.px[v])[l] = xs;
-                    lanes_mut::<S>(&mut st.py[v])[l] = ys;
+                    set_lane(simd, &mut st.px[v], masks[l], xs);
+                    set_lane(simd, &mut st.py[v], masks[l], ys);
                     let e = &mut info[g];
                     e.next_save = age * 2;
                     e.deadline = lane_deadline(e, max_iter);
@@ -277,6 +262,74 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
         }
     }
     Ok(iterations)
+}
+
+/// Orbit states saved every `STRIDE` iterations of a block, for replays.
+struct Checkpoints<S: Simd> {
+    x: [[S::f64s; V]; C],
+    y: [[S::f64s; V]; C],
+    dx: [[S::f64s; V]; C],
+    dy: [[S::f64s; V]; C],
+}
+
+/// What refilling a lane needs besides the lane itself.
+struct RefillCtx<'a, S: Simd> {
+    points: &'a [[f64; 2]],
+    family: Family,
+    max_iter: u32,
+    masks: [S::m64s; MAX_LANES],
+    idle: LaneInfo,
+}
+
+/// Loads the next sample that needs iterating into lane (v, l), or idles the lane when
+/// none is left. Samples in the main cardioid or period-2 bulb are written as interior
+/// without ever entering a lane. (A function, not a closure: closures do not inherit the
+/// SIMD target features of the function they are written in.)
+#[inline(always)]
+fn refill<S: Simd, const DE: bool>(
+    simd: S,
+    ctx: &RefillCtx<'_, S>,
+    st: &mut State<S>,
+    info: &mut LaneInfo,
+    v: usize,
+    l: usize,
+    block: u64,
+    cursor: &mut usize,
+    out: &mut [Orbit],
+) {
+    let masks = &ctx.masks;
+    loop {
+        if *cursor >= ctx.points.len() {
+            *info = ctx.idle;
+            set_lane(simd, &mut st.x[v], masks[l], 0.0);
+            set_lane(simd, &mut st.y[v], masks[l], 0.0);
+            set_lane(simd, &mut st.cx[v], masks[l], 0.0);
+            set_lane(simd, &mut st.cy[v], masks[l], 0.0);
+            set_lane(simd, &mut st.px[v], masks[l], f64::NAN);
+            return;
+        }
+        let p = *cursor;
+        *cursor += 1;
+        let point = ctx.points[p];
+        if matches!(ctx.family, Family::Mandelbrot) && formula::in_main_components(point) {
+            out[p] = Orbit::interior();
+            continue;
+        }
+        let s = ctx.family.start(point);
+        set_lane(simd, &mut st.x[v], masks[l], s.z[0]);
+        set_lane(simd, &mut st.y[v], masks[l], s.z[1]);
+        set_lane(simd, &mut st.cx[v], masks[l], s.c[0]);
+        set_lane(simd, &mut st.cy[v], masks[l], s.c[1]);
+        if DE {
+            set_lane(simd, &mut st.dx[v], masks[l], s.dz[0]);
+            set_lane(simd, &mut st.dy[v], masks[l], s.dz[1]);
+        }
+        set_lane(simd, &mut st.px[v], masks[l], f64::NAN);
+        set_lane(simd, &mut st.py[v], masks[l], f64::NAN);
+        *info = LaneInfo { pixel: p, start: s.n, loaded_at: block, next_save: FIRST_SAVE, deadline: 0 };
+        info.deadline = lane_deadline(info, ctx.max_iter);
+        return;
+    }
 }
 
 /// Runs `K` iterations on every vector; returns, per vector, the lanes that escaped.
@@ -292,6 +345,7 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
 fn run_block<S: Simd, const DE: bool, const EACH: bool>(
     simd: S,
     st: &mut State<S>,
+    ck: &mut Checkpoints<S>,
     r2v: S::f64s,
     addv: S::f64s,
 ) -> [S::m64s; V] {
@@ -300,7 +354,15 @@ fn run_block<S: Simd, const DE: bool, const EACH: bool>(
     let two = simd.splat_f64s(2.0);
     let zero = simd.splat_f64s(0.0);
     let mut esc = [simd.less_than_f64s(zero, zero); V];
-    for _ in 0..K {
+    for k in 0..K as usize {
+        if k % STRIDE as usize == 0 {
+            ck.x[k / STRIDE as usize] = x;
+            ck.y[k / STRIDE as usize] = y;
+            if DE {
+                ck.dx[k / STRIDE as usize] = dx;
+                ck.dy[k / STRIDE as usize] = dy;
+            }
+        }
         for v in 0..V {
             let (xv, yv) = (x[v], y[v]);
             let yy = simd.mul_f64s(yv, yv);
@@ -343,7 +405,9 @@ fn lane_deadline(info: &LaneInfo, max_iter: u32) -> u64 {
     info.loaded_at + info.next_save.min(overshoot_age)
 }
 
-/// Scalar replay of one block from its saved start state, checking every iteration.
+/// Scalar replay from a checkpoint (z_i0, dz_i0), testing z_i0 ..= z_(i0+STRIDE) (the last
+/// one is the next checkpoint, or the block's end value that the once-per-block test saw):
+/// the escape, or interior at `max_iter`, or `None` if neither happens in the stretch.
 #[inline(always)]
 fn replay<const DE: bool>(
     mut z: [f64; 2],
@@ -353,23 +417,23 @@ fn replay<const DE: bool>(
     i0: u32,
     max_iter: u32,
     r2: f64,
-) -> Orbit {
+) -> Option<Orbit> {
     let mut n = i0;
-    loop {
+    for _ in 0..=STRIDE {
         let (next, rr) = formula::step(z, c);
         if rr > r2 {
-            return Orbit { n, z, dz };
+            return Some(Orbit { n, z, dz });
         }
         if n >= max_iter {
-            return Orbit::interior();
+            return Some(Orbit::interior());
         }
         if DE {
             dz = formula::deriv_step(z, dz, dz_add);
         }
         z = next;
         n += 1;
-        debug_assert!(n <= i0 + K, "replay ran past its block");
     }
+    None
 }
 
 #[cfg(test)]
