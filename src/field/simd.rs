@@ -230,7 +230,7 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
                     let mut orbit = Orbit::interior();
                     for k in first..C {
                         let (z, dz) = at(k);
-                        let i = i0 as u32 + k as u32 * STRIDE;
+                        let i = i0 + k as u64 * STRIDE as u64;
                         if let Some(o) = replay::<DE>(z, dz, c, dz_add, i, max_iter, r2) {
                             orbit = o;
                             break;
@@ -414,24 +414,23 @@ fn replay<const DE: bool>(
     mut dz: [f64; 2],
     c: [f64; 2],
     dz_add: f64,
-    i0: u32,
+    i0: u64,
     max_iter: u32,
     r2: f64,
 ) -> Option<Orbit> {
-    let mut n = i0;
-    for _ in 0..=STRIDE {
+    for n in i0..=i0 + STRIDE as u64 {
         let (next, rr) = formula::step(z, c);
         if rr > r2 {
-            return Some(Orbit { n, z, dz });
+            // n <= max_iter here, so it fits the u32 of N.
+            return Some(Orbit { n: n as u32, z, dz });
         }
-        if n >= max_iter {
+        if n >= max_iter as u64 {
             return Some(Orbit::interior());
         }
         if DE {
             dz = formula::deriv_step(z, dz, dz_add);
         }
         z = next;
-        n += 1;
     }
     None
 }

@@ -46,7 +46,7 @@ pub fn srgb8_to_linear(code: u8) -> f32 {
 #[inline]
 pub fn linear_to_srgb8(v: f32) -> u8 {
     let t = tables();
-    if !(v > 0.0) {
+    if v.is_nan() || v <= 0.0 {
         return 0;
     }
     if v >= 1.0 {

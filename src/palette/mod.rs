@@ -100,7 +100,7 @@ impl Palette {
 /// is a function call); exact for |t| < 2^62, and the palette repeats long before that.
 #[inline]
 fn floor(t: f64) -> f64 {
-    if !(t.abs() < 4.0e18) {
+    if t.is_nan() || t.abs() >= 4.0e18 {
         return t.floor();
     }
     let f = t as i64 as f64;
