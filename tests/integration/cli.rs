@@ -232,7 +232,7 @@ fn ctrl_c_cancels_cleanly_and_leaves_no_file() {
     let dir = scratch("cli-cancel");
     // A long render: deep in seahorse valley, many iterations, big image.
     let args = ["render", "--center=-0.7436438870371587,0.1318259042053", "--zoom", "1e8", "--max-iter", "1000000"];
-    let mut child = Command::new(env!("CARGO_BIN_EXE_deepfield"))
+    let child = Command::new(env!("CARGO_BIN_EXE_deepfield"))
         .args(args)
         .args(["--size", "4000x3000", "-o", "big.png", "--exr", "big.exr"])
         .current_dir(&dir)
