@@ -136,7 +136,7 @@ impl ExrWriter {
         let headers: Headers = SmallVec::from_elem(header, 1);
         let (file, out) = AtomicFile::create(path)?;
         let (tail, tail_error) = Tail::new(out);
-        let (sender, receiver) = mpsc::sync_channel::<(usize, Chunk)>(64);
+        let (sender, receiver) = mpsc::sync_channel::<(usize, Chunk)>(16);
         let thread_headers = headers.clone();
         let thread = std::thread::spawn(move || {
             ::exr::block::write(tail, thread_headers, true, |_meta, writer| {
