@@ -18,15 +18,20 @@ const CENTER: [&str; 2] = ["-0.743643887037158704752191506114774", "0.1318259042
 
 fn main() {
     let samples: u32 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(400);
-    println!("| zoom | pixels | N differs | NF error median | NF error max | distance error median | distance error p99 |");
+    println!(
+        "| zoom | pixels | N differs | NF error median | NF error max | distance error median | distance error p99 |"
+    );
     println!("|---|---|---|---|---|---|---|");
-    for (zoom, radius) in [("1e2", "2e-2"), ("1e4", "2e-4"), ("1e6", "2e-6"), ("1e8", "2e-8"), ("1e10", "2e-10"), ("1e11", "2e-11")] {
+    for (zoom, radius) in
+        [("1e2", "2e-2"), ("1e4", "2e-4"), ("1e6", "2e-6"), ("1e8", "2e-8"), ("1e10", "2e-10"), ("1e11", "2e-11")]
+    {
         let text = format!(
             "version = 1\n[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{radius}\"\nwidth = 640\nheight = 480\n[iteration]\nmax = 20000\n",
             CENTER[0], CENTER[1]
         );
         let file = Scene::parse_file("ladder", &text).unwrap();
-        let scene = Scene::validate(file, "ladder", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).unwrap();
+        let scene =
+            Scene::validate(file, "ladder", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).unwrap();
         let params = deepfield::render::field_params(&scene, ChannelSet::default_exr());
         let spacing = params.grid.spacing();
         let ln_r = params.orbit.escape_radius.ln();
