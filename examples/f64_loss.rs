@@ -4,6 +4,7 @@
 //! zooms centred on the seahorse-valley spiral with the f64 engine (the real render path)
 //! and compares them with direct big-float iteration at the exact pixel coordinates
 //! (astro-float, the same independent reference the tests use). Prints a Markdown table.
+#![allow(clippy::print_stdout)] // printing the measurement is the point
 
 use std::sync::atomic::AtomicBool;
 

@@ -1,5 +1,6 @@
 //! Single-thread kernel speed (N only) on one view, best of 15 runs:
 //! `cargo run --release --example kernel_speed -- CX CY RADIUS MAX_ITER`.
+#![allow(clippy::print_stdout)] // printing the measurement is the point
 use std::sync::atomic::AtomicBool;
 
 use deepfield::field::{self, FieldParams, Needs, SampleGrid};
