@@ -113,7 +113,7 @@ fn golden_geometric_trap() {
 fn golden_bitmap_trap() {
     golden(
         "bitmap-trap",
-        "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[view]\ncenter = [\"0\", \"0\"]\nzoom = \"1.3\"\nwidth = 96\nheight = 72\n[[layer]]\nkind = \"distance\"\n[[layer]]\nkind = \"bitmap\"\nimage = \"tests/fixtures/trap.png\"\nsize = 0.5\n",
+        "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[view]\ncenter = [\"0\", \"0\"]\nzoom = \"1.3\"\nwidth = 96\nheight = 72\n[[layer]]\nkind = \"distance\"\n[[layer]]\nkind = \"bitmap\"\nimage = \"scenes/bitmaps/star.png\"\ncenter = [0.0, 0.3]\nsize = 0.5\nthreshold = 0.5\n",
     );
 }
 
