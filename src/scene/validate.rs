@@ -170,6 +170,8 @@ pub(super) fn validate(
         }
     };
 
+    let mut file = file;
+    anchor_paths(&mut file, base_dir);
     Ok(Scene {
         origin: origin.to_string(),
         base_dir: base_dir.to_path_buf(),
@@ -188,6 +190,30 @@ pub(super) fn validate(
         channels,
         file,
     })
+}
+
+/// Rewrites the files a valid scene refers to (bitmaps, palette files) as absolute paths,
+/// so the scene embedded in an output re-renders from any folder. Built-in palette names
+/// stay names.
+fn anchor_paths(file: &mut SceneFile, base_dir: &Path) {
+    let absolute = |p: &str| -> Option<String> {
+        let path = base_dir.join(p);
+        path.is_file().then(|| std::fs::canonicalize(&path).unwrap_or(path).display().to_string())
+    };
+    for l in &mut file.layers {
+        let l = l.get_mut();
+        if let Some(img) = &mut l.image
+            && let Some(abs) = absolute(img.get_ref())
+        {
+            *img.get_mut() = abs;
+        }
+        if let Some(pal) = &mut l.palette
+            && !palette::builtin_names().contains(&pal.get_ref().as_str())
+            && let Some(abs) = absolute(pal.get_ref())
+        {
+            *pal.get_mut() = abs;
+        }
+    }
 }
 
 /// The layer used when a scene names none: smooth iteration through `classic`.

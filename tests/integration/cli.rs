@@ -252,3 +252,18 @@ fn ctrl_c_cancels_cleanly_and_leaves_no_file() {
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     assert!(outputs(&dir).is_empty(), "left {:?}", outputs(&dir));
 }
+
+#[test]
+fn png_round_trip_finds_the_bitmap_from_another_folder() {
+    let dir = scratch("cli-roundtrip-bitmap");
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/trap.png");
+    std::fs::copy(&fixture, dir.join("trap.png")).unwrap();
+    write(&dir, "scene.toml", &format!("{SMALL}[[layer]]\nkind = \"bitmap\"\nimage = \"trap.png\"\nsize = 2.0\n"));
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let elsewhere = scratch("cli-roundtrip-bitmap-elsewhere");
+    let a = dir.join("a.png");
+    let o = deepfield(&["render", a.to_str().unwrap(), "-o", "b.png"], &elsewhere);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(elsewhere.join("b.png")).unwrap());
+}
