@@ -28,10 +28,15 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let scene = load_scene(&args)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
+    check_distinct(&args, &png_path)?;
     let exr_channels = if args.exr.is_some() { scene.channels } else { ChannelSet::default() };
     let toml = scene.to_toml();
 
     // Open every output before computing anything: an unwritable path fails at once.
+    let stats_file = match &args.stats_json {
+        Some(path) => Some(io::AtomicFile::create(path).map_err(Failure::input)?),
+        None => None,
+    };
     let png = PngWriter::create(&png_path, scene.width, scene.height, scene.png_bits, &toml).map_err(Failure::input)?;
     let png_enc = PngEncoder::new(scene.png_bits);
     let exr = match &args.exr {
@@ -89,7 +94,35 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     if let Some(w) = exr_writer.take() {
         w.finish().map_err(|e| Failure::Runtime(e.into()))?;
     }
-    report(&args, &stats)
+    report(&args, &stats, stats_file)
+}
+
+/// Refuses runs whose outputs would collide with each other or overwrite the input scene.
+fn check_distinct(args: &RenderArgs, png: &Path) -> Result<(), Failure> {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut named: Vec<(&str, PathBuf)> = vec![("-o", abs(png))];
+    if let Some(p) = &args.exr {
+        named.push(("--exr", abs(p)));
+    }
+    if let Some(p) = &args.stats_json {
+        named.push(("--stats-json", abs(p)));
+    }
+    for (i, (a, pa)) in named.iter().enumerate() {
+        for (b, pb) in &named[i + 1..] {
+            if pa == pb {
+                return Err(Failure::Input(anyhow!("{a} and {b} name the same file {}", pa.display())));
+            }
+        }
+        if let Some(scene) = &args.scene
+            && abs(scene) == *pa
+        {
+            return Err(Failure::Input(anyhow!(
+                "{a} would overwrite the input {}; give another output name with {a}",
+                scene.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn progress_bar(args: &RenderArgs, rows: u64) -> Option<ProgressBar> {
@@ -103,7 +136,11 @@ fn progress_bar(args: &RenderArgs, rows: u64) -> Option<ProgressBar> {
     Some(bar)
 }
 
-fn report(args: &RenderArgs, stats: &Stats) -> Result<(), Failure> {
+fn report(
+    args: &RenderArgs,
+    stats: &Stats,
+    stats_file: Option<(io::AtomicFile, std::io::BufWriter<std::fs::File>)>,
+) -> Result<(), Failure> {
     if args.stats {
         let mut out = std::io::stdout().lock();
         let text = format!(
@@ -121,9 +158,8 @@ fn report(args: &RenderArgs, stats: &Stats) -> Result<(), Failure> {
         );
         out.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }
-    if let Some(path) = &args.stats_json {
+    if let (Some(path), Some((file, mut w))) = (&args.stats_json, stats_file) {
         let json = serde_json::to_string_pretty(stats).map_err(|e| Failure::Runtime(e.into()))?;
-        let (file, mut w) = io::AtomicFile::create(path).map_err(Failure::input)?;
         w.write_all(json.as_bytes()).and_then(|_| w.write_all(b"\n")).map_err(|e| Failure::Runtime(e.into()))?;
         let inner = w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{}: {}", path.display(), e.error())))?;
         drop(inner);
@@ -223,7 +259,13 @@ fn apply_flags(file: &mut SceneFile, a: &RenderArgs) {
         }
         for l in &mut file.layers {
             let l = l.get_mut();
-            if matches!(l.kind.get_ref().as_str(), "smooth" | "trap" | "distance") {
+            // Distance layers without a palette are grey by design; they keep that look.
+            let uses_palette = match l.kind.get_ref().as_str() {
+                "smooth" | "trap" => true,
+                "distance" => l.palette.is_some(),
+                _ => false,
+            };
+            if uses_palette {
                 l.palette = Some(cli(p.clone()));
             }
         }

@@ -105,7 +105,8 @@ impl FromIterator<Channel> for ChannelSet {
 /// One trap's plane.
 #[derive(Debug, Clone, PartialEq)]
 pub enum TrapPlane {
-    /// Minimum orbit distance to a shape, in plane units (infinite for no observation).
+    /// Minimum orbit distance to a shape, in plane units (f32::MAX when the orbit escaped
+    /// before a single value was observed).
     Distance(Vec<f32>),
     /// Colour of the first bitmap hit, linear premultiplied RGBA (zero: no hit).
     Color(Vec<[f32; 4]>),

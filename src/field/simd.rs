@@ -441,9 +441,13 @@ mod tests {
     use crate::field::{SampleGrid, scalar};
 
     fn check(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool) {
+        check_with(family, center, radius, max_iter, derivative, 1024.0);
+    }
+
+    fn check_with(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool, escape_radius: f64) {
         let grid = SampleGrid { center, radius, width: 67, height: 31 };
         let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
-        let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative };
+        let params = OrbitParams { family, max_iter, escape_radius, derivative };
         let mut out = vec![Orbit::interior(); points.len()];
         let its = iterate(&params, &points, &mut out, &AtomicBool::new(false)).unwrap();
         let mut total = 0;
@@ -466,6 +470,10 @@ mod tests {
             check(Family::Mandelbrot, [-0.75, 0.0], 1.5, 3, de);
             check(Family::Julia { c: [-0.8, 0.156] }, [0.0, 0.0], 1.5, 700, de);
             check(Family::Julia { c: [0.0, 1.0] }, [0.0, 0.0], 1.6, 10_001, de);
+            // |c| > R^2 - R: the escape test runs at every step instead of once per block.
+            check_with(Family::Mandelbrot, [-0.5, 0.0], 2.5, 300, de, 2.0);
+            check_with(Family::Julia { c: [3.0, 1.5] }, [0.0, 0.0], 2.0, 100, de, 2.0);
+            check_with(Family::Julia { c: [-0.8, 0.156] }, [0.0, 0.0], 1.5, u32::MAX - 1, de, 2.0);
         }
     }
 }

@@ -26,8 +26,13 @@ impl AtomicFile {
         if !dir.is_dir() {
             return Err(IoError::new(dest, format!("cannot write: folder {} does not exist", dir.display())));
         }
+        if dest.is_dir() {
+            return Err(IoError::new(dest, "cannot write: it is a folder; give a file name"));
+        }
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let serial = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "output".into());
-        let temp = dir.join(format!(".{name}.{}.partial", std::process::id()));
+        let temp = dir.join(format!(".{name}.{}-{serial}.partial", std::process::id()));
         let file = File::create(&temp).map_err(|e| IoError::new(dest, format!("cannot write: {e}")))?;
         Ok((Self { dest: dest.to_path_buf(), temp, committed: false }, BufWriter::with_capacity(1 << 20, file)))
     }

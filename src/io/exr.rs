@@ -95,8 +95,8 @@ impl ExrLayout {
             BlockDescription::ScanLines,
             LineOrder::Increasing,
         );
-        header.own_attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from(scene_toml)));
-        header.own_attributes.comments = Some(Text::from(engine));
+        header.own_attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(utf8_text(scene_toml)));
+        header.own_attributes.comments = Some(utf8_text(engine));
         header.own_attributes.software_name = Some(Text::from(concat!("deepfield ", env!("CARGO_PKG_VERSION"))));
         header
     }
@@ -241,6 +241,12 @@ impl ExrEncoder {
     }
 }
 
+/// EXR text attributes are byte strings; ours hold UTF-8 (the exr crate's `Text::from`
+/// accepts only Latin-1 and panics on anything else, e.g. a path with CJK characters).
+fn utf8_text(s: &str) -> Text {
+    Text::from_slice_unchecked(s.as_bytes())
+}
+
 fn push_f32(data: &mut Vec<u8>, values: &[f32]) {
     for v in values {
         data.extend_from_slice(&v.to_ne_bytes());
@@ -251,7 +257,7 @@ fn push_f32(data: &mut Vec<u8>, values: &[f32]) {
 pub fn read_exr_scene(path: &Path) -> Result<Option<String>, IoError> {
     let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::new(path, e))?;
     Ok(meta.headers.first().and_then(|h| match h.own_attributes.other.get(&Text::from(SCENE_ATTRIBUTE)) {
-        Some(AttributeValue::Text(t)) => Some(t.to_string()),
+        Some(AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
         _ => None,
     }))
 }

@@ -143,7 +143,9 @@ pub fn render<P: Send>(
     let strips: Vec<(u32, u32)> =
         (0..scene.height).step_by(rows_per as usize).map(|r| (r, rows_per.min(scene.height - r))).collect();
     let strip_samples = (rows_per * scene.aa) as u64 * (scene.width * scene.aa) as u64;
-    let window = ((1u64 << 22) / strip_samples.max(1)).clamp(threads as u64 * 2, 64) as usize;
+    // Strips in flight: ~4M samples, at least two per thread, at most 64 unless threads need more.
+    let lo = threads as u64 * 2;
+    let window = ((1u64 << 22) / strip_samples.max(1)).max(lo).min(lo.max(64)) as usize;
     let iterations = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let aa = scene.aa;

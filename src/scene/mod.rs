@@ -77,6 +77,9 @@ pub struct Scene {
     pub center: [Decimal; 2],
     /// log10 of the view's half-height (works beyond the f64 range).
     pub log10_radius: f64,
+    /// The half-height correctly rounded to f64 from the decimal written (zero or infinite
+    /// outside the f64 range).
+    pub radius: f64,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -124,7 +127,7 @@ impl Scene {
 
     /// View half-height as an f64 (zero or infinite outside the f64 range).
     pub fn radius_f64(&self) -> f64 {
-        10f64.powf(self.log10_radius)
+        self.radius
     }
 
     /// The centre rounded to f64.

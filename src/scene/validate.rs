@@ -100,23 +100,23 @@ pub(super) fn validate(
 
     let view = &file.view;
     let center = cx.pair(&view.center, "view centre")?;
-    let log10_radius = match (&view.zoom, &view.radius) {
+    let (log10_radius, radius) = match (&view.zoom, &view.radius) {
         (Some(_), Some(r)) => return cx.err(r.span(), "give either `zoom` or `radius`, not both"),
         (Some(z), None) => {
             let d = cx.decimal(z, "zoom")?;
             if d.is_zero() || d.is_negative() {
                 return cx.err(z.span(), format!("zoom must be positive, got {d}"));
             }
-            2f64.log10() - d.log10_abs()
+            (2f64.log10() - d.log10_abs(), 2.0 / d.to_f64())
         }
         (None, Some(r)) => {
             let d = cx.decimal(r, "radius")?;
             if d.is_zero() || d.is_negative() {
                 return cx.err(r.span(), format!("radius must be positive, got {d}"));
             }
-            d.log10_abs()
+            (d.log10_abs(), d.to_f64())
         }
-        (None, None) => 0.5f64.log10() + 2.5f64.log10(), // radius 1.25: the whole set
+        (None, None) => (1.25f64.log10(), 1.25), // the whole set
     };
     if log10_radius > 3.0 {
         return cx.err(
@@ -178,6 +178,7 @@ pub(super) fn validate(
         family,
         center,
         log10_radius,
+        radius,
         width,
         height,
         max_iter,

@@ -267,3 +267,41 @@ fn png_round_trip_finds_the_bitmap_from_another_folder() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(elsewhere.join("b.png")).unwrap());
 }
+
+#[test]
+fn colliding_or_folder_outputs_are_refused_before_rendering() {
+    let dir = scratch("cli-collide");
+    write(&dir, "scene.toml", SMALL);
+    std::fs::create_dir(dir.join("folder")).unwrap();
+    for (args, needle) in [
+        (vec!["render", "scene.toml", "-o", "folder"], "it is a folder"),
+        (vec!["render", "scene.toml", "-o", "x.png", "--exr", "x.png"], "name the same file"),
+        (vec!["render", "scene.toml", "-o", "x.png", "--stats-json", "no/such/s.json"], "does not exist"),
+    ] {
+        let o = deepfield(&args, &dir);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+        assert_eq!(outputs(&dir), ["folder"], "{args:?} left files");
+    }
+    // Re-rendering a PNG in its own folder without -o would overwrite it.
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = std::fs::read(dir.join("a.png")).unwrap();
+    let o = deepfield(&["render", "a.png", "--size", "10x10"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("would overwrite the input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(dir.join("a.png")).unwrap(), before);
+}
+
+#[test]
+fn many_threads_and_unicode_paths_work() {
+    let dir = scratch("cli-unicode").join("日本語");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/trap.png");
+    std::fs::copy(&fixture, dir.join("星.png")).unwrap();
+    write(&dir, "scene.toml", &format!("{SMALL}[[layer]]\nkind = \"bitmap\"\nimage = \"星.png\"\n"));
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png", "--exr", "a.exr", "--threads", "40"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let scene = deepfield::io::read_exr_scene(&dir.join("a.exr")).unwrap().expect("scene");
+    assert!(scene.contains("星.png"), "{scene}");
+}
