@@ -34,7 +34,7 @@ struct Sample {
     n_ok: bool,
     /// |NF - NF_true| (when both escaped at the same n).
     nf_err: Option<f64>,
-    /// |d - d_true| / d_true (same condition).
+    /// |DE - DE_true| / |DE_true| for the vector (DEX, DEY): length and direction (same condition).
     de_err: Option<f64>,
 }
 
@@ -76,8 +76,12 @@ fn measure(v: &View) -> Vec<Sample> {
             let nf_true = (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0);
             sample.nf_err = Some((strip.nf[k] as f64 - nf_true).abs());
             let d_true = d.expect("escaped");
-            let d_engine = (strip.dex[k] as f64).hypot(strip.dey[k] as f64);
-            sample.de_err = Some((d_engine - d_true).abs() / d_true);
+            // The true vector: length d along conj(dz / z), i.e. along conj(dz) * z.
+            let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
+            let w = wx.hypot(wy);
+            let (tx, ty) = (d_true * wx / w, d_true * wy / w);
+            let err = (strip.dex[k] as f64 - tx).hypot(strip.dey[k] as f64 - ty);
+            sample.de_err = Some(err / d_true);
         }
         out.push(sample);
     }
