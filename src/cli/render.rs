@@ -63,7 +63,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
         let bytes = png_enc.encode(&strip.rgb);
         let chunks = match &exr_enc {
-            Some(e) => Some(e.encode(strip.row as usize * aa, &strip.planes)?),
+            Some(e) => Some(e.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref())?),
             None => None,
         };
         Ok((bytes, chunks))

@@ -21,11 +21,14 @@ pub enum Channel {
     DEY,
     /// Every trap plane the scene computes.
     Traps,
+    /// The composited colour of each sample: `R`, `G`, `B` (half floats, linear light).
+    Rgb,
 }
 
 impl Channel {
     /// Every channel, in the order the command line lists them.
-    pub const ALL: [Channel; 6] = [Channel::N, Channel::NF, Channel::T, Channel::DEX, Channel::DEY, Channel::Traps];
+    pub const ALL: [Channel; 7] =
+        [Channel::N, Channel::NF, Channel::T, Channel::DEX, Channel::DEY, Channel::Traps, Channel::Rgb];
 
     /// The name used on the command line and in scene files.
     pub fn name(self) -> &'static str {
@@ -36,6 +39,7 @@ impl Channel {
             Channel::DEX => "DEX",
             Channel::DEY => "DEY",
             Channel::Traps => "TRAPS",
+            Channel::Rgb => "RGB",
         }
     }
 }
@@ -52,7 +56,7 @@ impl FromStr for Channel {
         Channel::ALL
             .into_iter()
             .find(|c| c.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown channel `{s}`; expected one of N, NF, T, DEX, DEY, TRAPS"))
+            .ok_or_else(|| format!("unknown channel `{s}`; expected one of N, NF, T, DEX, DEY, TRAPS, RGB"))
     }
 }
 

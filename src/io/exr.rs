@@ -35,6 +35,7 @@ enum Source {
     Dey,
     TrapDistance(usize),
     TrapColor(usize, usize),
+    Color(usize),
 }
 
 /// Which channels a file holds, in the (sorted) order EXR stores them.
@@ -55,6 +56,11 @@ impl ExrLayout {
                 Channel::T => channels.push(("T".into(), Source::T)),
                 Channel::DEX => channels.push(("DEX".into(), Source::Dex)),
                 Channel::DEY => channels.push(("DEY".into(), Source::Dey)),
+                Channel::Rgb => {
+                    for (i, n) in ["R", "G", "B"].iter().enumerate() {
+                        channels.push((n.to_string(), Source::Color(i)));
+                    }
+                }
                 Channel::Traps => {
                     for (k, t) in traps.iter().enumerate() {
                         match t {
@@ -86,7 +92,11 @@ impl ExrLayout {
             .channels
             .iter()
             .map(|(name, src)| {
-                let ty = if *src == Source::N { SampleType::U32 } else { SampleType::F32 };
+                let ty = match src {
+                    Source::N => SampleType::U32,
+                    Source::Color(_) => SampleType::F16,
+                    _ => SampleType::F32,
+                };
                 ChannelDescription::new(name.as_str(), ty, false)
             })
             .collect();
@@ -195,8 +205,14 @@ impl Drop for ExrWriter {
 
 impl ExrEncoder {
     /// Builds and compresses the blocks of a strip whose first sample row is `row`
-    /// (a multiple of 16). Safe to call from many threads at once.
-    pub fn encode(&self, row: usize, planes: &Planes) -> Result<Vec<(usize, Chunk)>, String> {
+    /// (a multiple of 16); `colors` are the samples' composited colours, needed when the
+    /// layout has `R`, `G`, `B`. Safe to call from many threads at once.
+    pub fn encode(
+        &self,
+        row: usize,
+        planes: &Planes,
+        colors: Option<&[[f32; 3]]>,
+    ) -> Result<Vec<(usize, Chunk)>, String> {
         let mut out = Vec::new();
         let w = self.width;
         for b0 in (0..planes.rows).step_by(BLOCK_ROWS) {
@@ -215,6 +231,12 @@ impl ExrEncoder {
                             TrapPlane::Distance(d) => push_f32(&mut data, &d[r.clone()]),
                             TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),
                         },
+                        Source::Color(i) => {
+                            let c = colors.ok_or("the RGB channels need the composited colours")?;
+                            c[r.clone()].iter().for_each(|p| {
+                                data.extend_from_slice(&::exr::prelude::f16::from_f32(p[i]).to_ne_bytes())
+                            });
+                        }
                         Source::TrapColor(k, i) => match &planes.traps[k] {
                             TrapPlane::Color(c) => {
                                 c[r.clone()].iter().for_each(|p| data.extend_from_slice(&p[i].to_ne_bytes()))

@@ -15,7 +15,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::compose;
-use crate::field::{self, Cancelled, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
+use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
 use crate::scene::{FamilySpec, Scene};
 
@@ -53,6 +53,8 @@ pub struct RenderedStrip {
     pub rgb: Vec<[f32; 3]>,
     /// Raw planes of the strip's sample rows (`rows * aa` rows of `width * aa` samples).
     pub planes: Planes,
+    /// The composited colour of every sample (linear RGB), when an EXR asks for `RGB`.
+    pub samples: Option<Vec<[f32; 3]>>,
 }
 
 /// What a render did.
@@ -155,7 +157,8 @@ pub fn render<P: Send>(
         iterations.fetch_add(strip.iterations, Ordering::Relaxed);
         let samples = scene.stack.composite(&strip.planes, aa);
         let rgb = compose::downsample(&samples, strip.planes.width, aa as usize);
-        let done = RenderedStrip { row, rows, rgb, planes: strip.planes };
+        let samples = options.exr_channels.contains(Channel::Rgb).then_some(samples);
+        let done = RenderedStrip { row, rows, rgb, planes: strip.planes, samples };
         let prepared = prepare(&done).map_err(RenderError::Sink)?;
         progress(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64);
         Ok((done, prepared))

@@ -305,3 +305,22 @@ fn many_threads_and_unicode_paths_work() {
     let scene = deepfield::io::read_exr_scene(&dir.join("a.exr")).unwrap().expect("scene");
     assert!(scene.contains("星.png"), "{scene}");
 }
+
+#[test]
+fn exr_rgb_channels_hold_the_composited_linear_colour() {
+    let dir = scratch("cli-exr-rgb");
+    write(&dir, "scene.toml", SMALL);
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png", "--exr", "a.exr", "--channels", "N,RGB"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = exr::prelude::read_all_flat_layers_from_file(dir.join("a.exr")).unwrap();
+    let layer = &img.layer_data[0];
+    let names: Vec<String> = layer.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    assert_eq!(names, ["B", "G", "N", "R"]);
+    let red = layer.channel_data.list.iter().find(|c| c.name.to_string() == "R").unwrap();
+    let exr::prelude::FlatSamples::F16(red) = &red.sample_data else { panic!("R must be half") };
+    let png = image::open(dir.join("a.png")).unwrap().to_rgb8();
+    for (k, p) in png.pixels().enumerate() {
+        let encoded = deepfield::palette::color::linear_to_srgb8(red[k].to_f32());
+        assert!(encoded.abs_diff(p[0]) <= 1, "pixel {k}: EXR {encoded} vs PNG {}", p[0]);
+    }
+}
