@@ -12,5 +12,11 @@ echo "== clippy"
 cargo clippy --locked --all-targets -- -D warnings
 
 echo "== tests"
-cargo test --locked --all-targets
-cargo test --locked --doc
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+# Unit, integration, bench (as tests) and example targets, then doc tests.
+cargo test --locked --all-targets 2>&1 | tee "$log"
+cargo test --locked --doc 2>&1 | tee -a "$log"
+# One closing line for the whole run, summed over every test binary.
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
