@@ -14,7 +14,8 @@ fn main() {
     let cancel = AtomicBool::new(false);
     let mut best = 0.0f64;
     let mut per_sample = 0.0;
-    for _ in 0..15 {
+    let reps: usize = std::env::var("REPS").ok().and_then(|r| r.parse().ok()).unwrap_or(15);
+    for _ in 0..reps {
         let t = std::time::Instant::now();
         let its: u64 =
             (0..30).map(|k| field::compute_strip(&p, k * 16..k * 16 + 16, &cancel).unwrap().iterations).sum();
