@@ -198,7 +198,14 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
             let periodic = simd.and_m64s(simd.equal_f64s(st.x[v], st.px[v]), simd.equal_f64s(st.y[v], st.py[v]));
             let esc_bits = mask_bits::<S>(esc[v]);
             let per_bits = mask_bits::<S>(periodic);
-            let mut todo = if due { (1u32 << nl) - 1 } else { esc_bits | per_bits };
+            let mut todo = esc_bits | per_bits;
+            if due {
+                // Only the lanes whose own deadline has come (a periodicity save or the
+                // max-iteration block), not every lane.
+                for l in 0..nl {
+                    todo |= ((info[v * MAX_LANES + l].deadline <= block) as u32) << l;
+                }
+            }
             if todo == 0 {
                 continue;
             }
