@@ -30,7 +30,7 @@ use crate::formula::{self, Family};
 /// Vectors in flight per thread.
 const V: usize = 4;
 /// Iterations per branch-free block.
-const K: u32 = 16;
+const K: u32 = 32;
 /// Iterations between checkpoints inside a block (a replay never runs longer than this).
 const STRIDE: u32 = 4;
 /// Checkpoints per block.
