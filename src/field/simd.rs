@@ -232,7 +232,10 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
                     let first = if check_each || overshoot {
                         0
                     } else {
-                        (1..C).rev().find(|&k| formula::step(at(k).0, c).1 <= r2).unwrap_or(0)
+                        // Checkpoint 0 is inside (tested at the previous block's end) and the
+                        // inside ones form a prefix, so the last one is their count minus one;
+                        // counted without branches, the tests overlap.
+                        (1..C).map(|k| (formula::step(at(k).0, c).1 <= r2) as usize).sum::<usize>()
                     };
                     let mut orbit = Orbit::interior();
                     for k in first..C {
