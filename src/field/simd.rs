@@ -6,9 +6,11 @@
 //! * `V` independent vectors are interleaved so that the multiply/add latency chain of one
 //!   orbit is hidden behind the others; each vector holds `S::F64_LANES` orbits (8 with
 //!   AVX-512, 4 with AVX2, 1 in the portable fallback), chosen at run time by pulp.
-//! * Iterations run in blocks of `K` with no branch: each step only ORs "|z|^2 > R^2" into
-//!   a mask. The state is checkpointed every `STRIDE` steps; after a block, lanes whose mask
-//!   is set are replayed from the checkpoint before their escape with the scalar step of
+//! * Iterations run in blocks of `K` with no branch. When |z| > R implies the orbit stays
+//!   escaped (R^2 - R >= |c|, nearly always) |z|^2 is tested once, at the block's end;
+//!   otherwise each step ORs "|z|^2 > R^2" into a mask. The state is checkpointed every
+//!   `STRIDE` steps; after a block, lanes whose mask is set are replayed from the checkpoint
+//!   before their escape with the scalar step of
 //!   [`crate::formula`] (the same IEEE operations in the same order), so the escape index,
 //!   z_n and dz_n are bit-identical to the scalar kernel.
 //! * A finished lane is refilled with the next sample at once, so no lane idles while
