@@ -135,10 +135,21 @@ pub fn compute_strip(
     let ln_r = params.orbit.escape_radius.ln();
     let spacing = grid.spacing();
     let mut orbits = vec![Orbit::interior(); count];
-    let iterations = if params.needs.traps.is_empty() {
-        simd::iterate(&params.orbit, &points, &mut orbits, cancel)?
-    } else {
-        scalar::iterate_with_traps(&params.orbit, &params.needs.traps, &points, &mut orbits, &mut planes.traps, cancel)?
+    let iterations = match params.needs.traps.as_slice() {
+        [] => simd::iterate(&params.orbit, &points, &mut orbits, cancel)?,
+        // One geometric trap (the common case) runs vectorised; several traps or a bitmap
+        // (a texture lookup per step) run in the scalar kernel.
+        [Trap::Geometric(shape)] => {
+            let mut dist = vec![0.0f64; count];
+            let its = simd::iterate_with_trap(&params.orbit, *shape, &points, &mut orbits, &mut dist, cancel)?;
+            if let Some(TrapPlane::Distance(plane)) = planes.traps.first_mut() {
+                for (p, d) in plane.iter_mut().zip(&dist) {
+                    *p = d.min(f32::MAX as f64) as f32;
+                }
+            }
+            its
+        }
+        traps => scalar::iterate_with_traps(&params.orbit, traps, &points, &mut orbits, &mut planes.traps, cancel)?,
     };
     for (k, orbit) in orbits.iter().enumerate() {
         planes.n[k] = orbit.n;

@@ -28,6 +28,7 @@ use pulp::{Simd, WithSimd};
 
 use super::{Cancelled, Orbit, OrbitParams};
 use crate::formula::{self, Family};
+use crate::trap::Shape;
 
 /// Vectors in flight per thread.
 const V: usize = 4;
@@ -53,13 +54,32 @@ pub fn iterate(
     cancel: &AtomicBool,
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
-    pulp::Arch::new().dispatch(Job { params, points, out, cancel })
+    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], cancel })
+}
+
+/// As [`iterate`], also keeping each orbit's distance to one geometric trap `shape`
+/// (observing z_k for k >= 1 up to the escaping value, exactly as [`super::scalar`] does);
+/// `trap_out[k]` receives the distance for point k. The cardioid/bulb skip is off, since
+/// interior orbits have trap values too.
+pub fn iterate_with_trap(
+    params: &OrbitParams,
+    shape: Shape,
+    points: &[[f64; 2]],
+    out: &mut [Orbit],
+    trap_out: &mut [f64],
+    cancel: &AtomicBool,
+) -> Result<u64, Cancelled> {
+    assert_eq!(points.len(), out.len());
+    assert_eq!(points.len(), trap_out.len());
+    pulp::Arch::new().dispatch(Job { params, points, out, shape: Some(shape), trap_out, cancel })
 }
 
 struct Job<'a> {
     params: &'a OrbitParams,
     points: &'a [[f64; 2]],
     out: &'a mut [Orbit],
+    shape: Option<Shape>,
+    trap_out: &'a mut [f64],
     cancel: &'a AtomicBool,
 }
 
@@ -68,7 +88,12 @@ impl WithSimd for Job<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
-        if self.params.derivative { run::<S, true>(simd, self) } else { run::<S, false>(simd, self) }
+        match (self.params.derivative, self.shape.is_some()) {
+            (false, false) => run::<S, false, false>(simd, self),
+            (true, false) => run::<S, true, false>(simd, self),
+            (false, true) => run::<S, false, true>(simd, self),
+            (true, true) => run::<S, true, true>(simd, self),
+        }
     }
 }
 
@@ -127,11 +152,15 @@ struct State<S: Simd> {
     dy: [S::f64s; V],
     px: [S::f64s; V],
     py: [S::f64s; V],
+    /// Running trap metric (see [`metric`]).
+    tm: [S::f64s; V],
 }
 
 #[inline(always)]
-fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled> {
-    let Job { params, points, out, cancel } = job;
+fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled> {
+    let Job { params, points, out, shape, trap_out, cancel } = job;
+    let shape = shape.unwrap_or(Shape::Point { at: [0.0, 0.0] });
+    let tv = TrapV::<S>::new(simd, &shape);
     let nl = S::F64_LANES;
     debug_assert!(nl <= MAX_LANES);
     let r2 = params.escape_radius * params.escape_radius;
@@ -150,6 +179,7 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
         dy: [zero; V],
         px: [nan; V],
         py: [nan; V],
+        tm: [zero; V],
     };
     let idle = LaneInfo { pixel: IDLE, start: 0, loaded_at: 0, next_save: 1, deadline: u64::MAX };
     let mut info = [idle; V * MAX_LANES];
@@ -162,13 +192,19 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
     let iota = simd.partial_load_f64s(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0][..nl]);
     let masks: [S::m64s; MAX_LANES] = std::array::from_fn(|l| simd.equal_f64s(iota, simd.splat_f64s(l as f64)));
 
-    let ctx = RefillCtx { points, family, max_iter, masks, idle };
+    let ctx = RefillCtx { points, family, max_iter, masks, idle, shape };
     for v in 0..V {
         for l in 0..nl {
-            refill::<S, DE>(simd, &ctx, &mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
+            refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
         }
     }
-    let mut ck = Checkpoints::<S> { x: [[zero; V]; C], y: [[zero; V]; C], dx: [[zero; V]; C], dy: [[zero; V]; C] };
+    let mut ck = Checkpoints::<S> {
+        x: [[zero; V]; C],
+        y: [[zero; V]; C],
+        dx: [[zero; V]; C],
+        dy: [[zero; V]; C],
+        tm: [[zero; V]; C],
+    };
     let mut deadline = info.iter().map(|i| i.deadline).min().unwrap_or(u64::MAX);
 
     // Largest |c| any orbit uses decides whether escape can be tested once per block.
@@ -186,9 +222,9 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
             break;
         }
         let esc = if check_each {
-            run_block::<S, DE, true>(simd, &mut st, &mut ck, r2v, addv)
+            run_block::<S, DE, true, TRAP>(simd, &mut st, &mut ck, r2v, addv, &tv)
         } else {
-            run_block::<S, DE, false>(simd, &mut st, &mut ck, r2v, addv)
+            run_block::<S, DE, false, TRAP>(simd, &mut st, &mut ck, r2v, addv, &tv)
         };
         block += 1;
         if block.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
@@ -227,7 +263,8 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
                     let at = |k: usize| {
                         let z = [lanes::<S>(&ck.x[k][v])[l], lanes::<S>(&ck.y[k][v])[l]];
                         let dz = if DE { [lanes::<S>(&ck.dx[k][v])[l], lanes::<S>(&ck.dy[k][v])[l]] } else { [0.0; 2] };
-                        (z, dz)
+                        let tm = if TRAP { lanes::<S>(&ck.tm[k][v])[l] } else { 0.0 };
+                        (z, dz, tm)
                     };
                     // With the once-per-block test an escaped orbit stays escaped, so the escape
                     // lies after the last checkpoint still inside the circle; otherwise scan.
@@ -240,22 +277,29 @@ fn run<S: Simd, const DE: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled>
                         (1..C).map(|k| (formula::step(at(k).0, c).1 <= r2) as usize).sum::<usize>()
                     };
                     let mut orbit = Orbit::interior();
+                    let mut tm = f64::INFINITY;
                     for k in first..C {
-                        let (z, dz) = at(k);
+                        let (z, dz, tm0) = at(k);
                         let i = i0 + k as u64 * STRIDE as u64;
-                        if let Some(o) = replay::<DE>(z, dz, c, dz_add, i, max_iter, r2) {
-                            orbit = o;
+                        if let Some((o, t)) = replay::<DE, TRAP>(z, dz, tm0, &shape, c, dz_add, i, max_iter, r2) {
+                            (orbit, tm) = (o, t);
                             break;
                         }
                     }
                     iterations += orbit.iterations_from(li.start, max_iter);
                     out[li.pixel] = orbit;
-                    refill::<S, DE>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    if TRAP {
+                        trap_out[li.pixel] = finish_metric(&shape, tm);
+                    }
+                    refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if per_bits & (1 << l) != 0 {
                     iterations += i0 + K as u64 - li.start as u64;
                     out[li.pixel] = Orbit::interior();
-                    refill::<S, DE>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    if TRAP {
+                        trap_out[li.pixel] = finish_metric(&shape, lanes::<S>(&st.tm[v])[l]);
+                    }
+                    refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if block >= li.deadline {
                     // Refresh the periodicity reference (Brent: at ages 1, 2, 4, 8, ...).
@@ -282,6 +326,7 @@ struct Checkpoints<S: Simd> {
     y: [[S::f64s; V]; C],
     dx: [[S::f64s; V]; C],
     dy: [[S::f64s; V]; C],
+    tm: [[S::f64s; V]; C],
 }
 
 /// What refilling a lane needs besides the lane itself.
@@ -291,6 +336,7 @@ struct RefillCtx<'a, S: Simd> {
     max_iter: u32,
     masks: [S::m64s; MAX_LANES],
     idle: LaneInfo,
+    shape: Shape,
 }
 
 /// Loads the next sample that needs iterating into lane (v, l), or idles the lane when
@@ -298,7 +344,7 @@ struct RefillCtx<'a, S: Simd> {
 /// without ever entering a lane. (A function, not a closure: closures do not inherit the
 /// SIMD target features of the function they are written in.)
 #[inline(always)]
-fn refill<S: Simd, const DE: bool>(
+fn refill<S: Simd, const DE: bool, const TRAP: bool>(
     simd: S,
     ctx: &RefillCtx<'_, S>,
     st: &mut State<S>,
@@ -323,7 +369,7 @@ fn refill<S: Simd, const DE: bool>(
         let p = *cursor;
         *cursor += 1;
         let point = ctx.points[p];
-        if matches!(ctx.family, Family::Mandelbrot) && formula::in_main_components(point) {
+        if !TRAP && matches!(ctx.family, Family::Mandelbrot) && formula::in_main_components(point) {
             out[p] = Orbit::interior();
             continue;
         }
@@ -338,6 +384,11 @@ fn refill<S: Simd, const DE: bool>(
         }
         set_lane(simd, &mut st.px[v], masks[l], f64::NAN);
         set_lane(simd, &mut st.py[v], masks[l], f64::NAN);
+        if TRAP {
+            // Traps observe z_k for k >= 1: Mandelbrot's first value z_1 now, Julia's z_0 never.
+            let tm = if s.n >= 1 { metric(&ctx.shape, s.z) } else { f64::INFINITY };
+            set_lane(simd, &mut st.tm[v], masks[l], tm);
+        }
         *info = LaneInfo { pixel: p, start: s.n, loaded_at: block, next_save: FIRST_SAVE, deadline: 0 };
         info.deadline = lane_deadline(info, ctx.max_iter);
         return;
@@ -354,15 +405,17 @@ fn refill<S: Simd, const DE: bool>(
 /// escaped (growing to infinity or NaN, which the `!(|z|^2 <= R^2)` test also catches), and
 /// the scalar replay finds the first escaping index. Otherwise the test runs every step.
 #[inline(always)]
-fn run_block<S: Simd, const DE: bool, const EACH: bool>(
+fn run_block<S: Simd, const DE: bool, const EACH: bool, const TRAP: bool>(
     simd: S,
     st: &mut State<S>,
     ck: &mut Checkpoints<S>,
     r2v: S::f64s,
     addv: S::f64s,
+    tv: &TrapV<S>,
 ) -> [S::m64s; V] {
     let (mut x, mut y, cx, cy) = (st.x, st.y, st.cx, st.cy);
     let (mut dx, mut dy) = (st.dx, st.dy);
+    let mut tm = st.tm;
     let two = simd.splat_f64s(2.0);
     let zero = simd.splat_f64s(0.0);
     let mut esc = [simd.less_than_f64s(zero, zero); V];
@@ -373,6 +426,9 @@ fn run_block<S: Simd, const DE: bool, const EACH: bool>(
             if DE {
                 ck.dx[k / STRIDE as usize] = dx;
                 ck.dy[k / STRIDE as usize] = dy;
+            }
+            if TRAP {
+                ck.tm[k / STRIDE as usize] = tm;
             }
         }
         for v in 0..V {
@@ -391,6 +447,9 @@ fn run_block<S: Simd, const DE: bool, const EACH: bool>(
             }
             x[v] = simd.add_f64s(simd.mul_add_f64s(xv, xv, simd.neg_f64s(yy)), cx[v]);
             y[v] = simd.mul_add_f64s(simd.add_f64s(xv, xv), yv, cy[v]);
+            if TRAP {
+                tm[v] = simd.min_f64s(tm[v], tv.metric(simd, x[v], y[v]));
+            }
         }
     }
     if !EACH {
@@ -404,6 +463,9 @@ fn run_block<S: Simd, const DE: bool, const EACH: bool>(
     if DE {
         st.dx = dx;
         st.dy = dy;
+    }
+    if TRAP {
+        st.tm = tm;
     }
     esc
 }
@@ -421,36 +483,117 @@ fn lane_deadline(info: &LaneInfo, max_iter: u32) -> u64 {
 /// one is the next checkpoint, or the block's end value that the once-per-block test saw):
 /// the escape, or interior at `max_iter`, or `None` if neither happens in the stretch.
 #[inline(always)]
-fn replay<const DE: bool>(
+fn replay<const DE: bool, const TRAP: bool>(
     mut z: [f64; 2],
     mut dz: [f64; 2],
+    mut tm: f64,
+    shape: &Shape,
     c: [f64; 2],
     dz_add: f64,
     i0: u64,
     max_iter: u32,
     r2: f64,
-) -> Option<Orbit> {
+) -> Option<(Orbit, f64)> {
     for n in i0..=i0 + STRIDE as u64 {
         let (next, rr) = formula::step(z, c);
         if rr > r2 {
             // n <= max_iter here, so it fits the u32 of N.
-            return Some(Orbit { n: n as u32, z, dz });
+            return Some((Orbit { n: n as u32, z, dz }, tm));
         }
         if n >= max_iter as u64 {
-            return Some(Orbit::interior());
+            return Some((Orbit::interior(), tm));
         }
         if DE {
             dz = formula::deriv_step(z, dz, dz_add);
         }
         z = next;
+        if TRAP {
+            let m = metric(shape, z);
+            if m < tm {
+                tm = m;
+            }
+        }
     }
     None
+}
+
+/// The per-observation trap quantity, kept as a running minimum: the distance to the shape,
+/// or for a point its square (sqrt is monotone and correctly rounded, so the square root of
+/// the minimum is the minimum of the square roots, bit for bit, at one root per orbit).
+/// The operations match [`Shape::distance`] and [`TrapV::metric`] exactly.
+#[inline(always)]
+fn metric(shape: &Shape, z: [f64; 2]) -> f64 {
+    match *shape {
+        Shape::Point { at } => {
+            let (a, b) = (z[0] - at[0], z[1] - at[1]);
+            a * a + b * b
+        }
+        Shape::Line { at, dir } => {
+            let (a, b) = (z[0] - at[0], z[1] - at[1]);
+            (a * dir[1] - b * dir[0]).abs()
+        }
+        Shape::Cross { at, dir } => {
+            let (a, b) = (z[0] - at[0], z[1] - at[1]);
+            (a * dir[1] - b * dir[0]).abs().min((a * dir[0] + b * dir[1]).abs())
+        }
+        Shape::Circle { at, radius } => {
+            let (a, b) = (z[0] - at[0], z[1] - at[1]);
+            ((a * a + b * b).sqrt() - radius).abs()
+        }
+    }
+}
+
+/// The trap distance from the running minimum of [`metric`].
+#[inline(always)]
+fn finish_metric(shape: &Shape, m: f64) -> f64 {
+    if let Shape::Point { .. } = shape { m.sqrt() } else { m }
+}
+
+/// A shape's parameters as vectors, for [`metric`] on every lane.
+struct TrapV<S: Simd> {
+    kind: u8,
+    ax: S::f64s,
+    ay: S::f64s,
+    d0: S::f64s,
+    d1: S::f64s,
+    r: S::f64s,
+}
+
+impl<S: Simd> TrapV<S> {
+    #[inline(always)]
+    fn new(simd: S, shape: &Shape) -> Self {
+        let (kind, at, dir, r) = match *shape {
+            Shape::Point { at } => (0, at, [0.0; 2], 0.0),
+            Shape::Line { at, dir } => (1, at, dir, 0.0),
+            Shape::Cross { at, dir } => (2, at, dir, 0.0),
+            Shape::Circle { at, radius } => (3, at, [0.0; 2], radius),
+        };
+        let sp = |v: f64| simd.splat_f64s(v);
+        Self { kind, ax: sp(at[0]), ay: sp(at[1]), d0: sp(dir[0]), d1: sp(dir[1]), r: sp(r) }
+    }
+
+    /// [`metric`] on every lane.
+    #[inline(always)]
+    fn metric(&self, simd: S, x: S::f64s, y: S::f64s) -> S::f64s {
+        let a = simd.sub_f64s(x, self.ax);
+        let b = simd.sub_f64s(y, self.ay);
+        let sq = || simd.add_f64s(simd.mul_f64s(a, a), simd.mul_f64s(b, b));
+        let cross = || simd.abs_f64s(simd.sub_f64s(simd.mul_f64s(a, self.d1), simd.mul_f64s(b, self.d0)));
+        match self.kind {
+            0 => sq(),
+            1 => cross(),
+            2 => simd
+                .min_f64s(cross(), simd.abs_f64s(simd.add_f64s(simd.mul_f64s(a, self.d0), simd.mul_f64s(b, self.d1)))),
+            _ => simd.abs_f64s(simd.sub_f64s(simd.sqrt_f64s(sq()), self.r)),
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::field::{SampleGrid, scalar};
+    use crate::trap::Shape;
 
     fn check(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool) {
         check_with(family, center, radius, max_iter, derivative, 1024.0);
@@ -471,6 +614,41 @@ mod tests {
         // Periodicity detection may stop interior orbits at different points; escapes agree.
         if out.iter().all(|o| o.n != crate::field::INTERIOR) {
             assert_eq!(its, total);
+        }
+    }
+
+    /// The vectorised trap path against the scalar kernel: same orbits, same trap distance.
+    fn check_trap(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool, shape: Shape) {
+        let grid = SampleGrid { center, radius, width: 53, height: 29 };
+        let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
+        let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative };
+        let mut out = vec![Orbit::interior(); points.len()];
+        let mut dist = vec![0.0; points.len()];
+        iterate_with_trap(&params, shape, &points, &mut out, &mut dist, &AtomicBool::new(false)).unwrap();
+        let trap = crate::trap::Trap::Geometric(shape);
+        for (k, p) in points.iter().enumerate() {
+            let mut state = [trap.initial()];
+            let (want, _) = scalar::orbit(&params, *p, std::slice::from_ref(&trap), &mut state);
+            assert_eq!(out[k], want, "{shape:?} at {p:?}");
+            let crate::trap::TrapState::Distance(d) = state[0] else { unreachable!() };
+            assert_eq!(dist[k].to_bits(), d.to_bits(), "{shape:?} at {p:?}: {} vs {d}", dist[k]);
+        }
+    }
+
+    #[test]
+    fn trap_path_agrees_bit_for_bit_with_the_scalar_kernel() {
+        let dir = Shape::direction(30.0);
+        let shapes = [
+            Shape::Point { at: [0.1, -0.2] },
+            Shape::Line { at: [0.0, 0.3], dir },
+            Shape::Cross { at: [-0.5, 0.0], dir },
+            Shape::Circle { at: [0.0, 0.0], radius: 0.7 },
+        ];
+        for shape in shapes {
+            for de in [false, true] {
+                check_trap(Family::Mandelbrot, [-0.75, 0.0], 1.5, 400, de, shape);
+                check_trap(Family::Julia { c: [-0.8, 0.156] }, [0.0, 0.0], 1.5, 300, de, shape);
+            }
         }
     }
 
