@@ -2,9 +2,10 @@
 //!
 //! The field computes only what is asked of it ([`Needs`]): escape counts always; the final
 //! z only when NF or T is wanted (it is free once the orbit is done); the derivative only for
-//! distance estimates; traps only when a layer or channel uses them. Orbits without traps go
-//! through the vectorised kernel ([`simd`]); orbits with traps go through the scalar kernel
-//! ([`scalar`]), which shares the exact step functions so both agree bit for bit.
+//! distance estimates; traps only when a layer or channel uses them. Orbits without traps, or
+//! with one geometric trap, go through the vectorised kernel ([`simd`]); a bitmap trap or
+//! several traps go through the scalar kernel ([`scalar`]), which shares the exact step
+//! functions so both agree bit for bit.
 
 mod grid;
 mod planes;

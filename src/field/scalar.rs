@@ -1,8 +1,8 @@
 //! The scalar f64 kernel: one orbit at a time, with every option (derivative, traps).
 //!
-//! It runs orbits that carry traps (which sample the orbit at every step and so gain little
-//! from vectors), and it is the plain reference the vectorised kernel is tested against:
-//! both call the same step functions, so their results agree bit for bit.
+//! It runs orbits with a bitmap trap (a texture lookup per step) or several traps, and it is
+//! the plain reference the vectorised kernel is tested against: both call the same step
+//! functions, so their results agree bit for bit.
 //!
 //! Interior orbits stop early only where that is exact: Brent's periodicity check (z equal,
 //! bit for bit, to a value it held earlier) proves the f64 orbit cycles forever, and traps
