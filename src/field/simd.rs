@@ -152,7 +152,7 @@ struct State<S: Simd> {
     dy: [S::f64s; V],
     px: [S::f64s; V],
     py: [S::f64s; V],
-    /// Running trap metric (see [`metric`]).
+    /// Running trap metric (see [`Shape::metric`]).
     tm: [S::f64s; V],
 }
 
@@ -289,7 +289,7 @@ fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Resu
                     iterations += orbit.iterations_from(li.start, max_iter);
                     out[li.pixel] = orbit;
                     if TRAP {
-                        trap_out[li.pixel] = finish_metric(&shape, tm);
+                        trap_out[li.pixel] = shape.distance_from_metric(tm);
                     }
                     refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
@@ -297,7 +297,7 @@ fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Resu
                     iterations += i0 + K as u64 - li.start as u64;
                     out[li.pixel] = Orbit::interior();
                     if TRAP {
-                        trap_out[li.pixel] = finish_metric(&shape, lanes::<S>(&st.tm[v])[l]);
+                        trap_out[li.pixel] = shape.distance_from_metric(lanes::<S>(&st.tm[v])[l]);
                     }
                     refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
@@ -386,7 +386,7 @@ fn refill<S: Simd, const DE: bool, const TRAP: bool>(
         set_lane(simd, &mut st.py[v], masks[l], f64::NAN);
         if TRAP {
             // Traps observe z_k for k >= 1: Mandelbrot's first value z_1 now, Julia's z_0 never.
-            let tm = if s.n >= 1 { metric(&ctx.shape, s.z) } else { f64::INFINITY };
+            let tm = if s.n >= 1 { ctx.shape.metric(s.z) } else { f64::INFINITY };
             set_lane(simd, &mut st.tm[v], masks[l], tm);
         }
         *info = LaneInfo { pixel: p, start: s.n, loaded_at: block, next_save: FIRST_SAVE, deadline: 0 };
@@ -508,7 +508,7 @@ fn replay<const DE: bool, const TRAP: bool>(
         }
         z = next;
         if TRAP {
-            let m = metric(shape, z);
+            let m = shape.metric(z);
             if m < tm {
                 tm = m;
             }
@@ -517,39 +517,7 @@ fn replay<const DE: bool, const TRAP: bool>(
     None
 }
 
-/// The per-observation trap quantity, kept as a running minimum: the distance to the shape,
-/// or for a point its square (sqrt is monotone and correctly rounded, so the square root of
-/// the minimum is the minimum of the square roots, bit for bit, at one root per orbit).
-/// The operations match [`Shape::distance`] and [`TrapV::metric`] exactly.
-#[inline(always)]
-fn metric(shape: &Shape, z: [f64; 2]) -> f64 {
-    match *shape {
-        Shape::Point { at } => {
-            let (a, b) = (z[0] - at[0], z[1] - at[1]);
-            a * a + b * b
-        }
-        Shape::Line { at, dir } => {
-            let (a, b) = (z[0] - at[0], z[1] - at[1]);
-            (a * dir[1] - b * dir[0]).abs()
-        }
-        Shape::Cross { at, dir } => {
-            let (a, b) = (z[0] - at[0], z[1] - at[1]);
-            (a * dir[1] - b * dir[0]).abs().min((a * dir[0] + b * dir[1]).abs())
-        }
-        Shape::Circle { at, radius } => {
-            let (a, b) = (z[0] - at[0], z[1] - at[1]);
-            ((a * a + b * b).sqrt() - radius).abs()
-        }
-    }
-}
-
-/// The trap distance from the running minimum of [`metric`].
-#[inline(always)]
-fn finish_metric(shape: &Shape, m: f64) -> f64 {
-    if let Shape::Point { .. } = shape { m.sqrt() } else { m }
-}
-
-/// A shape's parameters as vectors, for [`metric`] on every lane.
+/// A shape's parameters as vectors, for [`Shape::metric`] on every lane.
 struct TrapV<S: Simd> {
     kind: u8,
     ax: S::f64s,
@@ -572,7 +540,7 @@ impl<S: Simd> TrapV<S> {
         Self { kind, ax: sp(at[0]), ay: sp(at[1]), d0: sp(dir[0]), d1: sp(dir[1]), r: sp(r) }
     }
 
-    /// [`metric`] on every lane.
+    /// [`Shape::metric`] on every lane, with the same operations.
     #[inline(always)]
     fn metric(&self, simd: S, x: S::f64s, y: S::f64s) -> S::f64s {
         let a = simd.sub_f64s(x, self.ax);
