@@ -11,6 +11,7 @@ pub mod field;
 pub mod formula;
 pub mod io;
 pub mod num;
+pub mod orbit;
 pub mod palette;
 pub mod render;
 pub mod scene;

@@ -1,11 +1,15 @@
-//! Numbers: exact decimal inputs.
+//! Numbers: exact decimal inputs, the extended-exponent `FloatExp`, and the `Real` trait
+//! the perturbation loop is generic over.
 //!
-//! View coordinates arrive as decimal strings so that any depth is exact. The f64 engine
-//! only needs them rounded once, but the scene keeps the text (and a wide-exponent summary
-//! of its value) so that deeper engines, error messages and the PNG metadata see exactly
-//! what the user wrote. (`FloatExp`, the extended-exponent type of the deep-zoom engine,
-//! will live here too.)
+//! View coordinates arrive as decimal strings so that any depth is exact; the scene keeps
+//! the text (and a wide-exponent summary of its value) so that deep engines, error messages
+//! and the PNG metadata see exactly what the user wrote. `FloatExp` carries pixel offsets
+//! and deltas below the f64 range; `Real` lets one loop run on f64 or `FloatExp`.
 
 mod decimal;
+mod floatexp;
+pub mod real;
 
 pub use decimal::{Decimal, DecimalError};
+pub use floatexp::FloatExp;
+pub use real::Real;

@@ -1,0 +1,152 @@
+//! The deep-zoom engine: an arbitrary-precision reference orbit, perturbation of every
+//! sample against it with rebasing, and bilinear approximation (BLA) to skip iterations.
+//!
+//! [`prepare`] computes what all tiles share (reference orbits, BLA tables) once per scene;
+//! [`Perturbation::orbit`] then iterates one sample. The loop is generic over the delta's
+//! number type (f64 or `FloatExp`), see [`perturb`].
+
+pub mod bigfloat;
+pub mod bla;
+pub mod perturb;
+pub mod reference;
+
+use std::sync::atomic::AtomicBool;
+
+use malachite_base::num::conversion::traits::FromSciString;
+use malachite_float::Float;
+use malachite_q::Rational;
+
+pub use bla::BlaTable;
+pub use perturb::{Counters, Numbers, Perturbation};
+pub use reference::Reference;
+
+use crate::field::Cancelled;
+use crate::num::{Decimal, FloatExp};
+
+/// The default BLA tolerance ε (relative size of the dropped nonlinear term per step).
+/// Chosen with `deepfield compare` (README): it keeps NF and distance errors inside the
+/// accuracy targets on the benchmark locations.
+pub const DEFAULT_BLA_TOLERANCE: f64 = 1e-12;
+
+/// How the view's scale was written (kept exact for the sample spacing).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Scale {
+    /// The image height spans 4 / zoom.
+    Zoom(Decimal),
+    /// Half the image height.
+    Radius(Decimal),
+}
+
+impl Scale {
+    /// The spacing between samples when `rows` sample rows span the view's height,
+    /// computed exactly and rounded once.
+    pub fn spacing(&self, rows: u32) -> FloatExp {
+        let parse = |d: &Decimal| {
+            let t = d.text().trim();
+            Rational::from_sci_string(t.strip_prefix('+').unwrap_or(t)).unwrap_or_default()
+        };
+        let radius = match self {
+            Scale::Zoom(z) => Rational::from(2u32) / parse(z),
+            Scale::Radius(r) => parse(r),
+        };
+        let spacing = radius * Rational::from(2u32) / Rational::from(rows);
+        bigfloat::to_floatexp(&Float::from_rational_prec(spacing, 64).0)
+    }
+}
+
+/// What the deep engine needs to know about a scene.
+#[derive(Debug, Clone)]
+pub struct DeepSpec {
+    /// View centre (the reference point).
+    pub center: [Decimal; 2],
+    /// Julia parameter, or None for the Mandelbrot set.
+    pub julia: Option<[Decimal; 2]>,
+    /// Sample spacing.
+    pub spacing: FloatExp,
+    /// The largest sample offset from the centre, in units of the spacing.
+    pub max_offset: f64,
+    /// Largest iteration index.
+    pub max_iter: u32,
+    /// Escape radius.
+    pub escape_radius: f64,
+    /// Carry the derivative.
+    pub derivative: bool,
+    /// BLA tolerance, or None for no BLA.
+    pub bla: Option<f64>,
+    /// Delta number types.
+    pub numbers: Numbers,
+}
+
+/// Progress of the shared work: (reference iterations done, of at most this many).
+pub type ReferenceProgress<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// Computes the reference orbit(s) and BLA tables for a scene.
+pub fn prepare(spec: &DeepSpec, progress: ReferenceProgress<'_>, cancel: &AtomicBool) -> Result<Perturbation, Cancelled> {
+    let bits = bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10);
+    let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
+    let zero = [Float::from(0u32), Float::from(0u32)];
+    let center = big(&spec.center);
+    let total = spec.max_iter as u64 * if spec.julia.is_some() { 2 } else { 1 };
+    let mut refs = Vec::new();
+    let mut done = 0u64;
+    let mut run = |start: &[Float; 2], c: &[Float; 2]| -> Result<Reference, Cancelled> {
+        let r = Reference::compute(start, c, spec.max_iter, spec.escape_radius, bits, &|n| progress(done + n as u64, total), cancel)?;
+        done += spec.max_iter as u64;
+        Ok(r)
+    };
+    let mandelbrot = spec.julia.is_none();
+    match &spec.julia {
+        None => refs.push(run(&zero, &center)?),
+        Some(c) => {
+            let c = big(c);
+            refs.push(run(&center, &c)?);
+            refs.push(run(&zero, &c)?);
+        }
+    }
+    progress(total, total);
+    let dc_max = if mandelbrot { spec.spacing.mul_f64(spec.max_offset) } else { FloatExp::ZERO };
+    let mut bla_fe = [None, None];
+    let mut bla_f64 = [None, None];
+    if let Some(eps) = spec.bla {
+        for (k, r) in refs.iter().enumerate() {
+            // Orbits of 0 step nonlinearly from Z_0 = 0: their tables start at index 1.
+            let origin = if mandelbrot || k == 1 { 1 } else { 0 };
+            let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max);
+            bla_f64[k] = Some(t.to_f64());
+            if spec.numbers == Numbers::FloatExp {
+                bla_fe[k] = Some(t);
+            }
+        }
+    }
+    Ok(Perturbation {
+        refs,
+        bla_fe,
+        bla_f64,
+        mandelbrot,
+        spacing: spec.spacing,
+        max_iter: spec.max_iter,
+        escape2: spec.escape_radius * spec.escape_radius,
+        derivative: spec.derivative,
+        numbers: spec.numbers,
+    })
+}
+
+impl Perturbation {
+    /// Bytes the reference orbits and BLA tables take.
+    pub fn bytes(&self) -> (usize, usize) {
+        let refs = self.refs.iter().map(Reference::bytes).sum();
+        let bla = self.bla_fe.iter().flatten().map(BlaTable::bytes).sum::<usize>()
+            + self.bla_f64.iter().flatten().map(BlaTable::bytes).sum::<usize>();
+        (refs, bla)
+    }
+
+    /// Precision of the reference orbit, in bits.
+    pub fn bits(&self) -> u64 {
+        self.refs[0].bits()
+    }
+
+    /// Length of the primary reference (its last index).
+    pub fn reference_length(&self) -> u32 {
+        self.refs[0].last()
+    }
+}

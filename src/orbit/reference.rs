@@ -1,0 +1,143 @@
+//! The reference orbit: one orbit iterated in arbitrary precision, stored compactly.
+//!
+//! Every sample of a deep view is iterated as a small delta against this orbit. The orbit
+//! is computed once per scene (all tiles share it) at a precision chosen from the view's
+//! depth, and stored as f64 pairs (16 bytes per iteration). Values whose exponent falls
+//! below the f64 range (|Z| < 2^-1000, which happens when the orbit passes very close to 0
+//! near a deep minibrot's nucleus) are also kept, sparsely, as `FloatExp`, because deep
+//! deltas must not be stepped against a Z that f64 rounded to zero.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use malachite_float::Float;
+
+use super::bigfloat::{self, BigComplex};
+use crate::field::Cancelled;
+use crate::num::FloatExp;
+
+/// Values below this magnitude are kept as `FloatExp` as well.
+const TINY: f64 = 1.0 / (1u128 << 100) as f64 / (1u128 << 100) as f64 / (1u128 << 100) as f64;
+
+/// Iterations between progress reports and cancellation checks.
+const REPORT_EVERY: u32 = 4096;
+
+/// An orbit Z_0 .. Z_last of z -> z^2 + C.
+#[derive(Debug, Clone)]
+pub struct Reference {
+    z: Vec<[f64; 2]>,
+    tiny: Vec<(u32, [FloatExp; 2])>,
+    escaped: bool,
+    bits: u64,
+}
+
+impl Reference {
+    /// Iterates from `start` with parameter `c` until |Z| > `escape_radius` or `max_iter`.
+    /// `progress` receives the iterations done so far; `cancel` stops the work.
+    pub fn compute(
+        start: &BigComplex,
+        c: &BigComplex,
+        max_iter: u32,
+        escape_radius: f64,
+        bits: u64,
+        progress: &dyn Fn(u32),
+        cancel: &AtomicBool,
+    ) -> Result<Reference, Cancelled> {
+        let r2 = escape_radius * escape_radius;
+        let mut out = Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits };
+        let mut z: BigComplex = [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
+        let mut n = 0u32;
+        loop {
+            let fe = [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])];
+            let f = [fe[0].to_f64(), fe[1].to_f64()];
+            if f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero()) {
+                out.tiny.push((n, fe));
+            }
+            out.z.push(f);
+            if f[0] * f[0] + f[1] * f[1] > r2 {
+                out.escaped = true;
+                break;
+            }
+            if n >= max_iter {
+                break;
+            }
+            if n.is_multiple_of(REPORT_EVERY) {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                progress(n);
+            }
+            z = bigfloat::step(&z, c, bits);
+            n += 1;
+        }
+        out.z.shrink_to_fit();
+        Ok(out)
+    }
+
+    /// Index of the last stored value.
+    #[inline]
+    pub fn last(&self) -> u32 {
+        (self.z.len() - 1) as u32
+    }
+
+    /// True when the orbit escaped (at index `last`).
+    pub fn escaped(&self) -> bool {
+        self.escaped
+    }
+
+    /// Precision it was computed with, in bits.
+    pub fn bits(&self) -> u64 {
+        self.bits
+    }
+
+    /// Z_m rounded to f64 (zero or subnormal for tiny values).
+    #[inline(always)]
+    pub fn get(&self, m: u32) -> [f64; 2] {
+        self.z[m as usize]
+    }
+
+    /// Z_m at full range.
+    #[inline]
+    pub fn get_fe(&self, m: u32) -> [FloatExp; 2] {
+        let f = self.z[m as usize];
+        if f[0].abs().max(f[1].abs()) < TINY
+            && let Ok(i) = self.tiny.binary_search_by_key(&m, |t| t.0)
+        {
+            return self.tiny[i].1;
+        }
+        [FloatExp::from(f[0]), FloatExp::from(f[1])]
+    }
+
+    /// Bytes of memory the stored orbit uses.
+    pub fn bytes(&self) -> usize {
+        self.z.capacity() * 16 + self.tiny.capacity() * std::mem::size_of::<(u32, [FloatExp; 2])>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orbit_of_minus_two_stays_on_two() {
+        let c = [Float::from(-2.0), Float::from(0.0)];
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let r = Reference::compute(&z0, &c, 50, 1024.0, 128, &|_| {}, &AtomicBool::new(false)).unwrap();
+        assert_eq!(r.last(), 50);
+        assert!(!r.escaped());
+        assert_eq!(r.get(1), [-2.0, 0.0]);
+        assert_eq!(r.get(50), [2.0, 0.0]);
+    }
+
+    #[test]
+    fn tiny_values_keep_their_exponent() {
+        // Z_0 = 1e-400 (beyond f64): stored exactly as FloatExp.
+        let d = crate::num::Decimal::parse("1e-400").unwrap();
+        let z0 = [bigfloat::from_decimal(&d, 200), Float::from(0.0)];
+        let c = [Float::from(0.25), Float::from(0.0)];
+        let r = Reference::compute(&z0, &c, 3, 4.0, 200, &|_| {}, &AtomicBool::new(false)).unwrap();
+        assert_eq!(r.get(0), [0.0, 0.0]);
+        let fe = r.get_fe(0);
+        assert!((fe[0].log2() / std::f64::consts::LOG2_10 + 400.0).abs() < 1e-9);
+        assert_eq!(r.get_fe(1)[0].to_f64(), 0.25);
+    }
+}
