@@ -6,6 +6,7 @@
 //! around it all ([`scene`], [`render`], [`io`]). The command line lives in the binary.
 
 pub mod coloring;
+pub mod compare;
 pub mod compose;
 pub mod field;
 pub mod formula;

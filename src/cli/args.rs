@@ -20,20 +20,45 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene to PNG (and optionally its raw data to EXR).
     Render(Box<RenderArgs>),
+    /// Render a scene with every engine that can address it and measure each against a
+    /// direct big-float ground truth on a sample of pixels.
+    Compare(Box<CompareArgs>),
 }
 
 /// `deepfield render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene to render: a TOML scene file, or a PNG written by deepfield (its embedded scene).
-    /// Without one, flags alone describe the scene (default: the whole Mandelbrot set).
-    pub scene: Option<PathBuf>,
+    /// The scene and flags that override it.
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Output PNG (default: the scene's name with .png, in the current folder).
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Also write the raw per-pixel data as OpenEXR (channels: see --channels).
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
+    /// Worker threads (default: one per core). Output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Print engine, precision, pixels, iterations, time and speed when done.
+    #[arg(long)]
+    pub stats: bool,
+    /// Write the same statistics as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// A scene and the flags that build or override it (shared by `render` and `compare`).
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Scene: a TOML scene file, a Kalles Fraktaler .kfr location, or a PNG written by deepfield
+    /// (its embedded scene).
+    /// Without one, flags alone describe the scene (default: the whole Mandelbrot set).
+    #[arg(value_name = "SCENE")]
+    pub path: Option<PathBuf>,
     /// Formula.
     #[arg(long, value_parser = ["mandelbrot", "julia"])]
     pub formula: Option<String>,
@@ -61,12 +86,16 @@ pub struct RenderArgs {
     /// Supersampling: N x N samples per pixel, averaged in linear light (1 ..= 16).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=16))]
     pub aa: Option<u64>,
-    /// Worker threads (default: one per core). Output does not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
-    pub threads: Option<u64>,
-    /// Engine: auto picks the cheapest exact enough for the view.
-    #[arg(long, value_parser = ["auto", "f64"])]
+    /// Engine: auto picks the cheapest exact enough for the view (f64 direct, then
+    /// perturbation with f64 deltas, then with FloatExp deltas); the others force one.
+    #[arg(long, value_parser = ["auto", "f64", "perturb-f64", "perturb-floatexp"])]
     pub engine: Option<String>,
+    /// Turn off bilinear approximation in the perturbation engines.
+    #[arg(long)]
+    pub no_bla: bool,
+    /// BLA tolerance ε (relative size of the dropped term per step; default 1e-12).
+    #[arg(long, value_name = "EPS", value_parser = parse_tolerance)]
+    pub bla_tolerance: Option<f64>,
     /// Palette for every layer that uses one: a built-in name or a palette file.
     #[arg(long, value_name = "NAME|FILE")]
     pub palette: Option<String>,
@@ -76,12 +105,29 @@ pub struct RenderArgs {
     /// PNG bits per channel.
     #[arg(long, value_parser = ["8", "16"])]
     pub bits: Option<String>,
-    /// Print engine, precision, pixels, iterations, time and speed when done.
+}
+
+/// `deepfield compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The scene and flags that override it.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Pixels compared against the big-float ground truth (a deterministic random sample).
+    #[arg(long, value_name = "N", default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    pub samples: u32,
+    /// Render only these sampled pixels with each engine instead of the whole image.
     #[arg(long)]
-    pub stats: bool,
-    /// Write the same statistics as JSON to FILE.
-    #[arg(long, value_name = "FILE")]
-    pub stats_json: Option<PathBuf>,
+    pub sample_only: bool,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Print the rows as JSON.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print the rows as CSV.
+    #[arg(long)]
+    pub csv: bool,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -112,6 +158,13 @@ fn parse_escape(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(r) if r.is_finite() && (2.0..=1e150).contains(&r) => Ok(r),
         _ => Err(format!("`{s}` is not an escape radius between 2 and 1e150")),
+    }
+}
+
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && (1e-300..=0.1).contains(&t) => Ok(t),
+        _ => Err(format!("`{s}` is not a BLA tolerance between 1e-300 and 0.1")),
     }
 }
 

@@ -7,7 +7,9 @@
 //! working, 130 for a cancelled run. `main` prints `error: {:#}` and never panics on input.
 
 mod args;
+mod compare;
 mod render;
+mod scene;
 
 use std::process::ExitCode;
 
@@ -41,6 +43,7 @@ pub fn main() -> ExitCode {
     };
     let result = match cli.command {
         args::Command::Render(r) => render::run(*r),
+        args::Command::Compare(c) => compare::run(*c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

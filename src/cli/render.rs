@@ -5,12 +5,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use anyhow::{Context, anyhow};
+use anyhow::anyhow;
 use deepfield::field::ChannelSet;
 use deepfield::io::{self, ExrLayout, ExrWriter, PngEncoder, PngWriter};
 use deepfield::render::{self, Options, RenderError, Stats};
-use deepfield::scene::raw::{LayerRaw, cli};
-use deepfield::scene::{Scene, SceneFile};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::Failure;
@@ -25,9 +23,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         let cancel = cancel.clone();
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
-    let scene = load_scene(&args)?;
+    let scene = super::scene::load(&args.scene)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
-    let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
+    let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.path.as_deref()));
     check_distinct(&args, &png_path)?;
     let exr_channels = if args.exr.is_some() { scene.channels } else { ChannelSet::default() };
     let toml = scene.to_toml();
@@ -54,9 +52,17 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     };
 
     let bar = progress_bar(&args, scene.height as u64);
-    let progress = |rows: u64| {
+    let progress = |p: render::Progress| {
         if let Some(b) = &bar {
-            b.set_position(rows);
+            match p {
+                render::Progress::Reference { done, total } => {
+                    b.set_message(format!("reference orbit {done}/{total}"));
+                }
+                render::Progress::Rows(rows) => {
+                    b.set_message("");
+                    b.set_position(rows);
+                }
+            }
         }
     };
     let aa = scene.aa as usize;
@@ -113,7 +119,7 @@ fn check_distinct(args: &RenderArgs, png: &Path) -> Result<(), Failure> {
                 return Err(Failure::Input(anyhow!("{a} and {b} name the same file {}", pa.display())));
             }
         }
-        if let Some(scene) = &args.scene
+        if let Some(scene) = &args.scene.path
             && abs(scene) == *pa
         {
             return Err(Failure::Input(anyhow!(
@@ -130,8 +136,9 @@ fn progress_bar(args: &RenderArgs, rows: u64) -> Option<ProgressBar> {
         return None;
     }
     let bar = ProgressBar::new(rows);
-    let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} rows, ETA {eta}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    let style =
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} rows, ETA {eta} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
     Some(bar)
 }
@@ -143,8 +150,8 @@ fn report(
 ) -> Result<(), Failure> {
     if args.stats {
         let mut out = std::io::stdout().lock();
-        let text = format!(
-            "engine      {}\n  why       {}\nprecision   {}\nsimd        {}\nthreads     {}\npixels      {}\nsamples     {}\niterations  {}\nwall time   {:.3} s\nspeed       {:.3e} iterations/s\n",
+        let mut text = format!(
+            "engine      {}\n  why       {}\nprecision   {}\nsimd        {}\nthreads     {}\npixels      {}\nsamples     {}\niterations  {}\nwall time   {:.3} s\nspeed       {:.3e} iterations/s\nglitches    {}\n",
             stats.engine,
             stats.engine_reason,
             stats.precision,
@@ -154,8 +161,24 @@ fn report(
             stats.samples,
             stats.iterations,
             stats.wall_seconds,
-            stats.iterations_per_second
+            stats.iterations_per_second,
+            stats.glitched_pixels
         );
+        if let Some(d) = &stats.deep {
+            text.push_str(&format!(
+                "reference   {} iterations at {} bits, {:.3} s (with BLA tables), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                d.reference_iterations,
+                d.reference_bits,
+                d.reference_seconds,
+                d.reference_bytes as f64 / 1e6,
+                d.bla_bytes as f64 / 1e6,
+                d.steps,
+                d.floatexp_steps,
+                d.bla_steps,
+                d.bla_iterations,
+                d.rebases
+            ));
+        }
         out.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }
     if let (Some(path), Some((file, mut w))) = (&args.stats_json, stats_file) {
@@ -174,106 +197,4 @@ fn default_output(scene: Option<&Path>) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "deepfield".into());
     PathBuf::from(format!("{stem}.png"))
-}
-
-/// Reads the scene named on the command line (TOML or PNG), applies the flags, validates.
-fn load_scene(args: &RenderArgs) -> Result<Scene, Failure> {
-    let (origin, text, base_dir) = match &args.scene {
-        None => ("command line".to_string(), "version = 1\n".to_string(), PathBuf::from(".")),
-        Some(path) => {
-            let origin = path.display().to_string();
-            if !path.exists() {
-                return Err(Failure::Input(anyhow!("{origin}: no such scene file")));
-            }
-            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let is_png = std::fs::File::open(path)
-                .and_then(|mut f| {
-                    let mut magic = [0u8; 8];
-                    std::io::Read::read(&mut f, &mut magic).map(|n| n == 8 && magic == *b"\x89PNG\r\n\x1a\n")
-                })
-                .unwrap_or(false);
-            let text = if is_png {
-                io::read_png_scene(path)
-                    .map_err(Failure::input)?
-                    .ok_or_else(|| Failure::Input(anyhow!("{origin}: this PNG carries no deepfield scene")))?
-            } else {
-                std::fs::read_to_string(path)
-                    .with_context(|| format!("{origin}: cannot read scene"))
-                    .map_err(Failure::Input)?
-            };
-            (origin, text, base)
-        }
-    };
-    let mut file = Scene::parse_file(&origin, &text).map_err(Failure::input)?;
-    apply_flags(&mut file, args);
-    Scene::validate(file, &origin, &text, &base_dir, &io::load_bitmap).map_err(Failure::input)
-}
-
-/// Writes the flags into the scene, so the PNG's embedded scene reproduces the render.
-fn apply_flags(file: &mut SceneFile, a: &RenderArgs) {
-    if let Some(f) = &a.formula {
-        file.formula.kind = cli(f.clone());
-        if f == "mandelbrot" {
-            file.formula.c = None;
-        }
-    }
-    if let Some(c) = &a.julia_c {
-        file.formula.kind = cli("julia".into());
-        file.formula.c = Some(cli(c.clone()));
-    }
-    if let Some(c) = &a.center {
-        file.view.center = cli(c.clone());
-    }
-    if let Some(z) = &a.zoom {
-        file.view.zoom = Some(cli(z.clone()));
-        file.view.radius = None;
-    }
-    if let Some(r) = &a.radius {
-        file.view.radius = Some(cli(r.clone()));
-        file.view.zoom = None;
-    }
-    if let Some((w, h)) = a.size {
-        file.view.width = cli(w as i64);
-        file.view.height = cli(h as i64);
-    }
-    if let Some(n) = a.max_iter {
-        file.iteration.max = cli(n as i64);
-    }
-    if let Some(r) = a.escape_radius {
-        file.iteration.escape_radius = cli(r);
-    }
-    if let Some(n) = a.aa {
-        file.render.aa = cli(n as i64);
-    }
-    if let Some(e) = &a.engine {
-        file.render.engine = cli(e.clone());
-    }
-    if let Some(p) = &a.palette {
-        // A palette file named on the command line is relative to the current folder.
-        let p = match std::fs::canonicalize(p) {
-            Ok(abs) if Path::new(p).is_file() => abs.display().to_string(),
-            _ => p.clone(),
-        };
-        if file.layers.is_empty() {
-            file.layers.push(toml::Spanned::new(0..0, LayerRaw::of_kind("smooth")));
-        }
-        for l in &mut file.layers {
-            let l = l.get_mut();
-            // Distance layers without a palette are grey by design; they keep that look.
-            let uses_palette = match l.kind.get_ref().as_str() {
-                "smooth" | "trap" => true,
-                "distance" => l.palette.is_some(),
-                _ => false,
-            };
-            if uses_palette {
-                l.palette = Some(cli(p.clone()));
-            }
-        }
-    }
-    if let Some(set) = a.channels {
-        file.output.channels = Some(cli(set.iter().map(|c| c.name().to_string()).collect()));
-    }
-    if let Some(b) = &a.bits {
-        file.output.bits = Some(cli(b.parse().unwrap_or(8)));
-    }
 }

@@ -25,6 +25,19 @@ impl SampleGrid {
         [self.center[0] + ox, self.center[1] - oy]
     }
 
+    /// The offset of sample (i, j) from the centre in units of the spacing (exact: halves).
+    #[inline]
+    pub fn offset(&self, i: u32, j: u32) -> [f64; 2] {
+        let ox = (2.0 * i as f64 + 1.0 - self.width as f64) * 0.5;
+        let oy = (2.0 * j as f64 + 1.0 - self.height as f64) * 0.5;
+        [ox, -oy]
+    }
+
+    /// The largest |offset| of any sample, in units of the spacing.
+    pub fn max_offset(&self) -> f64 {
+        (self.width as f64).hypot(self.height as f64) * 0.5
+    }
+
     /// Distance between neighbouring samples in the plane.
     pub fn spacing(&self) -> f64 {
         2.0 * self.radius / self.height as f64

@@ -12,14 +12,17 @@ mod planes;
 pub mod quantities;
 pub mod scalar;
 pub mod simd;
+pub mod single;
 
-use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use grid::SampleGrid;
 pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
 
 use crate::formula::Family;
-use crate::trap::Trap;
+use crate::orbit::{Counters, Perturbation};
+use crate::trap::{Trap, TrapState};
 
 /// N of a sample that never escaped within the iteration limit.
 pub const INTERIOR: u32 = u32::MAX;
@@ -98,13 +101,17 @@ pub struct FieldParams {
     pub needs: Needs,
     /// Where samples lie.
     pub grid: SampleGrid,
+    /// The deep engine's shared data; None runs the direct kernels.
+    pub deep: Option<Arc<Perturbation>>,
+    /// Run the direct f32 kernel instead of f64 (comparisons only; traps are not computed).
+    pub single: bool,
 }
 
 impl FieldParams {
     /// Builds the parameters; the derivative is tracked exactly when distance is needed.
     pub fn new(family: Family, max_iter: u32, escape_radius: f64, needs: Needs, grid: SampleGrid) -> Self {
         let orbit = OrbitParams { family, max_iter, escape_radius, derivative: needs.de };
-        Self { orbit, needs, grid }
+        Self { orbit, needs, grid, deep: None, single: false }
     }
 }
 
@@ -113,8 +120,11 @@ impl FieldParams {
 pub struct Strip {
     /// The planes, `grid.width` wide.
     pub planes: Planes,
-    /// Iterations performed by the orbit loops (skipped samples count zero).
+    /// Iterations performed by the orbit loops (skipped samples count zero; for the
+    /// perturbation engine, iterations the samples advanced, BLA-skipped ones included).
     pub iterations: u64,
+    /// What the perturbation loop did (zero for the direct kernels).
+    pub counters: Counters,
 }
 
 /// Computes sample rows `rows` of the grid.
@@ -127,6 +137,10 @@ pub fn compute_strip(
     let width = grid.width as usize;
     let count = width * rows.len();
     let mut planes = Planes::new(width, rows.len(), &params.needs);
+    if let Some(deep) = &params.deep {
+        let counters = deep_strip(deep, params, rows, &mut planes, cancel)?;
+        return Ok(Strip { planes, iterations: counters.iterations, counters });
+    }
     let mut points = Vec::with_capacity(count);
     for j in rows {
         for i in 0..grid.width {
@@ -137,6 +151,15 @@ pub fn compute_strip(
     let spacing = grid.spacing();
     let mut orbits = vec![Orbit::interior(); count];
     let iterations = match params.needs.traps.as_slice() {
+        _ if params.single => {
+            let mut its = 0;
+            for (o, p) in orbits.iter_mut().zip(&points) {
+                let (orbit, n) = single::orbit(&params.orbit, *p);
+                *o = orbit;
+                its += n;
+            }
+            its
+        }
         [] => simd::iterate(&params.orbit, &points, &mut orbits, cancel)?,
         // One geometric trap (the common case) runs vectorised; several traps or a bitmap
         // (a texture lookup per step) run in the scalar kernel.
@@ -152,22 +175,60 @@ pub fn compute_strip(
         }
         traps => scalar::iterate_with_traps(&params.orbit, traps, &points, &mut orbits, &mut planes.traps, cancel)?,
     };
+    fill_quantities(&params.needs, &orbits, ln_r, spacing, &mut planes);
+    Ok(Strip { planes, iterations, counters: Counters::default() })
+}
+
+/// Writes N and the quantities derived from each orbit's end into the planes.
+fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, planes: &mut Planes) {
     for (k, orbit) in orbits.iter().enumerate() {
         planes.n[k] = orbit.n;
         if orbit.n == INTERIOR {
             continue;
         }
-        if params.needs.nf {
+        if needs.nf {
             planes.nf[k] = quantities::smooth_fraction(orbit.z, ln_r);
         }
-        if params.needs.t {
+        if needs.t {
             planes.t[k] = quantities::phase(orbit.z);
         }
-        if params.needs.de {
+        if needs.de {
             let [dx, dy] = quantities::distance_vector(orbit.z, orbit.dz, spacing);
             planes.dex[k] = dx;
             planes.dey[k] = dy;
         }
     }
-    Ok(Strip { planes, iterations })
+}
+
+/// Computes sample rows `rows` with the perturbation engine (one sample at a time; traps
+/// observe z = Z + δ). The derivative it returns is already scaled by the spacing.
+fn deep_strip(
+    deep: &Perturbation,
+    params: &FieldParams,
+    rows: std::ops::Range<u32>,
+    planes: &mut Planes,
+    cancel: &AtomicBool,
+) -> Result<Counters, Cancelled> {
+    let grid = &params.grid;
+    let traps = &params.needs.traps;
+    let mut states: Vec<TrapState> = traps.iter().map(Trap::initial).collect();
+    let mut counters = Counters::default();
+    let mut orbits = Vec::with_capacity(grid.width as usize * rows.len());
+    for j in rows {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Cancelled);
+        }
+        for i in 0..grid.width {
+            for (state, trap) in states.iter_mut().zip(traps) {
+                *state = trap.initial();
+            }
+            let k = orbits.len();
+            orbits.push(deep.orbit(grid.offset(i, j), traps, &mut states, &mut counters));
+            for (plane, state) in planes.traps.iter_mut().zip(&states) {
+                plane.store(k, state);
+            }
+        }
+    }
+    fill_quantities(&params.needs, &orbits, params.orbit.escape_radius.ln(), 1.0, planes);
+    Ok(counters)
 }

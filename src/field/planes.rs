@@ -116,6 +116,19 @@ pub enum TrapPlane {
     Color(Vec<[f32; 4]>),
 }
 
+impl TrapPlane {
+    /// Stores sample `k`'s final trap state.
+    #[inline]
+    pub fn store(&mut self, k: usize, state: &crate::trap::TrapState) {
+        use crate::trap::TrapState;
+        match (self, state) {
+            (TrapPlane::Distance(d), TrapState::Distance(v)) => d[k] = v.min(f32::MAX as f64) as f32,
+            (TrapPlane::Color(c), TrapState::Color { rgba, .. }) => c[k] = *rgba,
+            _ => {}
+        }
+    }
+}
+
 /// Raw planes of `width * rows` samples, row-major. Planes not asked for are empty.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Planes {

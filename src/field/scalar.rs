@@ -77,11 +77,7 @@ pub fn iterate_with_traps(
         out[k] = orbit;
         iterations += its;
         for (plane, state) in planes.iter_mut().zip(&states) {
-            match (plane, state) {
-                (TrapPlane::Distance(d), TrapState::Distance(v)) => d[k] = v.min(f32::MAX as f64) as f32,
-                (TrapPlane::Color(c), TrapState::Color { rgba, .. }) => c[k] = *rgba,
-                _ => {}
-            }
+            plane.store(k, state);
         }
     }
     debug_assert!(out.iter().all(|o| o.n == INTERIOR || o.n <= params.max_iter));

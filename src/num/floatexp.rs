@@ -11,7 +11,7 @@
 //! deep iterations, and `frexp`-style library calls are several times slower.
 
 use std::cmp::Ordering;
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Exponent used for zero: far below any real value, so that comparisons by exponent work.
 const ZERO_EXP: i32 = i32::MIN / 4;
@@ -117,12 +117,6 @@ impl FloatExp {
         FloatExp::new((self.m * (1.0 + odd)).sqrt(), half)
     }
 
-    /// self / o.
-    #[inline]
-    pub fn div(self, o: FloatExp) -> Self {
-        FloatExp::new(self.m / o.m, self.e.saturating_sub(o.e))
-    }
-
     /// The larger of two values.
     #[inline]
     pub fn max(self, o: FloatExp) -> Self {
@@ -188,6 +182,14 @@ impl Add for FloatExp {
         } else {
             FloatExp::new(self.m * exp2i(d) + o.m, o.e)
         }
+    }
+}
+
+impl Div for FloatExp {
+    type Output = FloatExp;
+    #[inline]
+    fn div(self, o: FloatExp) -> FloatExp {
+        FloatExp::new(self.m / o.m, self.e.saturating_sub(o.e))
     }
 }
 
@@ -276,7 +278,7 @@ mod tests {
         assert!(three > tiny && -three < tiny && FloatExp::ZERO < tiny && -tiny < FloatExp::ZERO);
         assert_eq!(FloatExp::new(1.0, 5000).to_f64(), f64::INFINITY);
         let nine = FloatExp::exp10(-801.0).mul_f64(9.0);
-        let r = nine.sqrt().div(FloatExp::exp10(-400.5));
+        let r = nine.sqrt() / FloatExp::exp10(-400.5);
         assert!((r.to_f64() - 3.0).abs() < 1e-12, "{r:?}");
         assert_eq!(FloatExp::from(2.0).sqrt().to_f64(), 2f64.sqrt());
         // Subnormal f64 values convert both ways.

@@ -11,7 +11,15 @@ use super::FloatExp;
 
 /// A real number type the perturbation loop can run on.
 pub trait Real:
-    Copy + Send + Sync + Debug + PartialOrd + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+    Copy
+    + Send
+    + Sync
+    + Debug
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Neg<Output = Self>
 {
     /// Zero.
     const ZERO: Self;

@@ -55,7 +55,7 @@ fn merge(x: &Node, y: &Node, dc_max: FloatExp) -> Node {
     let b = cadd(cmul(y.a, x.b), y.b);
     let through = (y.r - cabs(x.b) * dc_max).max(FloatExp::ZERO);
     let ax = cabs(x.a);
-    let ry = if ax.is_zero() { y.r.max(FloatExp::ZERO) } else { through.div(ax) };
+    let ry = if ax.is_zero() { y.r.max(FloatExp::ZERO) } else { through / ax };
     Node { a, b, r: x.r.min(ry) }
 }
 
@@ -93,22 +93,26 @@ impl BlaTable<FloatExp> {
 
 impl<T: Real> BlaTable<T> {
     /// The longest valid step at index `m` for a delta with |z|^2 = `z2`, at most `budget`
-    /// iterations long; returns the step and its length.
+    /// iterations long; returns the step and its length. A longer step starting at the same
+    /// index is valid on a subset of where a shorter one is (its radius is a minimum over
+    /// more steps), so the search climbs from the shortest step and stops at the first that
+    /// fails: one probe where nothing is valid, which is the common case.
     #[inline]
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(&Bla<T>, u32)> {
         let i = m.checked_sub(self.origin)?;
         let aligned = if i == 0 { self.levels.len() } else { (i.trailing_zeros() as usize).min(self.levels.len()) };
-        for k in (0..aligned).rev() {
+        let mut best = None;
+        for k in 0..aligned {
             let len = 2u32 << k;
             if len > budget {
-                continue;
+                break;
             }
             match self.levels[k].get((i >> (k + 1)) as usize) {
-                Some(e) if z2 < e.r2 => return Some((e, len)),
-                _ => {}
+                Some(e) if z2 < e.r2 => best = Some((e, len)),
+                _ => break,
             }
         }
-        None
+        best
     }
 
     /// Bytes of memory the table uses.

@@ -41,6 +41,11 @@ impl Scale {
     /// The spacing between samples when `rows` sample rows span the view's height,
     /// computed exactly and rounded once.
     pub fn spacing(&self, rows: u32) -> FloatExp {
+        bigfloat::to_floatexp(&self.spacing_big(rows, 64))
+    }
+
+    /// The spacing between samples at `bits` of precision (rounded once).
+    pub fn spacing_big(&self, rows: u32, bits: u64) -> Float {
         let parse = |d: &Decimal| {
             let t = d.text().trim();
             Rational::from_sci_string(t.strip_prefix('+').unwrap_or(t)).unwrap_or_default()
@@ -50,7 +55,7 @@ impl Scale {
             Scale::Radius(r) => parse(r),
         };
         let spacing = radius * Rational::from(2u32) / Rational::from(rows);
-        bigfloat::to_floatexp(&Float::from_rational_prec(spacing, 64).0)
+        Float::from_rational_prec(spacing, bits).0
     }
 }
 
@@ -81,7 +86,11 @@ pub struct DeepSpec {
 pub type ReferenceProgress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// Computes the reference orbit(s) and BLA tables for a scene.
-pub fn prepare(spec: &DeepSpec, progress: ReferenceProgress<'_>, cancel: &AtomicBool) -> Result<Perturbation, Cancelled> {
+pub fn prepare(
+    spec: &DeepSpec,
+    progress: ReferenceProgress<'_>,
+    cancel: &AtomicBool,
+) -> Result<Perturbation, Cancelled> {
     let bits = bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10);
     let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
     let zero = [Float::from(0u32), Float::from(0u32)];
@@ -90,7 +99,15 @@ pub fn prepare(spec: &DeepSpec, progress: ReferenceProgress<'_>, cancel: &Atomic
     let mut refs = Vec::new();
     let mut done = 0u64;
     let mut run = |start: &[Float; 2], c: &[Float; 2]| -> Result<Reference, Cancelled> {
-        let r = Reference::compute(start, c, spec.max_iter, spec.escape_radius, bits, &|n| progress(done + n as u64, total), cancel)?;
+        let r = Reference::compute(
+            start,
+            c,
+            spec.max_iter,
+            spec.escape_radius,
+            bits,
+            &|n| progress(done + n as u64, total),
+            cancel,
+        )?;
         done += spec.max_iter as u64;
         Ok(r)
     };

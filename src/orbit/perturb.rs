@@ -215,12 +215,11 @@ impl Perturbation {
         let full_range = D::NAME == FloatExp::NAME;
         let two = D::from_f64(2.0);
         let start_n = s.n;
-        let done = |n: u32, counters: &mut Counters, orbit: Orbit| {
-            counters.iterations += (n - start_n) as u64;
-            Exit::Done(orbit)
-        };
-        loop {
-            let r = &self.refs[s.which];
+        // Counted locally and added on exit: the loop's state stays in registers.
+        let mut local = Counters::default();
+        let mut r = &self.refs[s.which];
+        let mut table = tables[s.which];
+        let exit = loop {
             let mut zm: [D; 2] = if full_range {
                 cconv(r.get_fe(s.m))
             } else {
@@ -236,33 +235,35 @@ impl Perturbation {
             }
             if z[0] * z[0] + z[1] * z[1] > self.escape2 {
                 let dz = if self.derivative { der.to_f64() } else { [0.0; 2] };
-                return done(s.n, counters, Orbit { n: s.n, z, dz });
+                break Exit::Done(Orbit { n: s.n, z, dz });
             }
             if s.n >= self.max_iter {
-                return done(s.n, counters, Orbit::interior());
+                break Exit::Done(Orbit::interior());
             }
             let d2 = norm2(s.dz);
             let f2 = norm2(full);
-            let glitch = !(f2 < d2) && f2 < norm2(zm).mul_f64(GLITCH2);
-            if f2 < d2 || glitch || s.m >= r.last() {
-                counters.glitches += glitch as u64;
-                counters.rebases += 1;
+            let rebase = f2 < d2 || s.m >= r.last();
+            let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
+            if rebase || glitch {
+                local.glitches += glitch as u64;
+                local.rebases += 1;
                 s.dz = full;
                 s.m = 0;
                 s.which = self.refs.len() - 1;
+                r = &self.refs[s.which];
+                table = tables[s.which];
                 zm = [D::ZERO; 2];
                 if hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
-                    counters.iterations += (s.n - start_n) as u64;
-                    return Exit::Switch(s);
+                    break Exit::Switch(s);
                 }
-            } else if let Some(table) = tables[s.which]
-                && let Some((e, len)) = table.lookup(s.m, d2, self.max_iter - s.n)
+            } else if let Some(t) = table
+                && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
             {
                 self.apply_bla(e, &mut s, der, add_fe);
                 s.m += len;
                 s.n += len;
-                counters.bla_steps += 1;
-                counters.bla_iterations += len as u64;
+                local.bla_steps += 1;
+                local.bla_iterations += len as u64;
                 continue;
             }
             if self.derivative {
@@ -274,19 +275,21 @@ impl Perturbation {
             s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
             s.m += 1;
             s.n += 1;
-            counters.steps += 1;
-            if full_range {
-                counters.floatexp_steps += 1;
-                if hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
-                    counters.iterations += (s.n - start_n) as u64;
-                    return Exit::Switch(s);
-                }
+            local.steps += 1;
+            if full_range && hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
+                break Exit::Switch(s);
             }
+        };
+        if full_range {
+            local.floatexp_steps = local.steps;
         }
+        local.iterations = (s.n - start_n) as u64;
+        counters.add(&local);
+        exit
     }
 
     /// δ -> A δ + B δc, and the derivative alike (in FloatExp: A may be huge).
-    #[inline]
+    #[inline(never)]
     fn apply_bla<D: Real>(&self, e: &Bla<D>, s: &mut Sample<D>, der: &mut Der, add_fe: FloatExp) {
         s.dz = cadd(cmul(e.a, s.dz), cmul(e.b, s.dc));
         if self.derivative {

@@ -44,7 +44,8 @@ impl Reference {
     ) -> Result<Reference, Cancelled> {
         let r2 = escape_radius * escape_radius;
         let mut out = Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits };
-        let mut z: BigComplex = [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
+        let mut z: BigComplex =
+            [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
         let mut n = 0u32;
         loop {
             let fe = [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])];

@@ -15,9 +15,12 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::compose;
+use std::sync::{Arc, Mutex};
+
 use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
-use crate::scene::{FamilySpec, Scene};
+use crate::orbit::{self, Counters, DeepSpec};
+use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
 
 /// Why a render did not complete.
 #[derive(Debug, thiserror::Error)]
@@ -57,6 +60,45 @@ pub struct RenderedStrip {
     pub samples: Option<Vec<[f32; 3]>>,
 }
 
+/// Progress of a render.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// Reference orbit iterations done, of at most `total`.
+    Reference {
+        /// Done so far.
+        done: u64,
+        /// At most this many.
+        total: u64,
+    },
+    /// Output rows finished.
+    Rows(u64),
+}
+
+/// What the deep engine did (absent for the direct kernels).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct DeepStats {
+    /// Precision of the reference orbit in bits.
+    pub reference_bits: u64,
+    /// Iterations in the primary reference orbit.
+    pub reference_iterations: u32,
+    /// Seconds spent on reference orbits and BLA tables.
+    pub reference_seconds: f64,
+    /// Bytes of the reference orbit(s).
+    pub reference_bytes: usize,
+    /// Bytes of the BLA tables.
+    pub bla_bytes: usize,
+    /// Perturbation steps performed one at a time.
+    pub steps: u64,
+    /// Of those, steps in FloatExp.
+    pub floatexp_steps: u64,
+    /// BLA steps applied.
+    pub bla_steps: u64,
+    /// Iterations skipped by BLA steps.
+    pub bla_iterations: u64,
+    /// Rebases.
+    pub rebases: u64,
+}
+
 /// What a render did.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Stats {
@@ -66,6 +108,12 @@ pub struct Stats {
     pub engine_reason: String,
     /// Arithmetic precision of the orbit loop.
     pub precision: String,
+    /// Samples Pauldelbrot's glitch criterion flagged (each was fixed by rebasing; always 0
+    /// for the direct kernels, which have no reference to glitch against).
+    pub glitched_pixels: u64,
+    /// The deep engine's figures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub deep: Option<DeepStats>,
     /// Instruction set the kernels ran with.
     pub simd: String,
     /// Output pixels.
@@ -122,6 +170,39 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
     FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
 }
 
+/// The field parameters for `plan`, with the deep engine's reference orbits and BLA tables
+/// computed (once, shared by every strip) when the plan perturbs. Returns the seconds
+/// the shared work took.
+pub fn prepare_field(
+    scene: &Scene,
+    plan: &EnginePlan,
+    exr_channels: ChannelSet,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<(FieldParams, f64), Cancelled> {
+    let start = Instant::now();
+    let mut params = field_params(scene, exr_channels);
+    if let EngineKind::Perturb { numbers, bla } = plan.kind {
+        let spec = DeepSpec {
+            center: scene.center.clone(),
+            julia: match &scene.family {
+                FamilySpec::Mandelbrot => None,
+                FamilySpec::Julia { c } => Some(c.clone()),
+            },
+            spacing: scene.scale.spacing(params.grid.height),
+            max_offset: params.grid.max_offset(),
+            max_iter: scene.max_iter,
+            escape_radius: scene.escape_radius,
+            derivative: params.needs.de,
+            bla,
+            numbers,
+        };
+        let report = |done, total| progress(Progress::Reference { done, total });
+        params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
+    }
+    Ok((params, start.elapsed().as_secs_f64()))
+}
+
 /// Renders `scene`. Each strip goes through `prepare` on the worker that computed it (in
 /// parallel: encoding, compression), then, strictly in order, to `sink` on a writer thread.
 /// `progress` receives the number of output rows done.
@@ -129,13 +210,14 @@ pub fn render<P: Send>(
     scene: &Scene,
     options: Options,
     cancel: &AtomicBool,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &(dyn Fn(Progress) + Sync),
     prepare: &(dyn Fn(&RenderedStrip) -> Result<P, String> + Sync),
     mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
     let plan = scene.engine().map_err(RenderError::Engine)?;
-    let params = field_params(scene, options.exr_channels);
+    let (params, reference_seconds) = prepare_field(scene, &plan, options.exr_channels, cancel, progress)?;
+    let counters = Mutex::new(Counters::default());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
         .build()
@@ -155,12 +237,15 @@ pub fn render<P: Send>(
     let compute = |&(row, rows): &(u32, u32)| -> Result<(RenderedStrip, P), RenderError> {
         let strip = field::compute_strip(&params, row * aa..(row + rows) * aa, cancel)?;
         iterations.fetch_add(strip.iterations, Ordering::Relaxed);
+        if params.deep.is_some() {
+            counters.lock().unwrap_or_else(|e| e.into_inner()).add(&strip.counters);
+        }
         let samples = scene.stack.composite(&strip.planes, aa);
         let rgb = compose::downsample(&samples, strip.planes.width, aa as usize);
         let samples = options.exr_channels.contains(Channel::Rgb).then_some(samples);
         let done = RenderedStrip { row, rows, rgb, planes: strip.planes, samples };
         let prepared = prepare(&done).map_err(RenderError::Sink)?;
-        progress(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64);
+        progress(Progress::Rows(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64));
         Ok((done, prepared))
     };
 
@@ -195,10 +280,38 @@ pub fn render<P: Send>(
     let wall = start.elapsed().as_secs_f64();
     let its = iterations.load(Ordering::Relaxed);
     let pixels = scene.width as u64 * scene.height as u64;
+    let c = counters.into_inner().unwrap_or_else(|e| e.into_inner());
+    let deep = params.deep.as_ref().map(|d| {
+        let (reference_bytes, bla_bytes) = d.bytes();
+        DeepStats {
+            reference_bits: d.bits(),
+            reference_iterations: d.reference_length(),
+            reference_seconds,
+            reference_bytes,
+            bla_bytes,
+            steps: c.steps,
+            floatexp_steps: c.floatexp_steps,
+            bla_steps: c.bla_steps,
+            bla_iterations: c.bla_iterations,
+            rebases: c.rebases,
+        }
+    });
+    let precision = match plan.kind {
+        EngineKind::Direct => "f64 (53-bit mantissa)".to_string(),
+        EngineKind::Perturb { numbers: orbit::Numbers::F64, .. } => {
+            format!("reference {} bits; deltas f64", deep.as_ref().map_or(0, |d| d.reference_bits))
+        }
+        EngineKind::Perturb { .. } => format!(
+            "reference {} bits; deltas FloatExp (53-bit mantissa, 32-bit exponent) below 2^-896, f64 above",
+            deep.as_ref().map_or(0, |d| d.reference_bits)
+        ),
+    };
     Ok(Stats {
         engine: plan.name.to_string(),
         engine_reason: plan.reason,
-        precision: "f64 (53-bit mantissa)".into(),
+        precision,
+        glitched_pixels: c.glitches,
+        deep,
         simd: simd_name(),
         pixels,
         samples: pixels * (aa as u64).pow(2),

@@ -4,6 +4,7 @@
 //! problem with the file, line and column of the offending value and what was expected.
 //! The scene also decides which engine can address the view ([`Scene::engine`]).
 
+pub mod kfr;
 pub mod raw;
 mod validate;
 
@@ -15,6 +16,7 @@ pub use validate::BitmapLoader;
 use crate::compose::Stack;
 use crate::field::ChannelSet;
 use crate::num::Decimal;
+use crate::orbit::{Numbers, Scale};
 use crate::source::SourceError;
 use crate::trap::Trap;
 
@@ -51,16 +53,55 @@ pub enum EngineChoice {
     Auto,
     /// Direct f64 iteration.
     F64,
+    /// Perturbation with f64 deltas.
+    PerturbF64,
+    /// Perturbation with FloatExp deltas where f64 would underflow.
+    PerturbFloatExp,
+}
+
+impl EngineChoice {
+    /// Every accepted spelling, for messages.
+    pub const NAMES: &'static str = "\"auto\", \"f64\", \"perturb-f64\" or \"perturb-floatexp\"";
+
+    /// Parses an engine name.
+    pub fn parse(name: &str) -> Option<Self> {
+        Some(match name {
+            "auto" => EngineChoice::Auto,
+            "f64" => EngineChoice::F64,
+            "perturb-f64" => EngineChoice::PerturbF64,
+            "perturb-floatexp" => EngineChoice::PerturbFloatExp,
+            _ => return None,
+        })
+    }
+}
+
+/// How an engine iterates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EngineKind {
+    /// Direct f64 iteration of every sample (SIMD kernels).
+    Direct,
+    /// Perturbation against an arbitrary-precision reference.
+    Perturb {
+        /// Delta number types.
+        numbers: Numbers,
+        /// BLA tolerance (None: no BLA).
+        bla: Option<f64>,
+    },
 }
 
 /// The engine that will run, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnginePlan {
-    /// Short name ("f64").
+    /// Short name ("f64", "perturb-f64", "perturb-floatexp").
     pub name: &'static str,
+    /// How it iterates.
+    pub kind: EngineKind,
     /// Why it was chosen.
     pub reason: String,
 }
+
+/// Sample spacings below 10^this put deltas too close to the f64 underflow for f64 deltas.
+pub const PERTURB_F64_MIN_LOG10_SPACING: f64 = -290.0;
 
 /// A validated scene.
 #[derive(Debug, Clone)]
@@ -92,6 +133,10 @@ pub struct Scene {
     pub aa: u32,
     /// Requested engine.
     pub engine: EngineChoice,
+    /// BLA tolerance for the perturbation engines (None: BLA off).
+    pub bla: Option<f64>,
+    /// The view's scale as written (exact, for deep engines).
+    pub scale: Scale,
     /// Colouring layers.
     pub stack: Stack,
     /// Orbit traps the layers use.
@@ -140,8 +185,9 @@ impl Scene {
         self.log10_radius + 2f64.log10() - ((self.height * self.aa) as f64).log10()
     }
 
-    /// Chooses the engine for this view, or explains why none available can render it.
-    pub fn engine(&self) -> Result<EnginePlan, String> {
+    /// f64 ulps of the orbit's coordinates per sample: how well direct f64 iteration
+    /// resolves the view.
+    pub fn ulps_per_sample(&self) -> f64 {
         // The orbits meet values of magnitude up to ~2 whatever the view; the centre and
         // the Julia parameter may be larger.
         let mut magnitude = 1.0f64.log10();
@@ -152,18 +198,71 @@ impl Scene {
             magnitude = magnitude.max(d.log10_abs());
         }
         let ulp_log10 = magnitude - 52.0 * 2f64.log10();
-        let ulps_per_pixel = 10f64.powf(self.log10_spacing() - ulp_log10);
+        10f64.powf(self.log10_spacing() - ulp_log10)
+    }
+
+    /// Chooses the engine for this view (or checks the forced one), and says why.
+    pub fn engine(&self) -> Result<EnginePlan, String> {
+        self.engine_for(self.engine)
+    }
+
+    /// Like [`Scene::engine`] for a given choice.
+    pub fn engine_for(&self, choice: EngineChoice) -> Result<EnginePlan, String> {
+        let ulps = self.ulps_per_sample();
         let depth = -self.log10_radius + 2f64.log10();
-        if ulps_per_pixel >= F64_MIN_ULPS_PER_PIXEL {
-            let reason = format!(
-                "zoom 1e{depth:.1}: a pixel spans {ulps_per_pixel:.3e} f64 ulps (>= {F64_MIN_ULPS_PER_PIXEL}), so direct f64 iteration is exact enough",
-            );
-            Ok(EnginePlan { name: "f64", reason })
-        } else {
-            Err(format!(
-                "the view is too deep for f64: at zoom 1e{depth:.1} a pixel spans only {ulps_per_pixel:.3e} f64 ulps of the coordinates \
-                 (at least {F64_MIN_ULPS_PER_PIXEL} are needed); rendering it needs the perturbation engine, which this build does not have yet"
-            ))
+        let spacing = self.log10_spacing();
+        let f64_ok = ulps >= F64_MIN_ULPS_PER_PIXEL;
+        let deltas_ok = spacing > PERTURB_F64_MIN_LOG10_SPACING;
+        let bla = if self.traps.is_empty() { self.bla } else { None };
+        let bla_note = match (self.bla, bla) {
+            (Some(e), Some(_)) => format!("; BLA tolerance {e:e}"),
+            (Some(_), None) => "; BLA off (traps must see every iteration)".into(),
+            (None, _) => "; BLA off".into(),
+        };
+        let perturb = |numbers| EngineKind::Perturb { numbers, bla };
+        match choice {
+            EngineChoice::Auto if f64_ok => Ok(EnginePlan {
+                name: "f64",
+                kind: EngineKind::Direct,
+                reason: format!(
+                    "zoom 1e{depth:.1}: a sample spans {ulps:.3e} f64 ulps (>= {F64_MIN_ULPS_PER_PIXEL}), so direct f64 iteration is exact enough"
+                ),
+            }),
+            EngineChoice::Auto if deltas_ok => Ok(EnginePlan {
+                name: "perturb-f64",
+                kind: perturb(Numbers::F64),
+                reason: format!(
+                    "zoom 1e{depth:.1}: a sample spans only {ulps:.3e} f64 ulps (< {F64_MIN_ULPS_PER_PIXEL}), but the sample spacing 1e{spacing:.1} is inside the f64 range, so perturbation with f64 deltas{bla_note}"
+                ),
+            }),
+            EngineChoice::Auto => Ok(EnginePlan {
+                name: "perturb-floatexp",
+                kind: perturb(Numbers::FloatExp),
+                reason: format!(
+                    "zoom 1e{depth:.1}: the sample spacing 1e{spacing:.1} is below the f64-safe 1e{PERTURB_F64_MIN_LOG10_SPACING}, so perturbation with FloatExp deltas (f64 once a delta grows past 2^-896){bla_note}"
+                ),
+            }),
+            EngineChoice::F64 if f64_ok => Ok(EnginePlan {
+                name: "f64",
+                kind: EngineKind::Direct,
+                reason: format!("forced; a sample spans {ulps:.3e} f64 ulps"),
+            }),
+            EngineChoice::F64 => Err(format!(
+                "the view is too deep for the f64 engine: at zoom 1e{depth:.1} a sample spans only {ulps:.3e} f64 ulps of the coordinates \
+                 (at least {F64_MIN_ULPS_PER_PIXEL} are needed); use --engine auto, perturb-f64 or perturb-floatexp"
+            )),
+            EngineChoice::PerturbF64 if deltas_ok => {
+                Ok(EnginePlan { name: "perturb-f64", kind: perturb(Numbers::F64), reason: format!("forced{bla_note}") })
+            }
+            EngineChoice::PerturbF64 => Err(format!(
+                "the view is too deep for perturbation with f64 deltas: the sample spacing 1e{spacing:.1} is below 1e{PERTURB_F64_MIN_LOG10_SPACING}, \
+                 where f64 deltas underflow; use --engine auto or perturb-floatexp"
+            )),
+            EngineChoice::PerturbFloatExp => Ok(EnginePlan {
+                name: "perturb-floatexp",
+                kind: perturb(Numbers::FloatExp),
+                reason: format!("forced{bla_note}"),
+            }),
         }
     }
 }

@@ -131,9 +131,15 @@ pub struct RenderRaw {
     /// Supersampling factor N (N x N samples per pixel).
     #[serde(default = "default_aa")]
     pub aa: Spanned<i64>,
-    /// "auto" or "f64".
+    /// "auto", "f64", "perturb-f64" or "perturb-floatexp".
     #[serde(default = "default_engine")]
     pub engine: Spanned<String>,
+    /// Bilinear approximation in the perturbation engines (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bla: Option<Spanned<bool>>,
+    /// BLA tolerance ε (default 1e-12).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bla_tolerance: Option<Spanned<f64>>,
     /// Background colour below all layers, "#rrggbb".
     #[serde(default = "default_background")]
     pub background: Spanned<String>,
@@ -151,7 +157,13 @@ fn default_background() -> Spanned<String> {
 
 impl Default for RenderRaw {
     fn default() -> Self {
-        Self { aa: default_aa(), engine: default_engine(), background: default_background() }
+        Self {
+            aa: default_aa(),
+            engine: default_engine(),
+            bla: None,
+            bla_tolerance: None,
+            background: default_background(),
+        }
     }
 }
 

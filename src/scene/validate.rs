@@ -11,6 +11,7 @@ use crate::coloring::Coloring;
 use crate::compose::{Layer, Stack};
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
+use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
 use crate::palette::{self, Palette, color};
 use crate::source::SourceError;
 use crate::trap::{Bitmap, BitmapTrap, Shape, Trap};
@@ -100,23 +101,24 @@ pub(super) fn validate(
 
     let view = &file.view;
     let center = cx.pair(&view.center, "view centre")?;
-    let (log10_radius, radius) = match (&view.zoom, &view.radius) {
+    let (log10_radius, radius, scale) = match (&view.zoom, &view.radius) {
         (Some(_), Some(r)) => return cx.err(r.span(), "give either `zoom` or `radius`, not both"),
         (Some(z), None) => {
             let d = cx.decimal(z, "zoom")?;
             if d.is_zero() || d.is_negative() {
                 return cx.err(z.span(), format!("zoom must be positive, got {d}"));
             }
-            (2f64.log10() - d.log10_abs(), 2.0 / d.to_f64())
+            (2f64.log10() - d.log10_abs(), 2.0 / d.to_f64(), Scale::Zoom(d))
         }
         (None, Some(r)) => {
             let d = cx.decimal(r, "radius")?;
             if d.is_zero() || d.is_negative() {
                 return cx.err(r.span(), format!("radius must be positive, got {d}"));
             }
-            (d.log10_abs(), d.to_f64())
+            (d.log10_abs(), d.to_f64(), Scale::Radius(d))
         }
-        (None, None) => (1.25f64.log10(), 1.25), // the whole set
+        // The whole set.
+        (None, None) => (1.25f64.log10(), 1.25, Scale::Radius(Decimal::parse("1.25").expect("valid literal"))),
     };
     if log10_radius > 3.0 {
         return cx.err(
@@ -133,14 +135,20 @@ pub(super) fn validate(
     if samples > MAX_SAMPLES {
         return cx.err(view.width.span(), format!("{width}x{height} with {aa}x{aa} supersampling is {samples} samples; at most {MAX_SAMPLES} are supported"));
     }
-    let engine = match file.render.engine.get_ref().as_str() {
-        "auto" => EngineChoice::Auto,
-        "f64" => EngineChoice::F64,
-        other => {
-            return cx
-                .err(file.render.engine.span(), format!("unknown engine `{other}`; expected \"auto\" or \"f64\""));
+    let engine = match EngineChoice::parse(file.render.engine.get_ref()) {
+        Some(e) => e,
+        None => {
+            let other = file.render.engine.get_ref();
+            let names = EngineChoice::NAMES;
+            return cx.err(file.render.engine.span(), format!("unknown engine `{other}`; expected {names}"));
         }
     };
+    let bla_on = file.render.bla.as_ref().is_none_or(|b| *b.get_ref());
+    let tolerance = match &file.render.bla_tolerance {
+        Some(t) => cx.finite(t, 1e-300, 0.1, "render.bla_tolerance")?,
+        None => DEFAULT_BLA_TOLERANCE,
+    };
+    let bla = bla_on.then_some(tolerance);
     let bg = cx.colour(&file.render.background)?;
 
     let mut traps = Vec::new();
@@ -185,6 +193,8 @@ pub(super) fn validate(
         escape_radius,
         aa,
         engine,
+        bla,
+        scale,
         stack: Stack { layers, background: [bg[0], bg[1], bg[2]] },
         traps,
         png_bits,

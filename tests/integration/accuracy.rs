@@ -27,15 +27,15 @@ struct View {
 
 /// One compared pixel.
 #[derive(Debug, Clone, Copy)]
-struct Sample {
+pub struct Sample {
     /// True distance estimate in pixels (None: the reference says interior).
-    d: Option<f64>,
+    pub d: Option<f64>,
     /// N agrees with the reference.
-    n_ok: bool,
+    pub n_ok: bool,
     /// |NF - NF_true| (when both escaped at the same n).
-    nf_err: Option<f64>,
+    pub nf_err: Option<f64>,
     /// |DE - DE_true| / |DE_true| for the vector (DEX, DEY): length and direction (same condition).
-    de_err: Option<f64>,
+    pub de_err: Option<f64>,
 }
 
 fn measure(v: &View) -> Vec<Sample> {
@@ -63,32 +63,37 @@ fn measure(v: &View) -> Vec<Sample> {
         if t.near_circle {
             continue;
         }
-        let k = i as usize;
-        let n = strip.n[k];
-        let engine_n = (n != INTERIOR).then_some(n);
-        let d = t.n.map(|_| {
-            let abs_z = t.z[0].hypot(t.z[1]);
-            abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]) / spacing
-        });
-        let mut sample = Sample { d, n_ok: engine_n == t.n, nf_err: None, de_err: None };
-        if sample.n_ok && n != INTERIOR {
-            let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
-            let nf_true = (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0);
-            sample.nf_err = Some((strip.nf[k] as f64 - nf_true).abs());
-            let d_true = d.expect("escaped");
-            // The true vector: length d along conj(dz / z), i.e. along conj(dz) * z.
-            let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
-            let w = wx.hypot(wy);
-            let (tx, ty) = (d_true * wx / w, d_true * wy / w);
-            let err = (strip.dex[k] as f64 - tx).hypot(strip.dey[k] as f64 - ty);
-            sample.de_err = Some(err / d_true);
-        }
-        out.push(sample);
+        out.push(judge(&t, &strip, i as usize, spacing, ln_r));
     }
     out
 }
 
-fn summary(name: &str, s: &[Sample]) {
+/// Compares sample `k` of `planes` with the reference's orbit. `spacing` converts the
+/// reference's dz into pixels (1 when the reference already scaled it).
+pub fn judge(t: &reference::Truth, planes: &field::Planes, k: usize, spacing: f64, ln_r: f64) -> Sample {
+    let n = planes.n[k];
+    let engine_n = (n != INTERIOR).then_some(n);
+    let d = t.n.map(|_| {
+        let abs_z = t.z[0].hypot(t.z[1]);
+        abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]) / spacing
+    });
+    let mut sample = Sample { d, n_ok: engine_n == t.n, nf_err: None, de_err: None };
+    if sample.n_ok && n != INTERIOR {
+        let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
+        let nf_true = (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0);
+        sample.nf_err = Some((planes.nf[k] as f64 - nf_true).abs());
+        let d_true = d.expect("escaped");
+        // The true vector: length d along conj(dz / z), i.e. along conj(dz) * z.
+        let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
+        let w = wx.hypot(wy);
+        let (tx, ty) = (d_true * wx / w, d_true * wy / w);
+        let err = (planes.dex[k] as f64 - tx).hypot(planes.dey[k] as f64 - ty);
+        sample.de_err = Some(err / d_true);
+    }
+    sample
+}
+
+pub fn summary(name: &str, s: &[Sample]) {
     let nf: Vec<f64> = s.iter().filter_map(|x| x.nf_err).collect();
     let de: Vec<f64> = s.iter().filter_map(|x| x.de_err).collect();
     let bad = s.iter().filter(|x| !x.n_ok).count();
@@ -104,7 +109,7 @@ fn summary(name: &str, s: &[Sample]) {
 }
 
 /// The error an f64 computation may have at a pixel d pixels from the set.
-fn allowed(flat: f64, d: Option<f64>) -> f64 {
+pub fn allowed(flat: f64, d: Option<f64>) -> f64 {
     match d {
         Some(d) if d < 1e-6 => flat.max(1e-12 / d),
         _ => flat,

@@ -112,13 +112,80 @@ fn unwritable_output_is_refused() {
 }
 
 #[test]
-fn views_too_deep_for_f64_are_refused_with_a_reason() {
-    rejects(
-        "too-deep",
-        Some("version = 1\n[view]\ncenter = [\"-0.75\", \"0.1\"]\nzoom = \"1e14\"\n"),
-        &[],
-        "too deep for f64",
+fn engines_forced_beyond_their_range_are_refused_with_a_reason() {
+    let deep = "version = 1\n[view]\ncenter = [\"-0.75\", \"0.1\"]\nzoom = \"1e14\"\n";
+    rejects("too-deep", Some(deep), &["--engine", "f64"], "too deep for the f64 engine");
+    let deeper = "version = 1\n[view]\ncenter = [\"-2\", \"0\"]\nzoom = \"1e320\"\n";
+    rejects("too-deep-deltas", Some(deeper), &["--engine", "perturb-f64"], "f64 deltas underflow");
+    rejects("bad-engine", Some("version = 1\n[render]\nengine = \"gmp\"\n"), &[], "scene.toml:3:10");
+    rejects("bad-tolerance", Some("version = 1\n[render]\nbla_tolerance = 2.0\n"), &[], "scene.toml:3:17");
+}
+
+/// Deep views render with the perturbation engine the choice names, and the statistics
+/// say so (engine, reason, glitch count).
+#[test]
+fn deep_views_render_with_perturbation_and_report_it() {
+    let dir = scratch("cli-deep");
+    let scene = "version = 1\n[view]\ncenter = [\"-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925\", \"0\"]\nzoom = \"1e330\"\nwidth = 48\nheight = 32\n[iteration]\nmax = 4000\n[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"distance\"\nblend = \"multiply\"\n";
+    write(&dir, "scene.toml", scene);
+    let o = deepfield(&["render", "scene.toml", "-o", "a.png", "--stats-json", "s.json"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["engine"], "perturb-floatexp");
+    assert!(json["engine_reason"].as_str().unwrap().contains("below the f64-safe"));
+    assert_eq!(json["glitched_pixels"], 0);
+    assert!(json["deep"]["reference_bits"].as_u64().unwrap() > 1096);
+}
+
+/// A Kalles Fraktaler location renders as a scene.
+#[test]
+fn kfr_locations_are_scenes() {
+    let dir = scratch("cli-kfr");
+    let kfr = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench-e14.kfr");
+    let o = deepfield(&["render", kfr.to_str().unwrap(), "--size", "32x24", "-o", "k.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    write(&dir, "bad.kfr", "Re: -0.75\nIm: 0.1x\nZoom: 1\n");
+    let o = deepfield(&["render", "bad.kfr", "-o", "b.png"], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("bad.kfr:2:5"), "{}", stderr(&o));
+    assert!(!dir.join("b.png").exists());
+}
+
+/// `deepfield compare` prints one row per engine with the documented keys; on a shallow
+/// view its ground truth agrees with direct f64 iteration.
+#[test]
+fn compare_measures_engines_against_the_truth() {
+    let dir = scratch("cli-compare");
+    write(&dir, "scene.toml", SMALL);
+    let o = deepfield(&["compare", "scene.toml", "--samples", "60", "--json"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r["engine"].as_str().unwrap()).collect();
+    assert!(
+        names.contains(&"f32") && names.contains(&"f64") && names.contains(&"perturb-floatexp bla 1e-6"),
+        "{names:?}"
     );
+    for r in rows {
+        for key in [
+            "seconds",
+            "iterations_per_second",
+            "n_mismatch_fraction",
+            "nf_error_p50",
+            "nf_error_p99",
+            "de_error_p50",
+            "de_error_p99",
+        ] {
+            assert!(r[key].as_f64().is_some_and(f64::is_finite), "{key} in {r}");
+        }
+    }
+    let f64_row = rows.iter().find(|r| r["engine"] == "f64").unwrap();
+    assert_eq!(f64_row["n_mismatch_fraction"], 0.0, "{f64_row}");
+    assert!(f64_row["nf_error_p99"].as_f64().unwrap() < 1e-6, "{f64_row}");
+    let o = deepfield(&["compare", "scene.toml", "--samples", "10", "--csv", "--sample-only"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.starts_with("engine,seconds,iterations_per_second,n_mismatch_fraction,"), "{text}");
 }
 
 #[test]

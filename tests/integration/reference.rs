@@ -14,7 +14,8 @@ pub fn to_f64(x: &BigFloat) -> f64 {
     let (words, _bits, sign, exp, _) = x.as_raw_parts().expect("finite");
     let top = *words.last().expect("mantissa") as f64;
     let next = if words.len() > 1 { words[words.len() - 2] as f64 / 2f64.powi(64) } else { 0.0 };
-    let v = (top + next) * 2f64.powi(exp - 64);
+    // Two steps so that exponents near the ends of the f64 range do not overflow early.
+    let v = (top + next) * 2f64.powi(-64) * 2f64.powi(exp);
     if sign == Sign::Neg { -v } else { v }
 }
 
@@ -49,6 +50,19 @@ pub struct Truth {
 /// Iterates z -> z^2 + c directly. `julia`: Some(c) iterates from z0 = point with dz0 = 1;
 /// None is the Mandelbrot set (z0 = 0, dz0 = 0, dz' = 2 z dz + 1).
 pub fn orbit(point: &[BigFloat; 2], julia: Option<&[BigFloat; 2]>, max_iter: u32, radius: f64, p: usize) -> Truth {
+    orbit_scaled(point, julia, max_iter, radius, p, None)
+}
+
+/// Like [`orbit`], with the returned dz multiplied by `dz_scale` before rounding to f64
+/// (deep views: dz itself is far outside the f64 range, dz times the pixel spacing is not).
+pub fn orbit_scaled(
+    point: &[BigFloat; 2],
+    julia: Option<&[BigFloat; 2]>,
+    max_iter: u32,
+    radius: f64,
+    p: usize,
+    dz_scale: Option<&BigFloat>,
+) -> Truth {
     let zero = BigFloat::from_f64(0.0, p);
     let one = BigFloat::from_f64(1.0, p);
     let two = BigFloat::from_f64(2.0, p);
@@ -73,7 +87,10 @@ pub fn orbit(point: &[BigFloat; 2], julia: Option<&[BigFloat; 2]>, max_iter: u32
             return Truth {
                 n: Some(n),
                 z: [to_f64(&x), to_f64(&y)],
-                dz: [to_f64(&dx), to_f64(&dy)],
+                dz: match dz_scale {
+                    Some(k) => [to_f64(&dx.mul(k, p, RM)), to_f64(&dy.mul(k, p, RM))],
+                    None => [to_f64(&dx), to_f64(&dy)],
+                },
                 near_circle: near,
             };
         }

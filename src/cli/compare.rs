@@ -1,0 +1,124 @@
+//! `deepfield compare`: a table of engines, their speed and their error against the truth.
+
+use std::io::{IsTerminal, Write};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use anyhow::anyhow;
+use deepfield::compare::{self, Row};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::Failure;
+use super::args::CompareArgs;
+
+/// Runs `deepfield compare`.
+pub fn run(args: CompareArgs) -> Result<(), Failure> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
+    let scene = super::scene::load(&args.scene)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0) as usize)
+        .build()
+        .map_err(|e| Failure::Runtime(e.into()))?;
+    let variants = compare::variants(&scene);
+    let pixels = compare::sample_pixels(&scene, args.samples);
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = ProgressBar::new(pixels.len() as u64);
+        let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+        b.set_style(style);
+        b.set_message("ground-truth pixels (big floats)");
+        b
+    });
+    let rows = pool.install(|| -> Result<Vec<Row>, Failure> {
+        let progress = |n: u64| {
+            if let Some(b) = &bar {
+                b.set_position(n);
+            }
+        };
+        let truths = compare::truths(&scene, &pixels, &cancel, &progress).map_err(|_| Failure::Cancelled)?;
+        if let Some(b) = &bar {
+            b.set_length(variants.len() as u64);
+            b.set_position(0);
+        }
+        let mut rows = Vec::new();
+        for (k, v) in variants.iter().enumerate() {
+            if let Some(b) = &bar {
+                b.set_message(v.name.clone());
+            }
+            let m = compare::run(&scene, v, &pixels, args.sample_only, &cancel).map_err(|_| Failure::Cancelled)?;
+            rows.push(compare::score(&v.name, &m, &truths, scene.escape_radius));
+            if let Some(b) = &bar {
+                b.set_position(k as u64 + 1);
+            }
+        }
+        Ok(rows)
+    });
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let rows = rows?;
+    let text = if args.json {
+        serde_json::to_string_pretty(&rows).map_err(|e| Failure::Runtime(e.into()))? + "\n"
+    } else if args.csv {
+        csv(&rows)
+    } else {
+        table(&rows, &scene.origin, pixels.len())
+    };
+    std::io::stdout().lock().write_all(text.as_bytes()).map_err(|e| Failure::Runtime(anyhow!(e)))
+}
+
+const KEYS: [&str; 8] = [
+    "engine",
+    "seconds",
+    "iterations_per_second",
+    "n_mismatch_fraction",
+    "nf_error_p50",
+    "nf_error_p99",
+    "de_error_p50",
+    "de_error_p99",
+];
+
+fn fields(r: &Row) -> [String; 8] {
+    [
+        r.engine.clone(),
+        format!("{:.4}", r.seconds),
+        format!("{:.4e}", r.iterations_per_second),
+        format!("{:.6}", r.n_mismatch_fraction),
+        format!("{:.3e}", r.nf_error_p50),
+        format!("{:.3e}", r.nf_error_p99),
+        format!("{:.3e}", r.de_error_p50),
+        format!("{:.3e}", r.de_error_p99),
+    ]
+}
+
+fn csv(rows: &[Row]) -> String {
+    let mut out = KEYS.join(",") + "\n";
+    for r in rows {
+        out += &(fields(r).join(",") + "\n");
+    }
+    out
+}
+
+fn table(rows: &[Row], origin: &str, samples: usize) -> String {
+    let heads = ["engine", "seconds", "iter/s", "N mismatch", "NF p50", "NF p99", "DE p50", "DE p99"];
+    let cells: Vec<[String; 8]> = rows.iter().map(fields).collect();
+    let width: Vec<usize> =
+        (0..8).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
+    let line = |c: &[&str]| -> String {
+        let mut s = format!("{:<w$}", c[0], w = width[0]);
+        for k in 1..8 {
+            s += &format!("  {:>w$}", c[k], w = width[k]);
+        }
+        s + "\n"
+    };
+    let mut out = format!("{origin}: {samples} sampled pixels against direct big-float iteration\n");
+    out += &line(&heads);
+    for c in &cells {
+        out += &line(&c.iter().map(String::as_str).collect::<Vec<_>>());
+    }
+    out
+}

@@ -1,0 +1,267 @@
+//! `deepfield compare`: every engine that can address a view, timed and measured against
+//! a direct big-float ground truth on a sample of pixels.
+//!
+//! The variants are the direct kernels (f32, f64) while their arithmetic still resolves a
+//! sample, and the perturbation engines (f64 deltas while the spacing is inside the f64
+//! range, FloatExp deltas always) without BLA and with BLA at two tolerances. Each renders
+//! the raw field (no colouring) of the whole image, or only the rows holding the sampled
+//! pixels; its time includes the reference orbit and BLA tables. Errors are measured on
+//! the sampled pixels only: N mismatches (pixels whose orbit passes within 1e-9 of the
+//! escape circle excepted), |NF - NF_true| where N agrees, and the relative error of the
+//! distance-estimate vector.
+
+mod truth;
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+use malachite_float::Float;
+use rayon::prelude::*;
+
+pub use truth::Truth;
+
+use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes};
+use crate::orbit::{self, Numbers, bigfloat};
+use crate::render::{self, Progress};
+use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
+
+/// One engine configuration to compare.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variant {
+    /// Row label, e.g. "perturb-f64 bla 1e-12".
+    pub name: String,
+    /// What runs.
+    pub kind: VariantKind,
+}
+
+/// The kernels a variant runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VariantKind {
+    /// Direct f32 iteration.
+    F32,
+    /// An engine plan (direct f64 or perturbation).
+    Engine(EngineKind),
+}
+
+/// One row of the comparison.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Row {
+    /// Variant name.
+    pub engine: String,
+    /// Wall-clock seconds (reference orbit and BLA tables included).
+    pub seconds: f64,
+    /// Iterations the samples advanced per second.
+    pub iterations_per_second: f64,
+    /// Fraction of compared pixels whose N differs from the truth.
+    pub n_mismatch_fraction: f64,
+    /// Median |NF - NF_true| over pixels whose N agrees.
+    pub nf_error_p50: f64,
+    /// 99th percentile of the same.
+    pub nf_error_p99: f64,
+    /// Median relative error of the distance-estimate vector.
+    pub de_error_p50: f64,
+    /// 99th percentile of the same.
+    pub de_error_p99: f64,
+    /// Pixels compared (sampled minus those near the escape circle).
+    pub compared: usize,
+}
+
+/// Smallest f32/f64 ulps per sample at which a direct kernel is still listed.
+const DIRECT_MIN_ULPS: f64 = 1.0;
+/// The looser BLA tolerance shown beside the scene's (or the default) one.
+pub const LOOSE_BLA_TOLERANCE: f64 = 1e-6;
+
+/// The variants that can address the scene's view.
+pub fn variants(scene: &Scene) -> Vec<Variant> {
+    let mut out = Vec::new();
+    let ulps64 = scene.ulps_per_sample();
+    if ulps64 * 2f64.powi(-29) >= DIRECT_MIN_ULPS {
+        out.push(Variant { name: "f32".into(), kind: VariantKind::F32 });
+    }
+    if ulps64 >= DIRECT_MIN_ULPS {
+        out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct) });
+    }
+    let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
+    let mut numbers = vec![];
+    if scene.log10_spacing() > crate::scene::PERTURB_F64_MIN_LOG10_SPACING {
+        numbers.push((Numbers::F64, "perturb-f64"));
+    }
+    numbers.push((Numbers::FloatExp, "perturb-floatexp"));
+    let bla_ok = scene.traps.is_empty();
+    for (n, label) in numbers {
+        out.push(Variant {
+            name: label.into(),
+            kind: VariantKind::Engine(EngineKind::Perturb { numbers: n, bla: None }),
+        });
+        if bla_ok {
+            for eps in [tight, LOOSE_BLA_TOLERANCE] {
+                let kind = EngineKind::Perturb { numbers: n, bla: Some(eps) };
+                out.push(Variant { name: format!("{label} bla {eps:e}"), kind: VariantKind::Engine(kind) });
+            }
+        }
+    }
+    out
+}
+
+/// `count` distinct sample positions (column, row) of the sample grid, chosen by a fixed
+/// pseudo-random sequence so that runs are reproducible.
+pub fn sample_pixels(scene: &Scene, count: u32) -> Vec<(u32, u32)> {
+    let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
+    let total = w as u64 * h as u64;
+    let mut state = 0x00de_e9f1_e1d5_u64;
+    let mut seen = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    while out.len() < count.min(total as u32) as usize {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let k = (state >> 20) % total;
+        if seen.insert(k) {
+            out.push(((k % w as u64) as u32, (k / w as u64) as u32));
+        }
+    }
+    out
+}
+
+/// The ground truth at the sampled pixels, computed in parallel; `progress` receives the
+/// number of pixels done.
+pub fn truths(
+    scene: &Scene,
+    pixels: &[(u32, u32)],
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Truth>, Cancelled> {
+    let rows = scene.height * scene.aa;
+    let cols = scene.width * scene.aa;
+    let bits = bigfloat::precision_for(scene.log10_spacing()) + 64;
+    let spacing = scene.scale.spacing_big(rows, bits);
+    let center = [bigfloat::from_decimal(&scene.center[0], bits), bigfloat::from_decimal(&scene.center[1], bits)];
+    let julia = match &scene.family {
+        FamilySpec::Mandelbrot => None,
+        FamilySpec::Julia { c } => Some([bigfloat::from_decimal(&c[0], bits), bigfloat::from_decimal(&c[1], bits)]),
+    };
+    let done = AtomicU64::new(0);
+    pixels
+        .par_iter()
+        .map(|&(i, j)| {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            // Offsets are exact halves: exact in a Float.
+            let ox = Float::from((2.0 * i as f64 + 1.0 - cols as f64) * 0.5);
+            let oy = Float::from(-(2.0 * j as f64 + 1.0 - rows as f64) * 0.5);
+            let px = center[0].add_prec_ref_ref(&ox.mul_prec_ref_ref(&spacing, bits).0, bits).0;
+            let py = center[1].add_prec_ref_ref(&oy.mul_prec_ref_ref(&spacing, bits).0, bits).0;
+            let t = truth::orbit(&[px, py], julia.as_ref(), scene.max_iter, scene.escape_radius, &spacing, bits);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            Ok(t)
+        })
+        .collect()
+}
+
+/// What a variant computed at the sampled pixels.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    /// (N, NF, DEX, DEY) per sampled pixel.
+    pub values: Vec<(u32, f32, f32, f32)>,
+    /// Iterations the samples advanced.
+    pub iterations: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// Runs a variant over the whole sample grid (or only the rows holding `pixels`).
+pub fn run(
+    scene: &Scene,
+    variant: &Variant,
+    pixels: &[(u32, u32)],
+    sample_only: bool,
+    cancel: &AtomicBool,
+) -> Result<Measured, Cancelled> {
+    let start = Instant::now();
+    let kind = match variant.kind {
+        VariantKind::F32 => EngineKind::Direct,
+        VariantKind::Engine(k) => k,
+    };
+    let plan = EnginePlan { name: "compare", kind, reason: String::new() };
+    let (mut params, _) = render::prepare_field(scene, &plan, ChannelSet::default_exr(), cancel, &|_: Progress| {})?;
+    params.single = variant.kind == VariantKind::F32;
+    let height = params.grid.height;
+    let mut rows: Vec<u32> = if sample_only { pixels.iter().map(|p| p.1).collect() } else { (0..height).collect() };
+    rows.sort_unstable();
+    rows.dedup();
+    // Bands of up to 16 consecutive rows, computed in parallel.
+    let mut bands: Vec<(u32, u32)> = Vec::new();
+    for r in rows {
+        match bands.last_mut() {
+            Some((s, e)) if *e == r && r - *s < 16 => *e = r + 1,
+            _ => bands.push((r, r + 1)),
+        }
+    }
+    let computed: Vec<(u32, Planes, u64)> = bands
+        .par_iter()
+        .map(|&(s, e)| field::compute_strip(&params, s..e, cancel).map(|st| (s, st.planes, st.iterations)))
+        .collect::<Result<_, _>>()?;
+    let seconds = start.elapsed().as_secs_f64();
+    let iterations = computed.iter().map(|c| c.2).sum();
+    let values = pixels
+        .iter()
+        .map(|&(i, j)| {
+            let (s, planes, _) = computed.iter().rev().find(|c| c.0 <= j).expect("row computed");
+            let k = ((j - s) as usize) * planes.width + i as usize;
+            (planes.n[k], planes.nf[k], planes.dex[k], planes.dey[k])
+        })
+        .collect();
+    Ok(Measured { values, iterations, seconds })
+}
+
+/// The value at fraction q of a sorted list (0 when empty).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
+/// Scores a variant's values against the truth.
+pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64) -> Row {
+    let ln_r = escape_radius.ln();
+    let (mut compared, mut mismatched) = (0usize, 0usize);
+    let (mut nf, mut de) = (Vec::new(), Vec::new());
+    for (&(n, f, dx, dy), t) in measured.values.iter().zip(truths) {
+        if t.near_circle {
+            continue;
+        }
+        compared += 1;
+        let engine_n = (n != INTERIOR).then_some(n);
+        if engine_n != t.n {
+            mismatched += 1;
+            continue;
+        }
+        if t.n.is_none() {
+            continue;
+        }
+        let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
+        let nf_true = (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0);
+        nf.push((f as f64 - nf_true).abs());
+        let abs_z = t.z[0].hypot(t.z[1]);
+        let d_true = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
+        let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
+        let w = wx.hypot(wy);
+        if d_true.is_finite() && d_true > 0.0 && w > 0.0 {
+            let err = (dx as f64 - d_true * wx / w).hypot(dy as f64 - d_true * wy / w) / d_true;
+            de.push(if err.is_finite() { err } else { f64::INFINITY });
+        }
+    }
+    nf.sort_by(f64::total_cmp);
+    de.sort_by(f64::total_cmp);
+    Row {
+        engine: name.to_string(),
+        seconds: measured.seconds,
+        iterations_per_second: if measured.seconds > 0.0 { measured.iterations as f64 / measured.seconds } else { 0.0 },
+        n_mismatch_fraction: if compared > 0 { mismatched as f64 / compared as f64 } else { 0.0 },
+        nf_error_p50: quantile(&nf, 0.5),
+        nf_error_p99: quantile(&nf, 0.99),
+        de_error_p50: quantile(&de, 0.5),
+        de_error_p99: quantile(&de, 0.99),
+        compared,
+    }
+}

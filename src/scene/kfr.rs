@@ -1,0 +1,525 @@
+//! Kalles Fraktaler `.kfr` locations, converted to deepfield scene text.
+//!
+//! A `.kfr` is what Kalles Fraktaler 2+ (KF) writes with "Save location": one `Key: value`
+//! pair per line, CRLF line ends, keys case-sensitive, no sections and no comments. KF 2.15
+//! writes, in this order, `Re`, `Im`, `Zoom`, `Iterations`, `IterDiv`, `SmoothMethod`,
+//! `SmoothingMethod`, `BailoutRadiusPreset`, `BailoutRadiusCustom`, `BailoutNormPreset`,
+//! `BailoutNormCustom`, `ColorMethod`, `Differences`, `ColorOffset`, `ColorPhaseStrength`,
+//! `Colors`, `InteriorColor`, `Smooth`, `Flat`, `MultiColor`, `BlendMC`, `MultiColors`,
+//! `Power`, `FractalType`, `Slopes`, `SlopePower`, `SlopeRatio`, `SlopeAngle`, `real`,
+//! `imag`, `SeedR`, `SeedI`, `FactorAR`, `FactorAI`, `Period`, `Texture*`,
+//! (`UseHybridFormula`, `HybridFormula`), `RotateAngle`, `StretchAngle`, `StretchAmount`,
+//! `ImagPointsUp`, (`UseOpenGL`, `GLSL`, `UseSRGB`), `TriangleInequalityAverage`, `Version`.
+//! Older files carry `Rotate` and `Ratio` instead of the transform keys. (Source: KF's
+//! `CFraktalSFT::ToText` / `OpenString` in `fraktal_sft/Parameter.cpp`, old and 2.15 versions;
+//! the reflection convention of `ImagPointsUp` as Fraktaler-3's `.kfr` import reads it.)
+//!
+//! What is mapped:
+//!
+//! | `.kfr` | scene | notes |
+//! |---|---|---|
+//! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept |
+//! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`) |
+//! | `Iterations` | `[iteration] max` | optional (KF keeps its current value when absent); 1 ..= 2^32 - 2 |
+//! | `TargetWidth`, `TargetHeight` | `[view] width`, `height` | KF 2.15 output size; these are `.kfs` keys, present when settings and location were saved together (PNG/EXR metadata) |
+//! | `ImageWidth`, `ImageHeight` | `[view] width`, `height` | used when no `Target*` key is given (older KF); otherwise 800 x 600 |
+//!
+//! What is checked, because deepfield cannot draw it and silently dropping it would give a
+//! different picture: `FractalType` must be 0 (Mandelbrot) and `Power` 2; `UseHybridFormula`
+//! must be 0; `SeedR`/`SeedI` must be 0 (KF's seed is the starting z_0 of a Mandelbrot-family
+//! orbit, not a Julia parameter); `RotateAngle`, `Rotate` and `StretchAmount` must be 0 (no
+//! rotation or skew); an old-style `Ratio` must be 360 (square pixels).
+//!
+//! KF has no Julia mode (its formulas iterate from `SeedR + i SeedI` with `c` the pixel), so a
+//! `.kfr` always converts to a Mandelbrot scene.
+//!
+//! What is ignored: everything else: colouring (`Colors`, `IterDiv`, `ColorMethod`,
+//! `Differences`, `ColorOffset`, `MultiColors`, `Slopes*`, `Texture*`, `GLSL`, ...), smoothing
+//! and bailout choices (deepfield's escape radius is its own), `Period`, `real`/`imag`/
+//! `FactorAR`/`FactorAI` (formula parameters; Fraktaler-3's `.kfr` import ignores them too),
+//! `Version`, and any key this module does not know. The converted scene has no `[[layer]]`,
+//! so it gets deepfield's default colouring.
+//!
+//! Two differences remain (the first is stated in the generated text): without
+//! `ImagPointsUp: 1` (KF 2.15.4 and later) KF draws the imaginary axis pointing down, so
+//! deepfield's image (axis up) is KF's mirrored top to bottom; and KF's sample grid may sit
+//! half a pixel from deepfield's pixel centres (invisible at any zoom).
+//!
+//! Lines may end in CRLF or LF; a leading byte-order mark, blank lines and spaces around keys
+//! and values are allowed. A line without a `:` is an error, and so is a key given twice
+//! among those this module reads (KF would silently take the first).
+
+use crate::num::Decimal;
+use crate::scene::{MAX_ITER_LIMIT, MAX_SIDE};
+use crate::source::SourceError;
+
+/// Width used when the file names none.
+const DEFAULT_WIDTH: u64 = 800;
+/// Height used when the file names none.
+const DEFAULT_HEIGHT: u64 = 600;
+
+/// Keys this module reads (each may appear once).
+const KNOWN: &[&str] = &[
+    "Re",
+    "Im",
+    "Zoom",
+    "Iterations",
+    "FractalType",
+    "Power",
+    "UseHybridFormula",
+    "SeedR",
+    "SeedI",
+    "RotateAngle",
+    "Rotate",
+    "StretchAmount",
+    "Ratio",
+    "ImagPointsUp",
+    "TargetWidth",
+    "TargetHeight",
+    "ImageWidth",
+    "ImageHeight",
+];
+
+/// One `Key: value` line.
+struct Entry<'a> {
+    key: &'a str,
+    value: &'a str,
+    /// Byte offset of the key in the text.
+    key_at: usize,
+    /// Byte offset of the value (just after the colon when the value is empty).
+    value_at: usize,
+}
+
+/// The parsed lines, with error construction bound to the source.
+struct Kfr<'a> {
+    origin: &'a str,
+    text: &'a str,
+    entries: Vec<Entry<'a>>,
+}
+
+impl<'a> Kfr<'a> {
+    fn parse(origin: &'a str, text: &'a str) -> Result<Self, SourceError> {
+        let mut entries: Vec<Entry<'a>> = Vec::new();
+        let mut start = 0;
+        for raw in text.split_inclusive('\n') {
+            let line_start = start;
+            start += raw.len();
+            let mut line = raw.trim_end_matches(['\n', '\r']);
+            let mut base = line_start;
+            if line_start == 0
+                && let Some(rest) = line.strip_prefix('\u{feff}')
+            {
+                base += line.len() - rest.len();
+                line = rest;
+            }
+            if line.trim().is_empty() {
+                continue;
+            }
+            let lead = line.len() - line.trim_start().len();
+            let Some(colon) = line.find(':') else {
+                let shown: String = line.trim().chars().take(40).collect();
+                return Err(SourceError::at(
+                    origin,
+                    text,
+                    Some(base + lead..base + lead),
+                    format!(
+                        "expected a Kalles Fraktaler location line `Key: value` (like `Re: -0.75`), found `{shown}` with no `:`"
+                    ),
+                ));
+            };
+            let key = line[..colon].trim();
+            if key.is_empty() {
+                return Err(SourceError::at(
+                    origin,
+                    text,
+                    Some(base + lead..base + lead),
+                    "expected a key before `:` (a line `Key: value`, like `Re: -0.75`)",
+                ));
+            }
+            let after = &line[colon + 1..];
+            let value = after.trim();
+            let value_at = base + colon + 1 + (after.len() - after.trim_start().len());
+            if KNOWN.contains(&key)
+                && let Some(first) = entries.iter().find(|e| e.key == key)
+            {
+                let first_line = crate::source::Position::of(text, first.key_at).line;
+                return Err(SourceError::at(
+                    origin,
+                    text,
+                    Some(base + lead..base + lead),
+                    format!("`{key}` is given twice (first on line {first_line}); expected it once"),
+                ));
+            }
+            entries.push(Entry { key, value, key_at: base + lead, value_at });
+        }
+        Ok(Self { origin, text, entries })
+    }
+
+    fn get(&self, key: &str) -> Option<&Entry<'a>> {
+        self.entries.iter().find(|e| e.key == key)
+    }
+
+    fn error_at(&self, at: usize, message: impl Into<String>) -> SourceError {
+        SourceError::at(self.origin, self.text, Some(at..at), message)
+    }
+
+    /// A required decimal key.
+    fn decimal(&self, key: &str, what: &str) -> Result<(Decimal, &Entry<'a>), SourceError> {
+        let Some(e) = self.get(key) else {
+            return Err(self.error_at(
+                self.text.len(),
+                format!("missing `{key}:` ({what}); a Kalles Fraktaler location needs `Re`, `Im` and `Zoom` lines"),
+            ));
+        };
+        let d = Decimal::parse(e.value).map_err(|err| self.error_at(e.value_at, format!("`{key}` ({what}): {err}")))?;
+        Ok((d, e))
+    }
+
+    /// An optional decimal key that must be zero if given.
+    fn must_be_zero(&self, key: &str, why: &str) -> Result<(), SourceError> {
+        let Some(e) = self.get(key) else { return Ok(()) };
+        let d = Decimal::parse(e.value).map_err(|err| self.error_at(e.value_at, format!("`{key}`: {err}")))?;
+        if d.is_zero() {
+            Ok(())
+        } else {
+            Err(self.error_at(e.value_at, format!("`{key}: {}` {why}; expected 0", e.value)))
+        }
+    }
+
+    /// An optional integer key, within `lo ..= hi`.
+    fn integer(&self, key: &str, lo: u64, hi: u64, what: &str) -> Result<Option<u64>, SourceError> {
+        let Some(e) = self.get(key) else { return Ok(None) };
+        let digits = e.value.strip_prefix('+').unwrap_or(e.value);
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(self.error_at(
+                e.value_at,
+                format!("`{key}` ({what}) must be a whole number from {lo} to {hi}, found `{}`", e.value),
+            ));
+        }
+        match digits.parse::<u64>() {
+            Ok(n) if (lo..=hi).contains(&n) => Ok(Some(n)),
+            _ => {
+                Err(self.error_at(e.value_at, format!("`{key}` ({what}) must be from {lo} to {hi}, found {}", e.value)))
+            }
+        }
+    }
+
+    /// An optional integer key that must equal `expected` if given.
+    fn must_equal(&self, key: &str, expected: i64, why: &str) -> Result<(), SourceError> {
+        let Some(e) = self.get(key) else { return Ok(()) };
+        match e.value.parse::<i64>() {
+            Ok(v) if v == expected => Ok(()),
+            Ok(_) => Err(self.error_at(e.value_at, format!("`{key}: {}` {why}; expected {expected}", e.value))),
+            Err(_) => Err(self.error_at(e.value_at, format!("`{key}` must be a whole number, found `{}`", e.value))),
+        }
+    }
+}
+
+/// Converts the text of a Kalles Fraktaler `.kfr` location into deepfield scene TOML.
+///
+/// `origin` names the file in errors and in the generated header comment. Errors carry the
+/// line and column of the offending value (or the end of the text for a missing key) and say
+/// what was expected. The result parses as a `version = 1` scene: a Mandelbrot view with the
+/// centre and zoom copied digit for digit, `[iteration] max` from `Iterations`, and no layers.
+pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
+    let kfr = Kfr::parse(origin, text)?;
+
+    let (re, _) = kfr.decimal("Re", "the real part of the view centre")?;
+    let (im, _) = kfr.decimal("Im", "the imaginary part of the view centre")?;
+    let (zoom, zoom_entry) = kfr.decimal("Zoom", "the zoom: the image height spans 4 / Zoom")?;
+    if zoom.is_zero() || zoom.is_negative() {
+        return Err(kfr.error_at(zoom_entry.value_at, format!("`Zoom` must be positive, found {}", zoom_entry.value)));
+    }
+    let max_iter = kfr.integer("Iterations", 1, MAX_ITER_LIMIT, "the maximum iteration count")?;
+
+    kfr.must_equal("FractalType", 0, "is not the Mandelbrot set (deepfield draws only z -> z^2 + c)")?;
+    kfr.must_equal("Power", 2, "is not z^2 + c (deepfield draws only power 2)")?;
+    kfr.must_equal("UseHybridFormula", 0, "turns on a hybrid formula, which deepfield cannot draw")?;
+    let seed_why =
+        "starts every orbit at a non-zero z_0 (KF's seed is not a Julia parameter; deepfield's Mandelbrot starts at 0)";
+    kfr.must_be_zero("SeedR", seed_why)?;
+    kfr.must_be_zero("SeedI", seed_why)?;
+    let rotate_why = "rotates the view; deepfield has no rotation, so this location cannot be converted";
+    kfr.must_be_zero("RotateAngle", rotate_why)?;
+    kfr.must_be_zero("Rotate", rotate_why)?;
+    kfr.must_be_zero(
+        "StretchAmount",
+        "stretches the view; deepfield has no skew, so this location cannot be converted",
+    )?;
+    if let Some(e) = kfr.get("Ratio") {
+        let d = Decimal::parse(e.value).map_err(|err| kfr.error_at(e.value_at, format!("`Ratio`: {err}")))?;
+        if (d.to_f64() - 360.0).abs() > 1e-6 {
+            return Err(kfr.error_at(
+                e.value_at,
+                format!(
+                    "`Ratio: {}` stretches the view (360 is square pixels); deepfield has no skew; expected 360",
+                    e.value
+                ),
+            ));
+        }
+    }
+    let imag_up = kfr.integer("ImagPointsUp", 0, 1, "1 when the imaginary axis points up")? == Some(1);
+
+    let side = |target: &str, image: &str, default: u64| -> Result<u64, SourceError> {
+        let what = "the image size in pixels";
+        Ok(match kfr.integer(target, 1, MAX_SIDE as u64, what)? {
+            Some(n) => n,
+            None => kfr.integer(image, 1, MAX_SIDE as u64, what)?.unwrap_or(default),
+        })
+    };
+    let width = side("TargetWidth", "ImageWidth", DEFAULT_WIDTH)?;
+    let height = side("TargetHeight", "ImageHeight", DEFAULT_HEIGHT)?;
+
+    let name: String = origin.chars().map(|c| if c.is_control() { '?' } else { c }).collect();
+    let mut out = String::new();
+    out.push_str(&format!("# Converted from the Kalles Fraktaler location {name}.\n"));
+    if !imag_up {
+        out.push_str(
+            "# The file has no `ImagPointsUp: 1`, so KF draws it with the imaginary axis pointing down;\n\
+             # deepfield's points up, so this image is KF's mirrored top to bottom.\n",
+        );
+    }
+    out.push_str("# KF's colouring (Colors, IterDiv, ColorMethod, ...) is not converted: add [[layer]] tables.\n");
+    out.push_str("version = 1\n\n[formula]\nkind = \"mandelbrot\"\n\n[view]\n");
+    // Decimal texts hold only digits, signs, '.', 'e' and 'E': safe inside TOML strings.
+    out.push_str(&format!("center = [\"{}\", \"{}\"]\n", re.text(), im.text()));
+    out.push_str(&format!("zoom = \"{}\"\n", zoom.text()));
+    out.push_str(&format!("width = {width}\nheight = {height}\n"));
+    if let Some(n) = max_iter {
+        out.push_str(&format!("\n[iteration]\nmax = {n}\n"));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A location as KF 2.15 saves it: CRLF, every key, colour data included.
+    const KF_215: &str = "Re: -1.759817130804847813610825010561798238243999999999999999999800\r\n\
+Im: -0.012593310799749865383746631843264858450340000000000000000000\r\n\
+Zoom: 1.00000000000E14\r\n\
+Iterations: 4036\r\n\
+IterDiv: 0.010000\r\n\
+SmoothMethod: 0\r\n\
+SmoothingMethod: 0\r\n\
+BailoutRadiusPreset: 0\r\n\
+BailoutRadiusCustom: 2\r\n\
+BailoutNormPreset: 1\r\n\
+BailoutNormCustom: 2\r\n\
+ColorMethod: 7\r\n\
+Differences: 3\r\n\
+ColorOffset: 0\r\n\
+ColorPhaseStrength: 0\r\n\
+Colors: 255,255,255,128,0,64,160,0,0,192,128,0,\r\n\
+InteriorColor: 0,0,0,\r\n\
+Smooth: 1\r\n\
+Flat: 0\r\n\
+MultiColor: 0\r\n\
+BlendMC: 0\r\n\
+MultiColors: \r\n\
+Power: 2\r\n\
+FractalType: 0\r\n\
+Slopes: 1\r\n\
+SlopePower: 50\r\n\
+SlopeRatio: 20\r\n\
+SlopeAngle: 45\r\n\
+real: 1\r\n\
+imag: 1\r\n\
+SeedR: 0\r\n\
+SeedI: 0\r\n\
+FactorAR: 1\r\n\
+FactorAI: 0\r\n\
+Period: 0\r\n\
+TextureEnabled: 0\r\n\
+TextureMerge: 1\r\n\
+TexturePower: 200\r\n\
+TextureRatio: 100\r\n\
+TextureFile: \r\n\
+TextureResize: 1\r\n\
+RotateAngle: 0\r\n\
+StretchAngle: 0\r\n\
+StretchAmount: 0\r\n\
+ImagPointsUp: 1\r\n\
+TriangleInequalityAverage: 0\r\n\
+Version: 2150500\r\n";
+
+    fn table(toml_text: &str) -> toml::Table {
+        toml_text.parse::<toml::Table>().unwrap_or_else(|e| panic!("{e}\n{toml_text}"))
+    }
+
+    fn err(text: &str) -> SourceError {
+        kfr_to_toml("loc.kfr", text).expect_err("should fail")
+    }
+
+    #[test]
+    fn mandelbrot_as_kf_writes_it() {
+        let out = kfr_to_toml("e14.kfr", KF_215).unwrap();
+        let t = table(&out);
+        assert_eq!(t["version"].as_integer(), Some(1));
+        assert_eq!(t["formula"]["kind"].as_str(), Some("mandelbrot"));
+        assert!(t["formula"].get("c").is_none());
+        let view = &t["view"];
+        assert_eq!(view["center"][0].as_str(), Some("-1.759817130804847813610825010561798238243999999999999999999800"));
+        assert_eq!(view["center"][1].as_str(), Some("-0.012593310799749865383746631843264858450340000000000000000000"));
+        assert_eq!(view["zoom"].as_str(), Some("1.00000000000E14"));
+        assert_eq!(view["width"].as_integer(), Some(800));
+        assert_eq!(view["height"].as_integer(), Some(600));
+        assert_eq!(t["iteration"]["max"].as_integer(), Some(4036));
+        assert!(t.get("layer").is_none(), "KF colours are not converted");
+        assert!(out.starts_with("# Converted from the Kalles Fraktaler location e14.kfr."));
+        assert!(!out.contains("mirrored"), "ImagPointsUp: 1 matches deepfield's orientation");
+        // It is a scene file deepfield reads.
+        crate::scene::Scene::parse_file("e14.kfr", &out).unwrap();
+    }
+
+    #[test]
+    fn old_style_lf_file_with_bom_deep_zoom_and_size() {
+        let text = "\u{feff}Re: -1.768610493014677074503175653270226520239677907588665494837677257575304640978808475\n\
+                    Im: 0.001266613503868717702066411192242601576193940560471409817185010171762524792588903\n\
+                    Zoom: 1E1086\n\
+                    Iterations: 600100\n\
+                    Colors: 0,0,0,\n\
+                    Rotate: 0.000000\n\
+                    Ratio: 360.000000\n\
+                    \n\
+                    SomeFutureKey: whatever\n\
+                    TargetWidth: 1920\n\
+                    TargetHeight: 1080\n\
+                    ImageWidth: 3840\n\
+                    ImageHeight: 2160\n";
+        let out = kfr_to_toml("old.kfr", text).unwrap();
+        let t = table(&out);
+        assert_eq!(t["view"]["zoom"].as_str(), Some("1E1086"));
+        assert!(t["view"]["center"][0].as_str().unwrap().ends_with("808475"));
+        assert_eq!(t["view"]["width"].as_integer(), Some(1920));
+        assert_eq!(t["view"]["height"].as_integer(), Some(1080));
+        assert_eq!(t["iteration"]["max"].as_integer(), Some(600100));
+        assert!(out.contains("mirrored top to bottom"), "no ImagPointsUp: KF's axis points down");
+    }
+
+    #[test]
+    fn image_size_without_target_and_no_iterations() {
+        let out = kfr_to_toml("x.kfr", "Re: 0\nIm: 0\nZoom: 1\nImageWidth: 640\nImageHeight: 360\n").unwrap();
+        let t = table(&out);
+        assert_eq!(t["view"]["width"].as_integer(), Some(640));
+        assert_eq!(t["view"]["height"].as_integer(), Some(360));
+        assert!(t.get("iteration").is_none(), "absent Iterations keeps the scene default");
+    }
+
+    /// KF has no Julia mode: its seed is z_0 of a Mandelbrot-family orbit. A file with a
+    /// non-zero seed (what a KF "Julia" attempt looks like) is refused with that explanation,
+    /// rather than converted into a Julia scene that KF never drew.
+    #[test]
+    fn seed_is_not_a_julia_parameter() {
+        let text =
+            "Re: 0.1\r\nIm: 0.2\r\nZoom: 2\r\nIterations: 500\r\nSeedR: -0.7436447860\r\nSeedI: 0.1318252536\r\n";
+        let e = err(text);
+        assert_eq!(e.origin, "loc.kfr");
+        let p = e.position.unwrap();
+        assert_eq!((p.line, p.column), (5, 8));
+        assert!(e.message.contains("SeedR") && e.message.contains("not a Julia parameter"), "{e}");
+        // A zero seed written as KF writes doubles is fine.
+        kfr_to_toml("z.kfr", "Re: 0\nIm: 0\nZoom: 1\nSeedR: 0\nSeedI: -0\n").unwrap();
+    }
+
+    #[test]
+    fn missing_key_is_named() {
+        let e = err("Re: -0.75\r\nIm: 0.1\r\nIterations: 100\r\n");
+        assert!(e.message.contains("missing `Zoom:`"), "{e}");
+        assert!(e.position.is_some());
+        let e = err("Zoom: 1\nIm: 0.1\n");
+        assert!(e.message.contains("missing `Re:`"), "{e}");
+        let e = err("");
+        assert!(e.message.contains("missing `Re:`"), "{e}");
+    }
+
+    #[test]
+    fn bad_number_points_at_the_value() {
+        let e = err("Re: -0.75\r\nIm:   0.1x5\r\nZoom: 1E5\r\n");
+        let p = e.position.unwrap();
+        assert_eq!((p.line, p.column), (2, 7));
+        assert!(e.message.contains("`Im`") && e.message.contains("not a decimal number"), "{e}");
+        assert_eq!(e.to_string().split(": ").next(), Some("loc.kfr:2:7"));
+
+        let e = err("Re: -0.75\nIm: 0\nZoom: 1,5E5\n");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((3, 7)));
+
+        let e = err("Re: -0.75\nIm: 0\nZoom: -3\n");
+        assert!(e.message.contains("positive"), "{e}");
+        let e = err("Re: -0.75\nIm: 0\nZoom: 0.0\n");
+        assert!(e.message.contains("positive"), "{e}");
+    }
+
+    #[test]
+    fn iterations_range() {
+        for bad in ["0", "4294967295", "99999999999999999999999", "1e6", "-5", "12.5"] {
+            let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nIterations: {bad}\n"));
+            assert_eq!(e.position.map(|p| (p.line, p.column)), Some((4, 13)), "{bad}: {e}");
+            assert!(e.message.contains("Iterations") && e.message.contains("4294967294"), "{e}");
+        }
+        let out = kfr_to_toml("x.kfr", "Re: 0\nIm: 0\nZoom: 1\nIterations: 4294967294\n").unwrap();
+        assert_eq!(table(&out)["iteration"]["max"].as_integer(), Some(4294967294));
+    }
+
+    #[test]
+    fn unsupported_transforms_and_formulas_are_refused() {
+        let base = "Re: 0\nIm: 0\nZoom: 1\n";
+        for (line, needle) in [
+            ("RotateAngle: 30.5", "rotation"),
+            ("Rotate: 12.000000", "rotation"),
+            ("StretchAmount: 0.5", "skew"),
+            ("Ratio: 400.000000", "skew"),
+            ("FractalType: 1", "Mandelbrot"),
+            ("Power: 3", "power 2"),
+            ("UseHybridFormula: 1", "hybrid"),
+            ("ImagPointsUp: 2", "ImagPointsUp"),
+        ] {
+            let e = err(&format!("{base}{line}\n"));
+            assert_eq!(e.position.map(|p| p.line), Some(4), "{line}");
+            assert!(e.message.contains(needle), "{line}: {e}");
+        }
+        kfr_to_toml("x.kfr", &format!("{base}RotateAngle: 0\nStretchAngle: 45\nStretchAmount: 0\n")).unwrap();
+    }
+
+    #[test]
+    fn malformed_lines_and_duplicates() {
+        let e = err("Re: 0\n  this is not a kfr line\nIm: 0\nZoom: 1\n");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((2, 3)));
+        assert!(e.message.contains("Key: value"), "{e}");
+        let e = err("Re: 0\n: 5\nIm: 0\nZoom: 1\n");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((2, 1)));
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nRe: 1\n");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((4, 1)));
+        assert!(e.message.contains("twice") && e.message.contains("line 1"), "{e}");
+        // Unknown keys may repeat freely.
+        kfr_to_toml("x.kfr", "Re: 0\nIm: 0\nZoom: 1\nFoo: 1\nFoo: 2\n").unwrap();
+    }
+
+    /// `scenes/bench-e14.kfr` (KF's format) and `scenes/bench-e14.toml` describe the same view.
+    #[test]
+    fn shipped_example_matches_its_scene() {
+        let out = kfr_to_toml("scenes/bench-e14.kfr", include_str!("../../scenes/bench-e14.kfr")).unwrap();
+        let t = table(&out);
+        let scene = table(include_str!("../../scenes/bench-e14.toml"));
+        assert_eq!(t["formula"]["kind"], scene["formula"]["kind"]);
+        for key in ["center", "zoom", "width", "height"] {
+            assert_eq!(t["view"][key], scene["view"][key], "{key}");
+        }
+        assert_eq!(t["iteration"]["max"], scene["iteration"]["max"]);
+        assert!(!out.contains("mirrored"), "the example sets ImagPointsUp: 1");
+    }
+
+    #[test]
+    fn exponent_forms_are_kept_verbatim() {
+        let out = kfr_to_toml(
+            "x.kfr",
+            "Re: -1.99999999999999999999999999837485e+00\nIm: 1.3717805209060941414e-211\nZoom: 3.16254E321\n",
+        )
+        .unwrap();
+        let t = table(&out);
+        assert_eq!(t["view"]["center"][0].as_str(), Some("-1.99999999999999999999999999837485e+00"));
+        assert_eq!(t["view"]["center"][1].as_str(), Some("1.3717805209060941414e-211"));
+        assert_eq!(t["view"]["zoom"].as_str(), Some("3.16254E321"));
+    }
+}

@@ -1,0 +1,177 @@
+//! The perturbation engines against direct arbitrary-precision iteration, at the extremes.
+//!
+//! Each view is rendered by the real path (scene, engine choice, reference orbit, BLA,
+//! perturbation loop, quantities) and random pixels are iterated directly by `reference`
+//! (astro-float, a different big-float implementation than the engine's malachite), from
+//! exact pixel coordinates. Targets (issue 3): N identical (orbits passing within 1e-9 of
+//! the escape circle excepted), NF within 1e-4, distance estimate within 1e-3 relative at
+//! the median; pixels nearer the set than 1e-6 px get the conditioning allowance of
+//! `accuracy::allowed` (no arithmetic pins them down better than 1e-16 / d).
+
+use std::sync::atomic::AtomicBool;
+
+use astro_float::BigFloat;
+use deepfield::field::{self, ChannelSet};
+use deepfield::render;
+
+use super::accuracy::{Sample, judge, summary};
+use super::reference;
+use super::util::{Lcg, median, scene};
+
+/// The e1086 benchmark location's centre (a deep minibrot), to 120 digits: enough for
+/// views to 1e-100.
+const MINIBROT: [&str; 2] = [
+    "-1.76861049301467707450317565327026522023967790758866549483767725757530464097880847527463570736246404425301437028994853855",
+    "0.00126661350386871770206641119224260157619394056047140981718501017176252479258890361669150134602850245253041759926938411",
+];
+/// The liiiines location's centre: -2 + 1.6e-102 + 1.4e-211 i.
+const LIIIINES: [&str; 2] = [
+    "-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925483202642018042879214193261311019861349448517336056952538528636093441258319101518468947695052924660781278387926133612368999268678559118848357284879481437613458535637431620616343911585652641236167774248507873",
+    "1.37178052090609414145729128541350514525330839736695026708710030908880680107546729978680204559181338295039364573873196577319068006687895587728672855990826461331344843897843243379157581698185171855284714599499709801317677506729468150382879822938996916336090559197836550022966441254042166415444219105895943405807252402353950295056242178258440758e-211",
+];
+
+struct View {
+    center: [&'static str; 2],
+    radius: &'static str,
+    julia: Option<[&'static str; 2]>,
+    max_iter: u32,
+    engine: &'static str,
+    samples: u32,
+}
+
+const SIZE: (u32, u32) = (40, 30);
+
+/// Renders the view and compares `samples` random pixels with the reference.
+fn measure(v: &View) -> (Vec<Sample>, String) {
+    let formula = match v.julia {
+        Some([re, im]) => format!("[formula]\nkind = \"julia\"\nc = [\"{re}\", \"{im}\"]\n"),
+        None => String::new(),
+    };
+    let text = format!(
+        "version = 1\n{formula}[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{}\"\nwidth = {}\nheight = {}\n[iteration]\nmax = {}\n[render]\nengine = \"{}\"\n",
+        v.center[0], v.center[1], v.radius, SIZE.0, SIZE.1, v.max_iter, v.engine
+    );
+    let s = scene(&text);
+    let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
+    let cancel = AtomicBool::new(false);
+    let (params, _) = render::prepare_field(&s, &plan, ChannelSet::default_exr(), &cancel, &|_| {}).expect("prepared");
+    let planes = field::compute_strip(&params, 0..SIZE.1, &cancel).expect("computed").planes;
+    let ln_r = params.orbit.escape_radius.ln();
+    // Enough bits to place every pixel exactly and iterate it without loss.
+    let bits = (-s.log10_spacing() * std::f64::consts::LOG2_10) as usize + 160;
+    let rm = astro_float::RoundingMode::ToEven;
+    let spacing = reference::parse(v.radius, bits).mul(&BigFloat::from_f64(2.0 / SIZE.1 as f64, bits), bits, rm);
+    let julia_c = v.julia.map(|c| [reference::parse(c[0], bits), reference::parse(c[1], bits)]);
+    let mut rng = Lcg(0xdee9 ^ v.max_iter as u64);
+    let mut out = Vec::new();
+    for _ in 0..v.samples {
+        let (i, j) = (rng.below(SIZE.0), rng.below(SIZE.1));
+        let p = reference::pixel(v.center, v.radius, SIZE.0, SIZE.1, i, j, bits);
+        let t =
+            reference::orbit_scaled(&p, julia_c.as_ref(), v.max_iter, params.orbit.escape_radius, bits, Some(&spacing));
+        if !t.near_circle {
+            out.push(judge(&t, &planes, (j * SIZE.0 + i) as usize, 1.0, ln_r));
+        }
+    }
+    (out, plan.name.to_string())
+}
+
+/// Asserts the issue's accuracy targets.
+fn check(name: &str, v: View, expect_engine: &str) {
+    let (s, engine) = measure(&v);
+    summary(&format!("{name} ({engine})"), &s);
+    assert_eq!(engine, expect_engine, "{name}: engine");
+    assert!(s.len() as u32 >= v.samples * 9 / 10, "{name}: too few comparable pixels");
+    for x in &s {
+        assert!(x.n_ok, "{name}: N differs from the reference: {x:?}");
+        if let Some(e) = x.nf_err {
+            let allowed = match x.d {
+                Some(d) if d < 1e-6 => 1e-4f64.max(1e-10 / d),
+                _ => 1e-4,
+            };
+            assert!(e <= allowed, "{name}: NF error {e} at d = {:?} px", x.d);
+        }
+    }
+    let de_median = median(s.iter().filter_map(|x| x.de_err).collect());
+    assert!(de_median <= 1e-3, "{name}: median distance error {de_median}");
+}
+
+#[test]
+fn zoom_1e14_and_1e16_where_f64_breaks_down() {
+    let v = |radius| View { center: MINIBROT, radius, julia: None, max_iter: 5000, engine: "auto", samples: 60 };
+    check("minibrot 1e14", v("2e-14"), "perturb-f64");
+    check("minibrot 1e16", v("2e-16"), "perturb-f64");
+}
+
+#[test]
+fn zoom_1e50() {
+    let v = View { center: MINIBROT, radius: "2e-50", julia: None, max_iter: 10000, engine: "auto", samples: 40 };
+    check("minibrot 1e50", v, "perturb-f64");
+}
+
+#[test]
+fn zoom_1e300_and_1e320_past_the_f64_exponent_range() {
+    let v = |radius| View { center: LIIIINES, radius, julia: None, max_iter: 12500, engine: "auto", samples: 24 };
+    check("liiiines 1e300", v("2e-300"), "perturb-floatexp");
+    check("liiiines 1e320", v("2e-320"), "perturb-floatexp");
+}
+
+#[test]
+fn zoom_1e1000_next_to_minus_two_where_z_lingers_at_two() {
+    // c = -2 + 3e-1000 + small imaginary parts: |z| stays near 2 for ~1660 iterations.
+    let v = View {
+        center: [
+            "-1.999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999997",
+            "1e-1000",
+        ],
+        radius: "2e-1000",
+        julia: None,
+        max_iter: 5000,
+        engine: "auto",
+        samples: 24,
+    };
+    check("next to -2 at 1e1000", v, "perturb-floatexp");
+}
+
+#[test]
+fn cusp_at_one_quarter() {
+    // Orbits near c = 0.25 crawl past the parabolic fixed point 1/2 (thousands of
+    // iterations); the reference sits just outside the set.
+    let v = View {
+        center: ["0.2500001", "0"],
+        radius: "2e-7",
+        julia: None,
+        max_iter: 20000,
+        engine: "perturb-f64",
+        samples: 40,
+    };
+    check("cusp 0.25", v, "perturb-f64");
+}
+
+#[test]
+fn julia_sets_at_1e40_and_1e310() {
+    let e40 = View {
+        center: [
+            "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
+            "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
+        ],
+        radius: "2e-40",
+        julia: Some(["-0.7436447860", "0.1318252536"]),
+        max_iter: 3000,
+        engine: "auto",
+        samples: 40,
+    };
+    check("julia 1e40", e40, "perturb-f64");
+    let e310 = View {
+        center: [
+            "1.498998059701593679863611269389471455923467487587207729632622361597165205414479266771001741604374880670827981821234891802701425395767007388531111033739859140450966250423798082016562443577765107061115497084206684010748981623142526398371956157555964949563876573643348089626811132808802434072359836986035651410273612093408366424625471686597567303179761716120900262",
+            "-0.065979059180909288508764626796452334526732369424523752491501200244877730170502430981529834329747396126521012785968015176337244600588494150764797829550193024781486072003694559842281658712296844476789446962510048136872670014639735191502853264175589134843720724066093486413512758440443041841060428572420332017483341677543572054285646284865668016892106466686005806",
+        ],
+        radius: "2e-310",
+        julia: Some(["-0.743643887037151", "0.131825904205330"]),
+        max_iter: 10000,
+        engine: "auto",
+        samples: 24,
+    };
+    check("julia 1e310", e310, "perturb-floatexp");
+}
