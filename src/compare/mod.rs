@@ -83,7 +83,7 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
     }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
     let mut numbers = vec![];
-    if scene.log10_spacing() > crate::scene::PERTURB_F64_MIN_LOG10_SPACING {
+    if scene.engine_for(crate::scene::EngineChoice::PerturbF64).is_ok() {
         numbers.push((Numbers::F64, "perturb-f64"));
     }
     numbers.push((Numbers::FloatExp, "perturb-floatexp"));

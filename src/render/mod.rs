@@ -302,7 +302,7 @@ pub fn render<P: Send>(
             format!("reference {} bits; deltas f64", deep.as_ref().map_or(0, |d| d.reference_bits))
         }
         EngineKind::Perturb { .. } => format!(
-            "reference {} bits; deltas FloatExp (53-bit mantissa, 32-bit exponent) below 2^-896, f64 above",
+            "reference {} bits; deltas FloatExp (53-bit mantissa, 32-bit exponent) below 2^-480, f64 above",
             deep.as_ref().map_or(0, |d| d.reference_bits)
         ),
     };

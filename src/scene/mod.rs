@@ -102,6 +102,9 @@ pub struct EnginePlan {
 
 /// Sample spacings below 10^this put deltas too close to the f64 underflow for f64 deltas.
 pub const PERTURB_F64_MIN_LOG10_SPACING: f64 = -290.0;
+/// The same for Julia sets, whose rebased step is δ -> δ^2 with nothing added: δ^2 must
+/// stay a normal f64 for deltas down to the sample spacing.
+pub const PERTURB_F64_MIN_LOG10_SPACING_JULIA: f64 = -150.0;
 
 /// A validated scene.
 #[derive(Debug, Clone)]
@@ -212,7 +215,11 @@ impl Scene {
         let depth = -self.log10_radius + 2f64.log10();
         let spacing = self.log10_spacing();
         let f64_ok = ulps >= F64_MIN_ULPS_PER_PIXEL;
-        let deltas_ok = spacing > PERTURB_F64_MIN_LOG10_SPACING;
+        let min_spacing = match self.family {
+            FamilySpec::Mandelbrot => PERTURB_F64_MIN_LOG10_SPACING,
+            FamilySpec::Julia { .. } => PERTURB_F64_MIN_LOG10_SPACING_JULIA,
+        };
+        let deltas_ok = spacing > min_spacing;
         let bla = if self.traps.is_empty() { self.bla } else { None };
         let bla_note = match (self.bla, bla) {
             (Some(e), Some(_)) => format!("; BLA tolerance {e:e}"),
@@ -239,7 +246,7 @@ impl Scene {
                 name: "perturb-floatexp",
                 kind: perturb(Numbers::FloatExp),
                 reason: format!(
-                    "zoom 1e{depth:.1}: the sample spacing 1e{spacing:.1} is below the f64-safe 1e{PERTURB_F64_MIN_LOG10_SPACING}, so perturbation with FloatExp deltas (f64 once a delta grows past 2^-896){bla_note}"
+                    "zoom 1e{depth:.1}: the sample spacing 1e{spacing:.1} is below the f64-safe 1e{min_spacing}, so perturbation with FloatExp deltas (f64 once a delta grows past 2^-480){bla_note}"
                 ),
             }),
             EngineChoice::F64 if f64_ok => Ok(EnginePlan {
@@ -255,7 +262,7 @@ impl Scene {
                 Ok(EnginePlan { name: "perturb-f64", kind: perturb(Numbers::F64), reason: format!("forced{bla_note}") })
             }
             EngineChoice::PerturbF64 => Err(format!(
-                "the view is too deep for perturbation with f64 deltas: the sample spacing 1e{spacing:.1} is below 1e{PERTURB_F64_MIN_LOG10_SPACING}, \
+                "the view is too deep for perturbation with f64 deltas: the sample spacing 1e{spacing:.1} is below 1e{min_spacing}, \
                  where f64 deltas underflow; use --engine auto or perturb-floatexp"
             )),
             EngineChoice::PerturbFloatExp => Ok(EnginePlan {

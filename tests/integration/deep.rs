@@ -37,6 +37,8 @@ struct View {
     max_iter: u32,
     engine: &'static str,
     samples: u32,
+    /// Extra `[render]` lines.
+    render: &'static str,
 }
 
 const SIZE: (u32, u32) = (40, 30);
@@ -48,8 +50,8 @@ fn measure(v: &View) -> (Vec<Sample>, String) {
         None => String::new(),
     };
     let text = format!(
-        "version = 1\n{formula}[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{}\"\nwidth = {}\nheight = {}\n[iteration]\nmax = {}\n[render]\nengine = \"{}\"\n",
-        v.center[0], v.center[1], v.radius, SIZE.0, SIZE.1, v.max_iter, v.engine
+        "version = 1\n{formula}[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{}\"\nwidth = {}\nheight = {}\n[iteration]\nmax = {}\n[render]\nengine = \"{}\"\n{}\n",
+        v.center[0], v.center[1], v.radius, SIZE.0, SIZE.1, v.max_iter, v.engine, v.render
     );
     let s = scene(&text);
     let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
@@ -98,22 +100,73 @@ fn check(name: &str, v: View, expect_engine: &str) {
 
 #[test]
 fn zoom_1e14_and_1e16_where_f64_breaks_down() {
-    let v = |radius| View { center: MINIBROT, radius, julia: None, max_iter: 5000, engine: "auto", samples: 60 };
+    let v = |radius| View {
+        center: MINIBROT,
+        radius,
+        julia: None,
+        max_iter: 5000,
+        engine: "auto",
+        samples: 60,
+        render: "",
+    };
     check("minibrot 1e14", v("2e-14"), "perturb-f64");
     check("minibrot 1e16", v("2e-16"), "perturb-f64");
 }
 
 #[test]
 fn zoom_1e50() {
-    let v = View { center: MINIBROT, radius: "2e-50", julia: None, max_iter: 10000, engine: "auto", samples: 40 };
+    let v = View {
+        center: MINIBROT,
+        radius: "2e-50",
+        julia: None,
+        max_iter: 10000,
+        engine: "auto",
+        samples: 40,
+        render: "",
+    };
     check("minibrot 1e50", v, "perturb-f64");
 }
 
 #[test]
 fn zoom_1e300_and_1e320_past_the_f64_exponent_range() {
-    let v = |radius| View { center: LIIIINES, radius, julia: None, max_iter: 12500, engine: "auto", samples: 24 };
+    let v = |radius| View {
+        center: LIIIINES,
+        radius,
+        julia: None,
+        max_iter: 12500,
+        engine: "auto",
+        samples: 24,
+        render: "",
+    };
     check("liiiines 1e300", v("2e-300"), "perturb-floatexp");
     check("liiiines 1e320", v("2e-320"), "perturb-floatexp");
+}
+
+/// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
+/// in f64 after; the switch points are what this checks (a too-early switch to f64 once
+/// put N off by one on 5% of these pixels).
+#[test]
+fn without_bla_at_1e320_and_1e1000() {
+    let v = View {
+        center: LIIIINES,
+        radius: "2e-320",
+        julia: None,
+        max_iter: 12500,
+        engine: "auto",
+        samples: 24,
+        render: "bla = false",
+    };
+    check("liiiines 1e320 without BLA", v, "perturb-floatexp");
+    let v = View {
+        center: MINIBROT,
+        radius: "2e-50",
+        julia: None,
+        max_iter: 10000,
+        engine: "auto",
+        samples: 24,
+        render: "bla = false",
+    };
+    check("minibrot 1e50 without BLA", v, "perturb-f64");
 }
 
 #[test]
@@ -129,6 +182,7 @@ fn zoom_1e1000_next_to_minus_two_where_z_lingers_at_two() {
         max_iter: 5000,
         engine: "auto",
         samples: 24,
+        render: "",
     };
     check("next to -2 at 1e1000", v, "perturb-floatexp");
 }
@@ -144,6 +198,7 @@ fn cusp_at_one_quarter() {
         max_iter: 20000,
         engine: "perturb-f64",
         samples: 40,
+        render: "",
     };
     check("cusp 0.25", v, "perturb-f64");
 }
@@ -160,6 +215,7 @@ fn julia_sets_at_1e40_and_1e310() {
         max_iter: 3000,
         engine: "auto",
         samples: 40,
+        render: "",
     };
     check("julia 1e40", e40, "perturb-f64");
     let e310 = View {
@@ -172,6 +228,7 @@ fn julia_sets_at_1e40_and_1e310() {
         max_iter: 10000,
         engine: "auto",
         samples: 24,
+        render: "",
     };
     check("julia 1e310", e310, "perturb-floatexp");
 }

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The README's speed/accuracy ladder: `deepfield compare` at zooms 1e0 ... 1e1000 around
+# one point (the liiiines location's centre, -2 + 1.6e-102 + 1.4e-211 i, padded with zeros
+# beyond its 340 digits), printed as one Markdown table.
+#
+#   scripts/compare-ladder.sh [SIZE] [SAMPLES]      (default 400x300, 100)
+#
+# Each depth renders the full SIZE image with every engine that can address it and
+# compares SAMPLES pixels with direct big-float iteration. Takes a few minutes on 2 cores.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+size="${1:-400x300}"
+samples="${2:-100}"
+cargo build --release --quiet
+bin=target/release/deepfield
+center="$(sed -n 's/^center = \["\([^"]*\)", "\([^"]*\)"\]/\1,\2/p' scenes/liiiines.toml)"
+echo "| zoom | engine | seconds | iterations/s | N mismatch | NF p50 | NF p99 | DE p50 | DE p99 |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for zoom in 1 1e10 1e14 1e16 1e50 1e300 1e320 1e1000; do
+    "$bin" compare --center "$center" --zoom "$zoom" --size "$size" --max-iter 20000 \
+        --samples "$samples" --csv -q |
+        tail -n +2 |
+        awk -F, -v z="$zoom" '{ printf "| %s | %s | %.3f | %.3g | %.4f | %.2g | %.2g | %.2g | %.2g |\n", z, $1, $2, $3, $4, $5, $6, $7, $8 }'
+done
