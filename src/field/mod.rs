@@ -213,19 +213,25 @@ fn deep_strip(
     let traps = &params.needs.traps;
     let mut states: Vec<TrapState> = traps.iter().map(Trap::initial).collect();
     let mut counters = Counters::default();
-    let mut orbits = Vec::with_capacity(grid.width as usize * rows.len());
-    for j in rows {
+    let width = grid.width as usize;
+    let mut orbits = vec![Orbit::interior(); width * rows.len()];
+    for (row, j) in orbits.chunks_mut(width).zip(rows.clone()) {
         if cancel.load(Ordering::Relaxed) {
             return Err(Cancelled);
         }
-        for i in 0..grid.width {
+        let row_start = (j - rows.start) as usize * width;
+        if traps.is_empty() {
+            let offsets: Vec<[f64; 2]> = (0..grid.width).map(|i| grid.offset(i, j)).collect();
+            deep.orbits(&offsets, row, &mut counters);
+            continue;
+        }
+        for (i, orbit) in row.iter_mut().enumerate() {
             for (state, trap) in states.iter_mut().zip(traps) {
                 *state = trap.initial();
             }
-            let k = orbits.len();
-            orbits.push(deep.orbit(grid.offset(i, j), traps, &mut states, &mut counters));
+            *orbit = deep.orbit(grid.offset(i as u32, j), traps, &mut states, &mut counters);
             for (plane, state) in planes.traps.iter_mut().zip(&states) {
-                plane.store(k, state);
+                plane.store(row_start + i, state);
             }
         }
     }

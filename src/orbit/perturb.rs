@@ -41,6 +41,8 @@ const GLITCH2: f64 = 1e-6;
 /// The derivative's mantissa is renormalised when its largest part leaves [2^-500, 2^500].
 const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
 const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
+/// BLA multipliers below this update the derivative in f64 (|A| |mant| < 2^900).
+const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
 
 /// Which number types the deltas use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -163,17 +165,43 @@ impl Der {
     }
 }
 
+/// Where a sample is: in its FloatExp or its f64 phase.
+enum Phase {
+    Fe(Sample<FloatExp>),
+    F64(Sample<f64>),
+}
+
 /// How a run of the loop in one number type ended.
 enum Exit<D> {
     Done(Orbit),
     Switch(Sample<D>),
 }
 
+/// The loop's fixed inputs in number type D.
+#[derive(Clone, Copy)]
+struct Ctx<'a, D> {
+    tables: [Option<&'a BlaTable<D>>; 2],
+    add_fe: FloatExp,
+    hybrid: bool,
+}
+
+/// A sample in flight in the interleaved f64 loop.
+#[derive(Clone, Copy)]
+struct Lane {
+    k: usize,
+    s: Sample<f64>,
+    der: Der,
+    start_n: u32,
+    dc_fe: [FloatExp; 2],
+}
+
+/// Samples the interleaved loop keeps in flight: their dependency chains (each step waits
+/// for the previous one's multiply-adds) overlap in the out-of-order core.
+const LANES: usize = 4;
+
 impl Perturbation {
-    /// Iterates the sample at `offset` (in units of the spacing, from the reference point),
-    /// letting traps observe every z_k, k >= 1. Returns the orbit's end; z_n is exact to f64
-    /// and dz_n is the derivative times the spacing.
-    pub fn orbit(&self, offset: [f64; 2], traps: &[Trap], states: &mut [TrapState], counters: &mut Counters) -> Orbit {
+    /// A sample's starting state (FloatExp), its derivative, and what the derivative adds.
+    fn start(&self, offset: [f64; 2]) -> (Sample<FloatExp>, Der, FloatExp) {
         let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         let zero = FloatExp::ZERO;
         let (start, add_fe) = if self.mandelbrot {
@@ -181,26 +209,111 @@ impl Perturbation {
         } else {
             (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0 }, zero)
         };
-        let mut der = Der::from_fe([self.spacing, zero], add_fe);
-        let use_bla = traps.is_empty();
-        let tables_fe = if use_bla { [self.bla_fe[0].as_ref(), self.bla_fe[1].as_ref()] } else { [None, None] };
-        let tables_64 = if use_bla { [self.bla_f64[0].as_ref(), self.bla_f64[1].as_ref()] } else { [None, None] };
-        let hybrid = self.numbers == Numbers::FloatExp;
-        let max_abs = |v: [FloatExp; 2]| v[0].abs().max(v[1].abs());
-        let mut fe_state = (hybrid && max_abs(d) < FloatExp::from(DOWN)).then_some(start);
-        let mut f64_state: Sample<f64> = start.convert();
+        (start, Der::from_fe([self.spacing, zero], add_fe), add_fe)
+    }
+
+    /// True when a sample starting at `s` must begin in FloatExp.
+    fn starts_in_floatexp(&self, s: &Sample<FloatExp>) -> bool {
+        let big = s.dz[0].abs().max(s.dz[1].abs());
+        self.numbers == Numbers::FloatExp && big < FloatExp::from(DOWN)
+    }
+
+    fn ctx<'a, D: Real>(&'a self, tables: &'a [Option<BlaTable<D>>; 2], bla: bool, add_fe: FloatExp) -> Ctx<'a, D> {
+        let tables = if bla { [tables[0].as_ref(), tables[1].as_ref()] } else { [None, None] };
+        Ctx { tables, add_fe, hybrid: self.numbers == Numbers::FloatExp }
+    }
+
+    /// Iterates the sample at `offset` (in units of the spacing, from the reference point),
+    /// letting traps observe every z_k, k >= 1. Returns the orbit's end; z_n is exact to f64
+    /// and dz_n is the derivative times the spacing.
+    pub fn orbit(&self, offset: [f64; 2], traps: &[Trap], states: &mut [TrapState], counters: &mut Counters) -> Orbit {
+        let (start, mut der, add_fe) = self.start(offset);
+        let fe = self.starts_in_floatexp(&start);
+        let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
+        self.drive(phase, start.dc, &mut der, add_fe, traps, states, counters)
+    }
+
+    /// Iterates many samples without traps, `LANES` at a time in the f64 phase (samples in
+    /// their FloatExp phase run one at a time). Same results as [`Perturbation::orbit`].
+    pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
+        let c64 = self.ctx(&self.bla_f64, true, FloatExp::ZERO);
+        let mut lanes: [Option<Lane>; LANES] = [None; LANES];
+        let mut next = 0;
+        let mut local = Counters::default();
         loop {
-            if let Some(s) = fe_state.take() {
-                match self.run::<FloatExp>(s, &mut der, add_fe, tables_fe, traps, states, counters, hybrid) {
-                    Exit::Done(o) => return o,
-                    Exit::Switch(s) => f64_state = s.convert(),
+            for slot in lanes.iter_mut() {
+                while slot.is_none() && next < offsets.len() {
+                    let k = next;
+                    next += 1;
+                    let (start, mut der, add_fe) = self.start(offsets[k]);
+                    let s = if self.starts_in_floatexp(&start) {
+                        let cfe = self.ctx(&self.bla_fe, true, add_fe);
+                        match self.run::<FloatExp>(start, &mut der, cfe, &[], &mut [], counters) {
+                            Exit::Done(o) => {
+                                out[k] = o;
+                                continue;
+                            }
+                            Exit::Switch(s) => s.convert(),
+                        }
+                    } else {
+                        start.convert()
+                    };
+                    *slot = Some(Lane { k, s, der, start_n: s.n, dc_fe: start.dc });
                 }
             }
-            match self.run::<f64>(f64_state, &mut der, add_fe, tables_64, traps, states, counters, hybrid) {
-                Exit::Done(o) => return o,
-                // The offset goes back to FloatExp from the original, never from its f64
-                // rounding: below 2^-1022 that keeps only a few bits.
-                Exit::Switch(s) => fe_state = Some(Sample { dc: start.dc, ..s.convert() }),
+            if lanes.iter().all(Option::is_none) {
+                break;
+            }
+            // Round robin until a lane finishes; then refill.
+            'batch: loop {
+                for slot in lanes.iter_mut() {
+                    let Some(lane) = slot else { continue };
+                    let add_fe = if self.mandelbrot { self.spacing } else { FloatExp::ZERO };
+                    let c = Ctx { add_fe, ..c64 };
+                    if let Some(exit) = self.op::<f64>(&mut lane.s, &mut lane.der, c, &[], &mut [], &mut local) {
+                        local.iterations += (lane.s.n - lane.start_n) as u64;
+                        out[lane.k] = match exit {
+                            Exit::Done(o) => o,
+                            Exit::Switch(s) => {
+                                let fe = Sample { dc: lane.dc_fe, ..s.convert() };
+                                self.drive(Phase::Fe(fe), lane.dc_fe, &mut lane.der, add_fe, &[], &mut [], counters)
+                            }
+                        };
+                        *slot = None;
+                        break 'batch;
+                    }
+                }
+            }
+        }
+        counters.add(&local);
+    }
+
+    /// Runs a sample from `phase` to its end, switching number types as its delta asks.
+    fn drive(
+        &self,
+        mut phase: Phase,
+        dc_fe: [FloatExp; 2],
+        der: &mut Der,
+        add_fe: FloatExp,
+        traps: &[Trap],
+        states: &mut [TrapState],
+        counters: &mut Counters,
+    ) -> Orbit {
+        let bla = traps.is_empty();
+        let cfe = self.ctx(&self.bla_fe, bla, add_fe);
+        let c64 = self.ctx(&self.bla_f64, bla, add_fe);
+        loop {
+            phase = match phase {
+                Phase::Fe(s) => match self.run::<FloatExp>(s, der, cfe, traps, states, counters) {
+                    Exit::Done(o) => return o,
+                    Exit::Switch(s) => Phase::F64(s.convert()),
+                },
+                Phase::F64(s) => match self.run::<f64>(s, der, c64, traps, states, counters) {
+                    Exit::Done(o) => return o,
+                    // The offset goes back to FloatExp from the original, never from its
+                    // f64 rounding: below 2^-1022 that keeps only a few bits.
+                    Exit::Switch(s) => Phase::Fe(Sample { dc: dc_fe, ..s.convert() }),
+                },
             }
         }
     }
@@ -211,82 +324,20 @@ impl Perturbation {
         &self,
         mut s: Sample<D>,
         der: &mut Der,
-        add_fe: FloatExp,
-        tables: [Option<&BlaTable<D>>; 2],
+        ctx: Ctx<'_, D>,
         traps: &[Trap],
         states: &mut [TrapState],
         counters: &mut Counters,
-        hybrid: bool,
     ) -> Exit<D> {
-        let full_range = D::NAME == FloatExp::NAME;
-        let two = D::from_f64(2.0);
         let start_n = s.n;
         // Counted locally and added on exit: the loop's state stays in registers.
         let mut local = Counters::default();
-        let mut r = &self.refs[s.which];
-        let mut table = tables[s.which];
         let exit = loop {
-            let mut zm: [D; 2] = if full_range {
-                cconv(r.get_fe(s.m))
-            } else {
-                let g = r.get(s.m);
-                [D::from_f64(g[0]), D::from_f64(g[1])]
-            };
-            let full = cadd(zm, s.dz);
-            let z = cto_f64(full);
-            if s.n >= 1 {
-                for (trap, state) in traps.iter().zip(states.iter_mut()) {
-                    trap.observe(state, z);
-                }
-            }
-            if z[0] * z[0] + z[1] * z[1] > self.escape2 {
-                let dz = if self.derivative { der.to_f64() } else { [0.0; 2] };
-                break Exit::Done(Orbit { n: s.n, z, dz });
-            }
-            if s.n >= self.max_iter {
-                break Exit::Done(Orbit::interior());
-            }
-            let d2 = norm2(s.dz);
-            let f2 = norm2(full);
-            let rebase = f2 < d2 || s.m >= r.last();
-            let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
-            if rebase || glitch {
-                local.glitches += glitch as u64;
-                local.rebases += 1;
-                s.dz = full;
-                s.m = 0;
-                s.which = self.refs.len() - 1;
-                r = &self.refs[s.which];
-                table = tables[s.which];
-                zm = [D::ZERO; 2];
-                if hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
-                    break Exit::Switch(s);
-                }
-            } else if let Some(t) = table
-                && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
-            {
-                self.apply_bla(e, &mut s, der, add_fe);
-                s.m += len;
-                s.n += len;
-                local.bla_steps += 1;
-                local.bla_iterations += len as u64;
-                continue;
-            }
-            if self.derivative {
-                let [x, y] = z;
-                let [a, b] = der.mant;
-                der.mant = [2.0 * (x * a - y * b) + der.add, 2.0 * (x * b + y * a)];
-                der.renormalise(add_fe);
-            }
-            s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
-            s.m += 1;
-            s.n += 1;
-            local.steps += 1;
-            if full_range && hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
-                break Exit::Switch(s);
+            if let Some(exit) = self.op(&mut s, der, ctx, traps, states, &mut local) {
+                break exit;
             }
         };
-        if full_range {
+        if D::NAME == FloatExp::NAME {
             local.floatexp_steps = local.steps;
         }
         local.iterations = (s.n - start_n) as u64;
@@ -294,15 +345,108 @@ impl Perturbation {
         exit
     }
 
-    /// δ -> A δ + B δc, and the derivative alike (in FloatExp: A may be huge).
-    #[inline(never)]
+    /// One pass of the loop: the end tests, then a rebase, a BLA step or a perturbation
+    /// step. Returns the exit when the sample ends or must change number type.
+    #[inline(always)]
+    fn op<D: Real>(
+        &self,
+        s: &mut Sample<D>,
+        der: &mut Der,
+        ctx: Ctx<'_, D>,
+        traps: &[Trap],
+        states: &mut [TrapState],
+        local: &mut Counters,
+    ) -> Option<Exit<D>> {
+        let full_range = D::NAME == FloatExp::NAME;
+        let r = &self.refs[s.which];
+        let mut zm: [D; 2] = if full_range {
+            cconv(r.get_fe(s.m))
+        } else {
+            let g = r.get(s.m);
+            [D::from_f64(g[0]), D::from_f64(g[1])]
+        };
+        let full = cadd(zm, s.dz);
+        let z = cto_f64(full);
+        if s.n >= 1 {
+            for (trap, state) in traps.iter().zip(states.iter_mut()) {
+                trap.observe(state, z);
+            }
+        }
+        if z[0] * z[0] + z[1] * z[1] > self.escape2 {
+            let dz = if self.derivative { der.to_f64() } else { [0.0; 2] };
+            return Some(Exit::Done(Orbit { n: s.n, z, dz }));
+        }
+        if s.n >= self.max_iter {
+            return Some(Exit::Done(Orbit::interior()));
+        }
+        let d2 = norm2(s.dz);
+        let f2 = norm2(full);
+        let rebase = f2 < d2 || s.m >= r.last();
+        let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
+        if rebase || glitch {
+            local.glitches += glitch as u64;
+            local.rebases += 1;
+            s.dz = full;
+            s.m = 0;
+            s.which = self.refs.len() - 1;
+            zm = [D::ZERO; 2];
+            if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
+                return Some(Exit::Switch(*s));
+            }
+        } else if let Some(t) = ctx.tables[s.which]
+            && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
+        {
+            self.apply_bla(e, s, der, ctx.add_fe);
+            s.m += len;
+            s.n += len;
+            local.bla_steps += 1;
+            local.bla_iterations += len as u64;
+            return None;
+        }
+        if self.derivative {
+            let [x, y] = z;
+            let [a, b] = der.mant;
+            der.mant = [2.0 * (x * a - y * b) + der.add, 2.0 * (x * b + y * a)];
+            der.renormalise(ctx.add_fe);
+        }
+        let two = D::from_f64(2.0);
+        s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
+        s.m += 1;
+        s.n += 1;
+        local.steps += 1;
+        if full_range && ctx.hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
+            return Some(Exit::Switch(*s));
+        }
+        None
+    }
+
+    /// δ -> A δ + B δc, and the derivative alike: in f64 when A and B are moderate (the
+    /// common case), else in FloatExp (A may be huge at depth).
+    #[inline]
     fn apply_bla<D: Real>(&self, e: &Bla<D>, s: &mut Sample<D>, der: &mut Der, add_fe: FloatExp) {
         s.dz = cadd(cmul(e.a, s.dz), cmul(e.b, s.dc));
         if self.derivative {
-            let a: [FloatExp; 2] = cconv(e.a);
-            let b: [FloatExp; 2] = cconv(e.b);
-            let d = cadd(cmul(a, der.to_fe()), [b[0] * add_fe, b[1] * add_fe]);
-            *der = Der::from_fe(d, add_fe);
+            let a = cto_f64(e.a);
+            let b = cto_f64(e.b);
+            let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+            if big < DER_SAFE {
+                // |A mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
+                // underflows, where it is negligible beside A mant).
+                let m = der.mant;
+                let am = [a[0] * m[0] - a[1] * m[1], a[0] * m[1] + a[1] * m[0]];
+                der.mant = [am[0] + b[0] * der.add, am[1] + b[1] * der.add];
+                der.renormalise(add_fe);
+            } else {
+                Self::bla_derivative_fe(e, der, add_fe);
+            }
         }
+    }
+
+    #[inline(never)]
+    fn bla_derivative_fe<D: Real>(e: &Bla<D>, der: &mut Der, add_fe: FloatExp) {
+        let a: [FloatExp; 2] = cconv(e.a);
+        let b: [FloatExp; 2] = cconv(e.b);
+        let d = cadd(cmul(a, der.to_fe()), [b[0] * add_fe, b[1] * add_fe]);
+        *der = Der::from_fe(d, add_fe);
     }
 }

@@ -248,10 +248,14 @@ fn planes(text: &str) -> (field::Planes, String) {
 #[test]
 fn perturbation_agrees_with_direct_f64_at_shallow_zoom() {
     for formula in ["", "[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n"] {
-        let view = format!("version = 1\n{formula}[view]\ncenter = [\"-0.1\", \"0.3\"]\nzoom = \"3\"\nwidth = 64\nheight = 48\n[iteration]\nmax = 2000\n");
+        let view = format!(
+            "version = 1\n{formula}[view]\ncenter = [\"-0.1\", \"0.3\"]\nzoom = \"3\"\nwidth = 64\nheight = 48\n[iteration]\nmax = 2000\n"
+        );
         let (direct, name) = planes(&format!("{view}[render]\nengine = \"f64\"\n"));
         assert_eq!(name, "f64");
-        for render in ["engine = \"perturb-f64\"\nbla = false", "engine = \"perturb-f64\"", "engine = \"perturb-floatexp\""] {
+        for render in
+            ["engine = \"perturb-f64\"\nbla = false", "engine = \"perturb-f64\"", "engine = \"perturb-floatexp\""]
+        {
             let (p, _) = planes(&format!("{view}[render]\n{render}\n"));
             let same = direct.n.iter().zip(&p.n).filter(|(a, b)| a == b).count();
             assert!(same as f64 >= 0.995 * p.n.len() as f64, "{render}: N agrees on {same} of {}", p.n.len());
@@ -270,11 +274,7 @@ fn perturbation_agrees_with_direct_f64_at_shallow_zoom() {
 /// or an infinity at any depth.
 #[test]
 fn bla_on_and_off_agree_and_every_channel_is_finite() {
-    let views = [
-        (MINIBROT, "2e-30", 6000),
-        (LIIIINES, "2e-310", 12500),
-        (LIIIINES, "2e-700", 12500),
-    ];
+    let views = [(MINIBROT, "2e-30", 6000), (LIIIINES, "2e-310", 12500), (LIIIINES, "2e-700", 12500)];
     for (center, radius, max) in views {
         let view = format!(
             "version = 1\n[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{radius}\"\nwidth = 48\nheight = 32\n[iteration]\nmax = {max}\n",
@@ -283,11 +283,15 @@ fn bla_on_and_off_agree_and_every_channel_is_finite() {
         let (on, _) = planes(&view);
         let (off, _) = planes(&format!("{view}[render]\nbla = false\n"));
         for p in [&on, &off] {
-            assert!(p.nf.iter().chain(&p.t).chain(&p.dex).chain(&p.dey).all(|v| v.is_finite()), "{radius}: non-finite value");
+            assert!(
+                p.nf.iter().chain(&p.t).chain(&p.dex).chain(&p.dey).all(|v| v.is_finite()),
+                "{radius}: non-finite value"
+            );
         }
         let same = on.n.iter().zip(&off.n).filter(|(a, b)| a == b).count();
         assert!(same as f64 >= 0.999 * on.n.len() as f64, "{radius}: BLA changes N on {} pixels", on.n.len() - same);
-        let nf: Vec<f64> = (0..on.n.len()).filter(|&k| on.n[k] == off.n[k]).map(|k| (on.nf[k] - off.nf[k]).abs() as f64).collect();
+        let nf: Vec<f64> =
+            (0..on.n.len()).filter(|&k| on.n[k] == off.n[k]).map(|k| (on.nf[k] - off.nf[k]).abs() as f64).collect();
         assert!(median(nf) < 1e-6, "{radius}: NF differs with BLA");
     }
 }
