@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The README's speed/accuracy ladder: `deepfield compare` at zooms 1e0 ... 1e1000 around
-# one point (the liiiines location's centre, -2 + 1.6e-102 + 1.4e-211 i, padded with zeros
-# beyond its 340 digits), printed as one Markdown table.
+# The README's speed/accuracy ladder: `deepfield compare` at zooms 1e0 ... 1e320 around the
+# liiiines location's centre (-2 + 1.6e-102 + 1.4e-211 i, given to 340 digits) and at 1e1000
+# next to -2 (-2 + 3e-1000 + 1e-1000 i; beyond its digits the liiiines centre is a generic
+# point whose neighbourhood is featureless), printed as one Markdown table.
 #
 #   scripts/compare-ladder.sh [SIZE] [SAMPLES]      (default 400x300, 100)
 #
@@ -16,8 +17,11 @@ bin=target/release/deepfield
 center="$(sed -n 's/^center = \["\([^"]*\)", "\([^"]*\)"\]/\1,\2/p' scenes/liiiines.toml)"
 echo "| zoom | engine | seconds | iterations/s | N mismatch | NF p50 | NF p99 | DE p50 | DE p99 |"
 echo "|---|---|---|---|---|---|---|---|---|"
+near_minus_two="-1.$(printf '9%.0s' $(seq 1 999))7,1e-1000"
 for zoom in 1 1e10 1e14 1e16 1e50 1e300 1e320 1e1000; do
-    "$bin" compare --center "$center" --zoom "$zoom" --size "$size" --max-iter 20000 \
+    c="$center"
+    if [ "$zoom" = 1e1000 ]; then c="$near_minus_two"; fi
+    "$bin" compare --center "$c" --zoom "$zoom" --size "$size" --max-iter 20000 \
         --samples "$samples" --csv -q |
         tail -n +2 |
         awk -F, -v z="$zoom" '{ printf "| %s | %s | %.3f | %.3g | %.4f | %.2g | %.2g | %.2g | %.2g |\n", z, $1, $2, $3, $4, $5, $6, $7, $8 }'
