@@ -17,7 +17,7 @@ use malachite_float::Float;
 use malachite_q::Rational;
 
 pub use bla::BlaTable;
-pub use perturb::{Counters, Numbers, Perturbation};
+pub use perturb::{Counters, Numbers, Perturbation, Skip};
 pub use reference::Reference;
 
 use crate::field::Cancelled;
@@ -124,11 +124,18 @@ pub fn prepare(
     let dc_max = if mandelbrot { spec.spacing.mul_f64(spec.max_offset) } else { FloatExp::ZERO };
     let mut bla_fe = [None, None];
     let mut bla_f64 = [None, None];
+    let mut skip = None;
     if let Some(eps) = spec.bla {
         for (k, r) in refs.iter().enumerate() {
             // Orbits of 0 step nonlinearly from Z_0 = 0: their tables start at index 1.
             let origin = if mandelbrot || k == 1 { 1 } else { 0 };
             let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max);
+            if k == 0 {
+                // The steps every sample takes first: from Z_1 (Mandelbrot, |δ_1| = |δc|) or
+                // Z_0 (Julia, |δ_0| = |offset|), bounded by the largest offset.
+                let bound = spec.spacing.mul_f64(spec.max_offset);
+                skip = Skip::find(&t, origin, bound, dc_max, spec.max_iter);
+            }
             bla_f64[k] = Some(t.to_f64());
             if spec.numbers == Numbers::FloatExp {
                 bla_fe[k] = Some(t);
@@ -145,6 +152,7 @@ pub fn prepare(
         escape2: spec.escape_radius * spec.escape_radius,
         derivative: spec.derivative,
         numbers: spec.numbers,
+        skip,
     })
 }
 

@@ -107,6 +107,47 @@ pub struct Perturbation {
     pub derivative: bool,
     /// Delta number types.
     pub numbers: Numbers,
+    /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
+    pub skip: Option<Skip>,
+}
+
+/// The run of BLA steps from the start of the primary reference that is valid for every
+/// sample of the view at once (their deltas are bounded by the largest offset), composed
+/// into one linear map δ_m = K δ_start. Every sample would take these same steps (or
+/// longer ones covering them, equal within the tolerance); taking them once per view
+/// skips each sample's first BLA lookups, and at depth its whole FloatExp phase.
+#[derive(Debug, Clone, Copy)]
+pub struct Skip {
+    /// Reference index (and iteration) the samples continue from.
+    pub m: u32,
+    /// δ_m = K δ_start, and the scaled derivative is K times the spacing.
+    pub k: [FloatExp; 2],
+    /// BLA steps composed.
+    pub steps: u32,
+}
+
+impl Skip {
+    /// Composes the valid steps of `table` from `start` for deltas up to `bound` (and
+    /// offsets up to `dc_max`), within `max_iter`.
+    pub fn find(
+        table: &BlaTable<FloatExp>,
+        start: u32,
+        bound: FloatExp,
+        dc_max: FloatExp,
+        max_iter: u32,
+    ) -> Option<Skip> {
+        let (mut a, mut b) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
+        let (mut m, mut bound, mut steps) = (start, bound, 0);
+        while let Some((e, len)) = table.lookup(m, bound * bound, max_iter - m) {
+            a = cmul(e.a, a);
+            b = cadd(cmul(e.a, b), e.b);
+            bound = norm2(e.a).sqrt() * bound + norm2(e.b).sqrt() * dc_max;
+            m += len;
+            steps += 1;
+        }
+        // δ_start = δc for the Mandelbrot set (and B = 0 for Julia sets): K = A + B.
+        (steps > 0).then_some(Skip { m, k: cadd(a, b), steps })
+    }
 }
 
 /// A sample's state in number type D.
@@ -200,16 +241,27 @@ struct Lane {
 const LANES: usize = 4;
 
 impl Perturbation {
-    /// A sample's starting state (FloatExp), its derivative, and what the derivative adds.
-    fn start(&self, offset: [f64; 2]) -> (Sample<FloatExp>, Der, FloatExp) {
+    /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
+    /// after the view's common BLA steps when `skip` (counted into `counters`).
+    fn start(&self, offset: [f64; 2], skip: bool, counters: &mut Counters) -> (Sample<FloatExp>, Der, FloatExp) {
         let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         let zero = FloatExp::ZERO;
-        let (start, add_fe) = if self.mandelbrot {
+        let (mut start, add_fe) = if self.mandelbrot {
             (Sample { dz: d, dc: d, m: 1, which: 0, n: 1 }, self.spacing)
         } else {
             (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0 }, zero)
         };
-        (start, Der::from_fe([self.spacing, zero], add_fe), add_fe)
+        let mut der = [self.spacing, zero];
+        if let (true, Some(k)) = (skip, &self.skip) {
+            counters.iterations += (k.m - start.m) as u64;
+            counters.bla_iterations += (k.m - start.m) as u64;
+            counters.bla_steps += k.steps as u64;
+            start.dz = cmul(k.k, d);
+            start.m = k.m;
+            start.n = k.m;
+            der = cmul(k.k, der);
+        }
+        (start, Der::from_fe(der, add_fe), add_fe)
     }
 
     /// True when a sample starting at `s` must begin in FloatExp.
@@ -227,7 +279,7 @@ impl Perturbation {
     /// letting traps observe every z_k, k >= 1. Returns the orbit's end; z_n is exact to f64
     /// and dz_n is the derivative times the spacing.
     pub fn orbit(&self, offset: [f64; 2], traps: &[Trap], states: &mut [TrapState], counters: &mut Counters) -> Orbit {
-        let (start, mut der, add_fe) = self.start(offset);
+        let (start, mut der, add_fe) = self.start(offset, traps.is_empty(), counters);
         let fe = self.starts_in_floatexp(&start);
         let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
         self.drive(phase, start.dc, &mut der, add_fe, traps, states, counters)
@@ -245,7 +297,7 @@ impl Perturbation {
                 while slot.is_none() && next < offsets.len() {
                     let k = next;
                     next += 1;
-                    let (start, mut der, add_fe) = self.start(offsets[k]);
+                    let (start, mut der, add_fe) = self.start(offsets[k], true, counters);
                     let s = if self.starts_in_floatexp(&start) {
                         let cfe = self.ctx(&self.bla_fe, true, add_fe);
                         match self.run::<FloatExp>(start, &mut der, cfe, &[], &mut [], counters) {
