@@ -237,8 +237,10 @@ struct Lane {
 }
 
 /// Samples the interleaved loop keeps in flight: their dependency chains (each step waits
-/// for the previous one's multiply-adds) overlap in the out-of-order core.
-const LANES: usize = 4;
+/// for the previous one's multiply-adds) overlap in the out-of-order core. Measured by
+/// alternating binaries (liiiines, 1e50 view): 2 lanes beat 1, 3, 4 and 8 (4 lanes: 25%
+/// slower; the lanes' state no longer stays in registers).
+const LANES: usize = 2;
 
 impl Perturbation {
     /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
