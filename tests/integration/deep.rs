@@ -41,6 +41,13 @@ struct View {
     render: &'static str,
 }
 
+impl View {
+    /// A Mandelbrot view with the engine chosen automatically and BLA at its default.
+    fn mandelbrot(center: [&'static str; 2], radius: &'static str, max_iter: u32, samples: u32) -> View {
+        View { center, radius, julia: None, max_iter, engine: "auto", samples, render: "" }
+    }
+}
+
 const SIZE: (u32, u32) = (40, 30);
 
 /// Renders the view and compares `samples` random pixels with the reference.
@@ -100,44 +107,20 @@ fn check(name: &str, v: View, expect_engine: &str) {
 
 #[test]
 fn zoom_1e14_and_1e16_where_f64_breaks_down() {
-    let v = |radius| View {
-        center: MINIBROT,
-        radius,
-        julia: None,
-        max_iter: 5000,
-        engine: "auto",
-        samples: 60,
-        render: "",
-    };
+    let v = |radius| View::mandelbrot(MINIBROT, radius, 5000, 60);
     check("minibrot 1e14", v("2e-14"), "perturb-f64");
     check("minibrot 1e16", v("2e-16"), "perturb-f64");
 }
 
 #[test]
 fn zoom_1e50() {
-    let v = View {
-        center: MINIBROT,
-        radius: "2e-50",
-        julia: None,
-        max_iter: 10000,
-        engine: "auto",
-        samples: 40,
-        render: "",
-    };
+    let v = View::mandelbrot(MINIBROT, "2e-50", 10000, 40);
     check("minibrot 1e50", v, "perturb-f64");
 }
 
 #[test]
 fn zoom_1e300_and_1e320_past_the_f64_exponent_range() {
-    let v = |radius| View {
-        center: LIIIINES,
-        radius,
-        julia: None,
-        max_iter: 12500,
-        engine: "auto",
-        samples: 24,
-        render: "",
-    };
+    let v = |radius| View::mandelbrot(LIIIINES, radius, 12500, 24);
     check("liiiines 1e300", v("2e-300"), "perturb-floatexp");
     check("liiiines 1e320", v("2e-320"), "perturb-floatexp");
 }
@@ -146,26 +129,10 @@ fn zoom_1e300_and_1e320_past_the_f64_exponent_range() {
 /// in f64 after; the switch points are what this checks (a too-early switch to f64 once
 /// put N off by one on 5% of these pixels).
 #[test]
-fn without_bla_at_1e320_and_1e1000() {
-    let v = View {
-        center: LIIIINES,
-        radius: "2e-320",
-        julia: None,
-        max_iter: 12500,
-        engine: "auto",
-        samples: 24,
-        render: "bla = false",
-    };
+fn without_bla_at_1e320_and_1e50() {
+    let v = View { render: "bla = false", ..View::mandelbrot(LIIIINES, "2e-320", 12500, 24) };
     check("liiiines 1e320 without BLA", v, "perturb-floatexp");
-    let v = View {
-        center: MINIBROT,
-        radius: "2e-50",
-        julia: None,
-        max_iter: 10000,
-        engine: "auto",
-        samples: 24,
-        render: "bla = false",
-    };
+    let v = View { render: "bla = false", ..View::mandelbrot(MINIBROT, "2e-50", 10000, 24) };
     check("minibrot 1e50 without BLA", v, "perturb-f64");
 }
 
@@ -177,12 +144,7 @@ fn zoom_1e1000_next_to_minus_two_where_z_lingers_at_two() {
             "-1.999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999997",
             "1e-1000",
         ],
-        radius: "2e-1000",
-        julia: None,
-        max_iter: 5000,
-        engine: "auto",
-        samples: 24,
-        render: "",
+        ..View::mandelbrot(MINIBROT, "2e-1000", 5000, 24)
     };
     check("next to -2 at 1e1000", v, "perturb-floatexp");
 }
@@ -191,15 +153,7 @@ fn zoom_1e1000_next_to_minus_two_where_z_lingers_at_two() {
 fn cusp_at_one_quarter() {
     // Orbits near c = 0.25 crawl past the parabolic fixed point 1/2 (thousands of
     // iterations); the reference sits just outside the set.
-    let v = View {
-        center: ["0.2500001", "0"],
-        radius: "2e-7",
-        julia: None,
-        max_iter: 20000,
-        engine: "perturb-f64",
-        samples: 40,
-        render: "",
-    };
+    let v = View { engine: "perturb-f64", ..View::mandelbrot(["0.2500001", "0"], "2e-7", 20000, 40) };
     check("cusp 0.25", v, "perturb-f64");
 }
 
