@@ -166,8 +166,9 @@ fn report(
         );
         if let Some(d) = &stats.deep {
             text.push_str(&format!(
-                "reference   {} iterations at {} bits, {:.3} s (with BLA tables), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                "reference   {} iterations{} at {} bits, {:.3} s (with BLA tables), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
                 d.reference_iterations,
+                if d.reference_escaped { " (escaped)" } else { "" },
                 d.reference_bits,
                 d.reference_seconds,
                 d.reference_bytes as f64 / 1e6,

@@ -170,6 +170,12 @@ impl Perturbation {
         self.refs[0].bits()
     }
 
+    /// True when the primary reference escaped before the iteration limit (samples that
+    /// outlive it continue by rebasing).
+    pub fn reference_escaped(&self) -> bool {
+        self.refs[0].escaped()
+    }
+
     /// Length of the primary reference (its last index).
     pub fn reference_length(&self) -> u32 {
         self.refs[0].last()

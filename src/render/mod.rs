@@ -81,6 +81,8 @@ pub struct DeepStats {
     pub reference_bits: u64,
     /// Iterations in the primary reference orbit.
     pub reference_iterations: u32,
+    /// The primary reference escaped before the iteration limit.
+    pub reference_escaped: bool,
     /// Seconds spent on reference orbits and BLA tables.
     pub reference_seconds: f64,
     /// Bytes of the reference orbit(s).
@@ -286,6 +288,7 @@ pub fn render<P: Send>(
         DeepStats {
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
+            reference_escaped: d.reference_escaped(),
             reference_seconds,
             reference_bytes,
             bla_bytes,
