@@ -3,8 +3,9 @@
 //! With the reference Z_m and a sample's full value z = Z_m + δ, the map z -> z^2 + c
 //! becomes δ -> (2 Z_m + δ) δ + δc (δc = the sample's offset from the reference parameter,
 //! zero for Julia sets, whose delta lives in z_0). The loop is written once, generic over
-//! the delta's number type ([`Real`]: f64, or `FloatExp` below 1e-300); the driver switches
-//! a sample between the two as its delta crosses the f64-safe range.
+//! the delta's number type ([`Real`]: f64, or `FloatExp` for deltas below 2^-480 in views
+//! past the f64 range); the driver switches a sample between the two as its delta crosses
+//! the range where every term of the step is a normal f64.
 //!
 //! Rebasing (Zhuoran): when |Z_m + δ| < |δ| the sample is closer to 0 than to the
 //! reference, so it continues from the start of an orbit of 0 with δ = the full value.
@@ -33,8 +34,8 @@ use crate::trap::{Trap, TrapState};
 /// above the offset δc, which at these depths is below the f64 range.
 const DOWN: f64 = f64::from_bits((1023 - 500) << 52);
 /// Deltas above this move a sample from FloatExp back to f64: every term of the step
-/// (δ^2 included) is then a normal f64. (At 2^-480, where only δ itself is normal,
-/// `deepfield compare` at zoom 1e320 found N off by one on 5% of pixels.)
+/// (δ^2 included) is then a normal f64. (Switching at 2^-896, where only δ itself is
+/// normal, `deepfield compare` at zoom 1e320 found N off by one on 5% of pixels.)
 const UP: f64 = f64::from_bits((1023 - 480) << 52);
 /// Pauldelbrot's criterion, squared: |Z + δ|^2 < GLITCH2 |Z|^2 flags a glitch.
 const GLITCH2: f64 = 1e-6;
@@ -290,7 +291,8 @@ impl Perturbation {
     /// Iterates many samples without traps, `LANES` at a time in the f64 phase (samples in
     /// their FloatExp phase run one at a time). Same results as [`Perturbation::orbit`].
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
-        let c64 = self.ctx(&self.bla_f64, true, FloatExp::ZERO);
+        let add_fe = if self.mandelbrot { self.spacing } else { FloatExp::ZERO };
+        let c64 = self.ctx(&self.bla_f64, true, add_fe);
         let mut lanes: [Option<Lane>; LANES] = [None; LANES];
         let mut next = 0;
         let mut local = Counters::default();
@@ -299,7 +301,7 @@ impl Perturbation {
                 while slot.is_none() && next < offsets.len() {
                     let k = next;
                     next += 1;
-                    let (start, mut der, add_fe) = self.start(offsets[k], true, counters);
+                    let (start, mut der, _) = self.start(offsets[k], true, counters);
                     let s = if self.starts_in_floatexp(&start) {
                         let cfe = self.ctx(&self.bla_fe, true, add_fe);
                         match self.run::<FloatExp>(start, &mut der, cfe, &[], &mut [], counters) {
@@ -322,9 +324,7 @@ impl Perturbation {
             'batch: loop {
                 for slot in lanes.iter_mut() {
                     let Some(lane) = slot else { continue };
-                    let add_fe = if self.mandelbrot { self.spacing } else { FloatExp::ZERO };
-                    let c = Ctx { add_fe, ..c64 };
-                    if let Some(exit) = self.op::<f64>(&mut lane.s, &mut lane.der, c, &[], &mut [], &mut local) {
+                    if let Some(exit) = self.op::<f64>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local) {
                         local.iterations += (lane.s.n - lane.start_n) as u64;
                         out[lane.k] = match exit {
                             Exit::Done(o) => o,
