@@ -119,6 +119,7 @@ fn engines_forced_beyond_their_range_are_refused_with_a_reason() {
     rejects("too-deep-deltas", Some(deeper), &["--engine", "perturb-f64"], "f64 deltas underflow");
     rejects("bad-engine", Some("version = 1\n[render]\nengine = \"gmp\"\n"), &[], "scene.toml:3:10");
     rejects("bad-tolerance", Some("version = 1\n[render]\nbla_tolerance = 2.0\n"), &[], "scene.toml:3:17");
+    rejects("huge-reference", Some(deep), &["--max-iter", "4000000000"], "too many for the perturbation engine");
 }
 
 /// Deep views render with the perturbation engine the choice names, and the statistics
@@ -186,6 +187,24 @@ fn compare_measures_engines_against_the_truth() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("engine,seconds,iterations_per_second,n_mismatch_fraction,"), "{text}");
+}
+
+/// Past the f64 range `compare` lists only the FloatExp engines, and the default BLA
+/// tolerance matches its big-float truth.
+#[test]
+fn compare_at_depth_lists_the_engines_that_can_address_it() {
+    let dir = scratch("cli-compare-deep");
+    let center = "-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925,1.3717805209060941414572912854135e-211";
+    let args = ["compare", "--center", center, "--zoom", "1e320", "--size", "40x30", "--max-iter", "12500"];
+    let o = deepfield(&[&args[..], &["--samples", "12", "--sample-only", "--json"]].concat(), &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let names: Vec<&str> = rows.as_array().unwrap().iter().map(|r| r["engine"].as_str().unwrap()).collect();
+    assert_eq!(names, ["perturb-floatexp", "perturb-floatexp bla 1e-12", "perturb-floatexp bla 1e-6"]);
+    for r in rows.as_array().unwrap().iter().take(2) {
+        assert_eq!(r["n_mismatch_fraction"], 0.0, "{r}");
+        assert!(r["nf_error_p99"].as_f64().unwrap() < 1e-6, "{r}");
+    }
 }
 
 #[test]
