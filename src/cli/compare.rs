@@ -24,6 +24,13 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         .build()
         .map_err(|e| Failure::Runtime(e.into()))?;
     let variants = compare::variants(&scene);
+    if variants.is_empty() {
+        return Err(Failure::Input(anyhow!(
+            "no engine can address this view: it is too deep for direct iteration, and iteration.max = {} is above the perturbation engines' limit of {}",
+            scene.max_iter,
+            deepfield::scene::MAX_PERTURB_ITER
+        )));
+    }
     let pixels = compare::sample_pixels(&scene, args.samples);
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(pixels.len() as u64);

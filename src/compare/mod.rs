@@ -81,6 +81,10 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
     if ulps64 >= DIRECT_MIN_ULPS {
         out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct) });
     }
+    if scene.max_iter > crate::scene::MAX_PERTURB_ITER {
+        // The perturbation engines refuse such limits (their reference is stored whole).
+        return out;
+    }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
     let mut numbers = vec![];
     if scene.engine_for(crate::scene::EngineChoice::PerturbF64).is_ok() {
@@ -111,7 +115,7 @@ pub fn sample_pixels(scene: &Scene, count: u32) -> Vec<(u32, u32)> {
     let mut state = 0x00de_e9f1_e1d5_u64;
     let mut seen = std::collections::HashSet::new();
     let mut out = Vec::new();
-    while out.len() < count.min(total as u32) as usize {
+    while (out.len() as u64) < (count as u64).min(total) {
         state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         let k = (state >> 20) % total;
         if seen.insert(k) {

@@ -201,6 +201,9 @@ fn compare_at_depth_lists_the_engines_that_can_address_it() {
     let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let names: Vec<&str> = rows.as_array().unwrap().iter().map(|r| r["engine"].as_str().unwrap()).collect();
     assert_eq!(names, ["perturb-floatexp", "perturb-floatexp bla 1e-12", "perturb-floatexp bla 1e-6"]);
+    let o = deepfield(&[&args[..7], &["--max-iter", "4000000000"]].concat(), &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no engine can address this view"), "{}", stderr(&o));
     for r in rows.as_array().unwrap().iter().take(2) {
         assert_eq!(r["n_mismatch_fraction"], 0.0, "{r}");
         assert!(r["nf_error_p99"].as_f64().unwrap() < 1e-6, "{r}");
