@@ -36,13 +36,23 @@ pub fn to_floatexp(x: &Float) -> FloatExp {
 
 /// z^2 + c at precision `prec`.
 pub fn step(z: &BigComplex, c: &BigComplex, prec: u64) -> BigComplex {
-    let xx = z[0].square_prec_ref(prec).0;
-    let yy = z[1].square_prec_ref(prec).0;
-    let xy = z[0].mul_prec_ref_ref(&z[1], prec).0;
-    let re = xx.sub_prec(yy, prec).0.add_prec_ref_ref(&c[0], prec).0;
+    let mut z = z.clone();
+    step_assign(&mut z, c, prec);
+    z
+}
+
+/// z <- z^2 + c at precision `prec`, in place: one new allocation per step (x y) instead of
+/// one per operation; the reference orbit spends most of its time here.
+pub fn step_assign(z: &mut BigComplex, c: &BigComplex, prec: u64) {
+    let [x, y] = z;
+    let xy = x.mul_prec_ref_ref(y, prec).0;
+    x.square_prec_assign(prec);
+    y.square_prec_assign(prec);
+    x.sub_prec_assign_ref(y, prec);
+    x.add_prec_assign_ref(&c[0], prec);
     // 2xy + cy: doubling is exact (an exponent change).
-    let im = (xy << 1u32).add_prec_ref_ref(&c[1], prec).0;
-    [re, im]
+    *y = xy << 1u32;
+    y.add_prec_assign_ref(&c[1], prec);
 }
 
 /// Bits of precision for a view whose sample spacing is 10^log10_spacing: enough to place

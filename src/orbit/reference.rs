@@ -67,7 +67,7 @@ impl Reference {
                 }
                 progress(n);
             }
-            z = bigfloat::step(&z, c, bits);
+            bigfloat::step_assign(&mut z, c, bits);
             n += 1;
         }
         out.z.shrink_to_fit();
