@@ -85,6 +85,34 @@ pub fn oklab_to_linear([l, a, b]: [f32; 3]) -> [f32; 3] {
     ]
 }
 
+/// OKLab to OKLCH: lightness, chroma, hue in turns [0, 1).
+pub fn oklab_to_oklch([l, a, b]: [f32; 3]) -> [f32; 3] {
+    let h = b.atan2(a) / std::f32::consts::TAU;
+    [l, a.hypot(b), if h < 0.0 { h + 1.0 } else { h }]
+}
+
+/// OKLCH (hue in turns) to OKLab.
+pub fn oklch_to_oklab([l, c, h]: [f32; 3]) -> [f32; 3] {
+    let (s, co) = (h * std::f32::consts::TAU).sin_cos();
+    [l, c * co, c * s]
+}
+
+/// HSV (hue in turns, saturation, value; all in [0, 1]) to RGB in the same encoding.
+pub fn hsv_to_rgb([h, s, v]: [f32; 3]) -> [f32; 3] {
+    let h6 = (h - h.floor()) * 6.0;
+    let k = |n: f32| {
+        let k = (n + h6) % 6.0;
+        v - v * s * k.min(4.0 - k).clamp(0.0, 1.0)
+    };
+    [k(5.0), k(3.0), k(1.0)]
+}
+
+/// Formats sRGB-encoded components as `#rrggbb`.
+pub fn to_hex(srgb: [f32; 3]) -> String {
+    let c = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    format!("#{:02x}{:02x}{:02x}", c(srgb[0]), c(srgb[1]), c(srgb[2]))
+}
+
 /// Parses `#rrggbb` into sRGB-encoded components.
 pub fn parse_hex(text: &str) -> Option<[f32; 3]> {
     let h = text.strip_prefix('#')?;
@@ -114,6 +142,13 @@ mod tests {
         assert!((w[0] - 1.0).abs() < 1e-4 && w[1].abs() < 1e-4 && w[2].abs() < 1e-4);
         assert_eq!(parse_hex("#ff8000"), Some([1.0, 128.0 / 255.0, 0.0]));
         assert_eq!(parse_hex("ff8000"), None);
+        assert_eq!(to_hex([1.0, 128.0 / 255.0, 0.0]), "#ff8000");
+        let lab = linear_to_oklab([0.3, 0.6, 0.1]);
+        let back = oklch_to_oklab(oklab_to_oklch(lab));
+        assert!((0..3).all(|k| (back[k] - lab[k]).abs() < 1e-6));
+        assert_eq!(hsv_to_rgb([0.0, 1.0, 1.0]), [1.0, 0.0, 0.0]);
+        assert_eq!(hsv_to_rgb([1.0 / 3.0, 1.0, 0.5]), [0.0, 0.5, 0.0]);
+        assert_eq!(hsv_to_rgb([0.5, 0.0, 0.25]), [0.25, 0.25, 0.25]);
         for i in 0..=100_000 {
             let v = i as f32 / 100_000.0;
             assert_eq!(linear_to_srgb8(v) as usize, tables().encode.partition_point(|&t| t <= v), "{v}");

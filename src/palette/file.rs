@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use super::{Mode, Palette, Space, Stop, color};
+use super::{Cosine, Definition, Mode, Palette, Space, Stop, color};
 use crate::source::SourceError;
 
 /// Why a palette could not be had.
@@ -42,6 +42,13 @@ pub fn builtin_names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(n, _)| *n).collect()
 }
 
+/// A built-in palette by name.
+pub fn builtin(name: &str) -> Option<Palette> {
+    let (name, text) = BUILTIN.iter().find(|(n, _)| *n == name)?;
+    // The built-in files are checked by the tests: a parse error here is a build defect.
+    parse(&format!("palettes/{name}.toml"), text).ok()
+}
+
 /// A built-in palette by name, or a palette file by path (relative paths are resolved
 /// against `base`, the folder of the scene that names it).
 pub fn load(name_or_path: &str, base: Option<&Path>) -> Result<Palette, PaletteError> {
@@ -66,14 +73,28 @@ pub fn load(name_or_path: &str, base: Option<&Path>) -> Result<Palette, PaletteE
 struct RawPalette {
     name: String,
     #[serde(default)]
-    #[allow(dead_code)]
     description: String,
     #[serde(default)]
     space: Space,
     #[serde(default)]
     mode: Mode,
-    #[serde(rename = "stop")]
+    #[serde(default)]
+    offset: Option<toml::Spanned<f64>>,
+    #[serde(default)]
+    density: Option<toml::Spanned<f64>>,
+    #[serde(default)]
+    cosine: Option<toml::Spanned<RawCosine>>,
+    #[serde(default, rename = "stop")]
     stops: Vec<toml::Spanned<RawStop>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCosine {
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+    d: [f64; 3],
 }
 
 #[derive(Deserialize)]
@@ -93,11 +114,41 @@ fn one() -> f64 {
 pub fn parse(origin: &str, text: &str) -> Result<Palette, SourceError> {
     let raw: RawPalette = toml::from_str(text).map_err(|e| SourceError::from_toml(origin, text, &e))?;
     let err = |span: std::ops::Range<usize>, msg: String| SourceError::at(origin, text, Some(span), msg);
-    if raw.stops.len() < 2 {
-        return Err(SourceError::at(origin, text, None, "a palette needs at least 2 [[stop]] tables"));
+    let definition = match (&raw.cosine, raw.stops.is_empty()) {
+        (Some(c), true) => {
+            let v = c.get_ref();
+            if [v.a, v.b, v.c, v.d].iter().flatten().any(|x| !x.is_finite()) {
+                return Err(err(c.span(), "cosine coefficients must be finite numbers".into()));
+            }
+            Definition::Cosine(Cosine { a: v.a, b: v.b, c: v.c, d: v.d })
+        }
+        (Some(c), false) => {
+            return Err(err(c.span(), "a palette has either [cosine] or [[stop]] tables, not both".into()));
+        }
+        (None, _) => Definition::Stops(stops(&raw.stops, &err)?),
+    };
+    let number = |v: &Option<toml::Spanned<f64>>, default: f64, what: &str| match v {
+        None => Ok(default),
+        Some(v) if v.get_ref().is_finite() && (what == "offset" || *v.get_ref() > 0.0) => Ok(*v.get_ref()),
+        Some(v) => Err(err(
+            v.span(),
+            format!("`{what}` must be a finite number{}", if what == "offset" { "" } else { " > 0" }),
+        )),
+    };
+    let offset = number(&raw.offset, 0.0, "offset")?;
+    let density = number(&raw.density, 1.0, "density")?;
+    Ok(Palette::with(raw.name, raw.description, raw.space, raw.mode, definition).adjusted(offset, density))
+}
+
+fn stops(
+    raw: &[toml::Spanned<RawStop>],
+    err: &dyn Fn(std::ops::Range<usize>, String) -> SourceError,
+) -> Result<Vec<Stop>, SourceError> {
+    if raw.len() < 2 {
+        return Err(err(0..0, "a palette needs at least 2 [[stop]] tables (or one [cosine] table)".into()));
     }
-    let mut stops = Vec::with_capacity(raw.stops.len());
-    for (k, s) in raw.stops.iter().enumerate() {
+    let mut stops = Vec::with_capacity(raw.len());
+    for (k, s) in raw.iter().enumerate() {
         let span = s.span();
         let s = s.get_ref();
         if !(0.0..=1.0).contains(&s.pos) {
@@ -118,7 +169,37 @@ pub fn parse(origin: &str, text: &str) -> Result<Palette, SourceError> {
         }
         stops.push(Stop { pos: s.pos, srgb, opacity: s.opacity as f32 });
     }
-    Ok(Palette::new(raw.name, raw.space, raw.mode, stops))
+    Ok(stops)
+}
+
+/// The palette in our TOML format (what `deepfield palettes import` writes); parsing the
+/// text gives the same palette back (colours rounded to 8 bits).
+pub fn to_toml(p: &Palette) -> String {
+    let mut out = String::new();
+    let q = |s: &str| toml::Value::String(s.to_string()).to_string();
+    out += &format!("name = {}\n", q(&p.name));
+    out += &format!("description = {}\n", q(&p.description));
+    out += &format!("space = \"{}\"\nmode = \"{}\"\n", p.space.name(), p.mode.name());
+    if p.offset != 0.0 {
+        out += &format!("offset = {:?}\n", p.offset);
+    }
+    if p.density != 1.0 {
+        out += &format!("density = {:?}\n", p.density);
+    }
+    match &p.definition {
+        Definition::Cosine(c) => {
+            out += &format!("\n[cosine]\na = {:?}\nb = {:?}\nc = {:?}\nd = {:?}\n", c.a, c.b, c.c, c.d);
+        }
+        Definition::Stops(stops) => {
+            for s in stops {
+                out += &format!("\n[[stop]]\npos = {:?}\ncolor = \"{}\"\n", s.pos, color::to_hex(s.srgb));
+                if s.opacity != 1.0 {
+                    out += &format!("opacity = {:?}\n", s.opacity as f64);
+                }
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -134,5 +215,26 @@ mod tests {
         let e = parse("x.toml", "name = \"x\"\nbogus = 1\n").unwrap_err();
         assert_eq!(e.position.unwrap().line, 2, "{e}");
         assert!(matches!(load("no-such-palette", None), Err(PaletteError::Unknown { .. })));
+        let e = parse(
+            "x.toml",
+            "name = \"x\"\ndensity = -1.0\n[cosine]\na=[0.5,0.5,0.5]\nb=[0.5,0.5,0.5]\nc=[1,1,1]\nd=[0,0.1,0.2]\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.position.unwrap().line, 2, "{e}");
+    }
+
+    #[test]
+    fn toml_round_trip() {
+        for name in builtin_names() {
+            let p = builtin(name).unwrap();
+            let back = parse("back.toml", &to_toml(&p)).unwrap();
+            assert_eq!(back, p, "{name}");
+        }
+        let text = "name = \"c\"\noffset = 0.25\ndensity = 2.0\n[cosine]\na=[0.5,0.5,0.5]\nb=[0.5,0.5,0.5]\nc=[1,1,1]\nd=[0,0.1,0.2]\n";
+        let p = parse("c.toml", text).unwrap();
+        assert_eq!(parse("c2.toml", &to_toml(&p)).unwrap(), p);
+        // density and offset act before the mode: t = 0.1 samples the palette at 0.45.
+        let plain = p.clone().adjusted(0.0, 1.0);
+        assert_eq!(p.at(0.1), plain.at(0.45));
     }
 }

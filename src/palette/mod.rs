@@ -1,20 +1,27 @@
-//! Palettes: colour stops interpolated in a chosen space, sampled through a lookup table.
+//! Palettes: colour stops (or a cosine formula) interpolated in a chosen space, sampled
+//! through a lookup table.
 //!
-//! A palette is defined by stops (position, sRGB colour, opacity), the space in which
-//! neighbouring stops are blended (OKLab by default: perceptually even ramps without the
-//! muddy midpoints of sRGB blending) and what happens outside [0, 1). Colouring asks for
-//! millions of samples, so each palette is baked once into a table of linear-light RGBA and
-//! sampled with linear interpolation between table entries.
+//! A palette is defined by stops (position, sRGB colour, opacity) or by Inigo Quilez's
+//! cosine formula `a + b cos(2 pi (c t + d))`, the space in which neighbouring stops are
+//! blended (OKLab by default: perceptually even ramps without the muddy midpoints of sRGB
+//! blending; OKLCH to sweep hue; sRGB or linear light to match other programs), what happens
+//! outside [0, 1) (repeat, mirror, clamp), and an offset and density applied before that:
+//! position = t * density + offset. Cycling a palette is moving its offset.
+//!
+//! Colouring asks for millions of samples, so each palette is baked once into a table of
+//! linear-light RGBA and sampled with linear interpolation between table entries.
 //!
 //! Palettes shipped in `palettes/` are compiled into the binary, so a palette name works
-//! from any working directory; any other TOML file in the same format is loaded by path.
+//! from any working directory; any other TOML file in the same format is loaded by path,
+//! and [`import`] reads the formats other programs write.
 
 pub mod color;
 mod file;
+pub mod import;
 
 use std::sync::Arc;
 
-pub use file::{PaletteError, builtin_names, load, parse};
+pub use file::{PaletteError, builtin, builtin_names, load, parse, to_toml};
 
 /// Space in which neighbouring stops are interpolated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
@@ -23,10 +30,24 @@ pub enum Space {
     /// OKLab (perceptual).
     #[default]
     Oklab,
+    /// OKLCH: OKLab in polar form; hue turns the short way round between stops.
+    Oklch,
     /// sRGB-encoded values.
     Srgb,
     /// Linear-light RGB.
     Linear,
+}
+
+impl Space {
+    /// The name used in palette files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Space::Oklab => "oklab",
+            Space::Oklch => "oklch",
+            Space::Srgb => "srgb",
+            Space::Linear => "linear",
+        }
+    }
 }
 
 /// How positions outside [0, 1) map into the palette.
@@ -42,6 +63,17 @@ pub enum Mode {
     Clamp,
 }
 
+impl Mode {
+    /// The name used in palette files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Repeat => "repeat",
+            Mode::Mirror => "mirror",
+            Mode::Clamp => "clamp",
+        }
+    }
+}
+
 /// A colour stop.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stop {
@@ -53,6 +85,38 @@ pub struct Stop {
     pub opacity: f32,
 }
 
+/// Inigo Quilez's cosine palette: sRGB colour `a + b cos(2 pi (c t + d))`, per channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cosine {
+    /// Bias.
+    pub a: [f64; 3],
+    /// Amplitude.
+    pub b: [f64; 3],
+    /// Frequency (cycles over [0, 1]); whole numbers keep `repeat` seamless.
+    pub c: [f64; 3],
+    /// Phase in cycles.
+    pub d: [f64; 3],
+}
+
+impl Cosine {
+    /// sRGB-encoded colour at `t`, clamped to [0, 1].
+    pub fn at(&self, t: f64) -> [f32; 3] {
+        std::array::from_fn(|k| {
+            let v = self.a[k] + self.b[k] * (std::f64::consts::TAU * (self.c[k] * t + self.d[k])).cos();
+            v.clamp(0.0, 1.0) as f32
+        })
+    }
+}
+
+/// What defines a palette's colours.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Definition {
+    /// Stops, positions strictly increasing, the first at 0.
+    Stops(Vec<Stop>),
+    /// A cosine formula (opaque).
+    Cosine(Cosine),
+}
+
 const LUT_SIZE: usize = 4096;
 
 /// A palette ready for sampling.
@@ -60,25 +124,84 @@ const LUT_SIZE: usize = 4096;
 pub struct Palette {
     /// Its name.
     pub name: String,
+    /// One sentence on what it looks like.
+    pub description: String,
     /// Interpolation space.
     pub space: Space,
     /// Out-of-range behaviour.
     pub mode: Mode,
-    /// The stops, positions strictly increasing, the first at 0.
-    pub stops: Vec<Stop>,
+    /// Added to every position (cycles), after the density.
+    pub offset: f64,
+    /// Positions are multiplied by this (stretch: < 1 widens the bands).
+    pub density: f64,
+    /// Its colours.
+    pub definition: Definition,
     lut: Arc<Vec<[f32; 4]>>,
 }
 
 impl Palette {
-    /// Builds a palette from validated stops.
+    /// Builds a palette from validated stops (offset 0, density 1).
     pub fn new(name: impl Into<String>, space: Space, mode: Mode, stops: Vec<Stop>) -> Self {
-        let lut = (0..LUT_SIZE).map(|i| interpolate(&stops, space, i as f64 / (LUT_SIZE - 1) as f64)).collect();
-        Self { name: name.into(), space, mode, stops, lut: Arc::new(lut) }
+        Self::with(name, String::new(), space, mode, Definition::Stops(stops))
     }
 
-    /// Linear-light RGBA (not premultiplied) at position `t`, after the palette's mode.
+    /// Builds a palette from any definition (offset 0, density 1).
+    pub fn with(
+        name: impl Into<String>,
+        description: impl Into<String>,
+        space: Space,
+        mode: Mode,
+        definition: Definition,
+    ) -> Self {
+        let lut = (0..LUT_SIZE)
+            .map(|i| {
+                let t = i as f64 / (LUT_SIZE - 1) as f64;
+                match &definition {
+                    Definition::Stops(stops) => interpolate(stops, space, t),
+                    Definition::Cosine(c) => {
+                        let s = c.at(t).map(color::srgb_to_linear);
+                        [s[0], s[1], s[2], 1.0]
+                    }
+                }
+            })
+            .collect();
+        Self {
+            name: name.into(),
+            description: description.into(),
+            space,
+            mode,
+            offset: 0.0,
+            density: 1.0,
+            definition,
+            lut: Arc::new(lut),
+        }
+    }
+
+    /// The same palette with another offset and density (the table is shared).
+    pub fn adjusted(mut self, offset: f64, density: f64) -> Self {
+        self.offset = offset;
+        self.density = density;
+        self
+    }
+
+    /// The stops (a cosine palette is sampled at 33 evenly spaced stops).
+    pub fn stops(&self) -> Vec<Stop> {
+        match &self.definition {
+            Definition::Stops(s) => s.clone(),
+            Definition::Cosine(c) => (0..=32)
+                .map(|k| {
+                    let pos = k as f64 / 32.0;
+                    Stop { pos, srgb: c.at(pos), opacity: 1.0 }
+                })
+                .collect(),
+        }
+    }
+
+    /// Linear-light RGBA (not premultiplied) at position `t`, after the palette's density,
+    /// offset and mode.
     #[inline]
     pub fn at(&self, t: f64) -> [f32; 4] {
+        let t = t * self.density + self.offset;
         let u = match self.mode {
             Mode::Repeat => t - floor(t),
             Mode::Mirror => {
@@ -107,27 +230,51 @@ fn floor(t: f64) -> f64 {
     if f > t { f - 1.0 } else { f }
 }
 
+/// A colour in the coordinates of `space`.
+fn to_space(space: Space, srgb: [f32; 3]) -> [f32; 3] {
+    let lin = srgb.map(color::srgb_to_linear);
+    match space {
+        Space::Srgb => srgb,
+        Space::Linear => lin,
+        Space::Oklab => color::linear_to_oklab(lin),
+        Space::Oklch => color::oklab_to_oklch(color::linear_to_oklab(lin)),
+    }
+}
+
+/// Linear light from the coordinates of `space`.
+fn from_space(space: Space, v: [f32; 3]) -> [f32; 3] {
+    match space {
+        Space::Srgb => v.map(color::srgb_to_linear),
+        Space::Linear => v,
+        Space::Oklab => color::oklab_to_linear(v),
+        Space::Oklch => color::oklab_to_linear(color::oklch_to_oklab(v)),
+    }
+}
+
 /// Exact interpolation between the stops around `t` (in [0, 1]), as linear RGBA.
 fn interpolate(stops: &[Stop], space: Space, t: f64) -> [f32; 4] {
     let k = stops.iter().rposition(|s| s.pos <= t).unwrap_or(0);
     let a = stops[k];
     let b = *stops.get(k + 1).unwrap_or(&a);
     let w = if b.pos > a.pos { ((t - a.pos) / (b.pos - a.pos)) as f32 } else { 0.0 };
-    let to = |s: Stop| -> [f32; 3] {
-        let lin = s.srgb.map(color::srgb_to_linear);
-        match space {
-            Space::Srgb => s.srgb,
-            Space::Linear => lin,
-            Space::Oklab => color::linear_to_oklab(lin),
+    let (ca, mut cb) = (to_space(space, a.srgb), to_space(space, b.srgb));
+    if space == Space::Oklch {
+        // Hue (turns) the short way round; an achromatic end takes the other's hue.
+        if ca[1] < 1e-4 {
+            return finish(space, [ca[0] + (cb[0] - ca[0]) * w, cb[1] * w, cb[2]], a, b, w);
         }
-    };
-    let (ca, cb) = (to(a), to(b));
+        if cb[1] < 1e-4 {
+            cb[2] = ca[2];
+        }
+        let dh = cb[2] - ca[2];
+        cb[2] = ca[2] + dh - dh.round();
+    }
     let mix = [ca[0] + (cb[0] - ca[0]) * w, ca[1] + (cb[1] - ca[1]) * w, ca[2] + (cb[2] - ca[2]) * w];
-    let lin = match space {
-        Space::Srgb => mix.map(color::srgb_to_linear),
-        Space::Linear => mix,
-        Space::Oklab => color::oklab_to_linear(mix),
-    };
+    finish(space, mix, a, b, w)
+}
+
+fn finish(space: Space, mix: [f32; 3], a: Stop, b: Stop, w: f32) -> [f32; 4] {
+    let lin = from_space(space, mix);
     let alpha = a.opacity + (b.opacity - a.opacity) * w;
     [lin[0].clamp(0.0, 1.0), lin[1].clamp(0.0, 1.0), lin[2].clamp(0.0, 1.0), alpha]
 }
@@ -159,7 +306,7 @@ mod tests {
     fn stops_are_hit_exactly() {
         for p in builtin_names() {
             let pal = load(p, None).unwrap();
-            for s in &pal.stops {
+            for s in &pal.stops() {
                 let got = pal.at(s.pos.min(0.999_999_999));
                 let want = s.srgb.map(color::srgb_to_linear);
                 for k in 0..3 {

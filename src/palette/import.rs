@@ -1,0 +1,1 @@
+//! Importers for the palette formats other programs write (work in progress).
