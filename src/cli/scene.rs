@@ -108,8 +108,8 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
             let l = l.get_mut();
             // Distance layers without a palette are grey by design; they keep that look.
             let uses_palette = match l.kind.get_ref().as_str() {
-                "smooth" | "trap" => true,
-                "distance" => l.palette.is_some(),
+                "smooth" | "histogram" | "angle" | "stripe" | "trap" => true,
+                "distance" | "interior" => l.palette.is_some(),
                 _ => false,
             };
             if uses_palette {

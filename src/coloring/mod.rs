@@ -1,36 +1,33 @@
 //! Colourings: pure functions from raw planes to linear-light, premultiplied RGBA.
 //!
 //! Each colouring reads only the planes it declares in [`Coloring::needs`], which is how a
-//! scene decides what the field computes. Distances arrive in sample-raster pixels and are
-//! converted to image pixels (divided by the supersampling factor) so a look does not
-//! change with supersampling.
+//! scene decides what the field computes: smooth iteration needs NF, distance and slope
+//! need the DE vector, phase colourings need T, and the orbit statistics (traps, stripe
+//! average) are computed only when a layer names them. Distances arrive in sample-raster
+//! pixels and are converted to image pixels (divided by the supersampling factor) so a
+//! look does not change with supersampling.
+//!
+//! Colourings that need the whole image (histogram equalisation) read a [`Context`] built
+//! once from every strip; the others are local, sample by sample.
+
+mod histogram;
+pub mod mask;
+pub mod shading;
+mod transfer;
+
+pub use histogram::Histogram;
+pub use mask::{Mask, MaskQuantity};
+pub use shading::{DistanceStyle, Light};
+pub use transfer::Transfer;
 
 use crate::field::{INTERIOR, Needs, Planes, TrapPlane};
 use crate::palette::{Palette, color};
-use crate::trap::Trap;
 
-/// Map from smooth iteration to palette position, before density and offset.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Transfer {
-    /// nu.
-    #[default]
-    Linear,
-    /// sqrt(nu).
-    Sqrt,
-    /// ln(1 + nu).
-    Log,
-}
-
-impl Transfer {
-    #[inline]
-    fn apply(self, nu: f64) -> f64 {
-        match self {
-            Transfer::Linear => nu,
-            Transfer::Sqrt => nu.max(0.0).sqrt(),
-            Transfer::Log => nu.max(0.0).ln_1p(),
-        }
-    }
+/// Image-wide data some colourings need, built once from every strip of the image.
+#[derive(Debug, Clone, Default)]
+pub struct Context {
+    /// Distribution of escape counts (for histogram colouring).
+    pub histogram: Option<Histogram>,
 }
 
 /// One way of turning raw data into colour.
@@ -49,13 +46,27 @@ pub enum Coloring {
         /// Colour of interior samples (linear RGBA).
         interior: [f32; 4],
     },
-    /// The seeds' soft distance colouring v = clamp((k d)^0.2, 0, 1), d in image pixels;
-    /// through a palette (clamped) when one is given, else as an sRGB grey level.
-    SoftDistance {
-        /// Scale k (per pixel).
-        k: f64,
+    /// Histogram-equalised iteration: position = fraction of the image's exterior samples
+    /// that escaped earlier (continuous in NF), times `cycles`, plus offset.
+    Histogram {
+        /// The palette.
+        palette: Palette,
+        /// Palette cycles over the whole distribution.
+        cycles: f64,
+        /// Palette offset in cycles.
+        offset: f64,
+        /// Colour of interior samples (linear RGBA).
+        interior: [f32; 4],
+    },
+    /// Distance estimate through a palette (clamped at the ends for the soft style), or as
+    /// an sRGB grey level when no palette is given (the seeds' look).
+    Distance {
+        /// Distance to value.
+        style: DistanceStyle,
         /// Optional palette.
         palette: Option<Palette>,
+        /// Palette offset in cycles.
+        offset: f64,
     },
     /// Boundary lines: the set and everything closer than `width / 2` pixels, antialiased.
     Boundary {
@@ -63,6 +74,37 @@ pub enum Coloring {
         width: f64,
         /// Line colour (linear RGBA).
         color: [f32; 4],
+    },
+    /// Slope lighting from the DE vector: a grey level (1 = fully lit), meant to be blended
+    /// (multiply, overlay, soft light) over a colour layer. Interior samples are transparent.
+    Slope {
+        /// The light.
+        light: Light,
+    },
+    /// Binary decomposition: one colour where Im z_n >= 0 (T < 1/2), the other elsewhere.
+    Binary {
+        /// Colours for the upper and lower half-planes (linear RGBA).
+        colors: [[f32; 4]; 2],
+    },
+    /// Final angle through a palette: position = T * density + offset.
+    Angle {
+        /// The palette.
+        palette: Palette,
+        /// Palette cycles per turn (whole numbers are seamless).
+        density: f64,
+        /// Palette offset in cycles.
+        offset: f64,
+    },
+    /// Stripe average through a palette: position = stripe * density + offset.
+    Stripe {
+        /// Index of the stripe statistic in the field's trap list.
+        trap: usize,
+        /// The palette.
+        palette: Palette,
+        /// Palette cycles per unit of stripe value.
+        density: f64,
+        /// Palette offset in cycles.
+        offset: f64,
     },
     /// Distance of the orbit to a geometric trap: palette at d * density + offset.
     TrapDistance {
@@ -80,72 +122,172 @@ pub enum Coloring {
         /// Index of the trap in the field's trap list.
         trap: usize,
     },
+    /// Interior colouring: only samples inside the set, by a solid colour or by the
+    /// orbit's closest approach to a geometric trap through a palette.
+    Interior {
+        /// How the interior is filled.
+        fill: InteriorFill,
+    },
+}
+
+/// How an interior layer fills the set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InteriorFill {
+    /// One colour (linear RGBA).
+    Solid([f32; 4]),
+    /// Palette at trap distance * density + offset.
+    Trap {
+        /// Index of the trap in the field's trap list.
+        trap: usize,
+        /// The palette.
+        palette: Palette,
+        /// Palette cycles per unit of distance in the plane.
+        density: f64,
+        /// Offset in cycles.
+        offset: f64,
+    },
 }
 
 impl Coloring {
-    /// The raw planes this colouring reads (`traps` is the scene's trap list).
-    pub fn needs(&self, traps: &[Trap]) -> Needs {
+    /// The raw planes this colouring reads (trap planes come from the scene's trap list).
+    pub fn needs(&self) -> Needs {
         match self {
-            Coloring::Smooth { .. } => Needs { nf: true, ..Needs::default() },
-            Coloring::SoftDistance { .. } | Coloring::Boundary { .. } => Needs { de: true, ..Needs::default() },
-            Coloring::TrapDistance { trap, .. } | Coloring::BitmapTrap { trap } => {
-                Needs { traps: vec![traps[*trap].clone()], ..Needs::default() }
+            Coloring::Smooth { .. } | Coloring::Histogram { .. } => Needs { nf: true, ..Needs::default() },
+            Coloring::Distance { .. } | Coloring::Boundary { .. } | Coloring::Slope { .. } => {
+                Needs { de: true, ..Needs::default() }
             }
+            Coloring::Binary { .. } | Coloring::Angle { .. } => Needs { t: true, ..Needs::default() },
+            Coloring::Stripe { .. }
+            | Coloring::TrapDistance { .. }
+            | Coloring::BitmapTrap { .. }
+            | Coloring::Interior { .. } => Needs::default(),
         }
     }
 
-    /// Colours every sample of `planes`; `aa` is the supersampling factor. Output is linear
-    /// light, premultiplied by alpha.
-    pub fn paint(&self, planes: &Planes, aa: u32) -> Vec<[f32; 4]> {
-        let len = planes.len();
+    /// True when the colouring reads image-wide data from a [`Context`].
+    pub fn is_global(&self) -> bool {
+        matches!(self, Coloring::Histogram { .. })
+    }
+
+    /// Colours every sample of `planes`; `aa` is the supersampling factor and `mask` scales
+    /// each sample's opacity. Output is linear light, premultiplied by alpha.
+    pub fn paint(&self, planes: &Planes, aa: u32, ctx: &Context, mask: Option<&Mask>) -> Vec<[f32; 4]> {
         let px = 1.0 / aa as f64;
+        let len = planes.len();
+        let mut out = self.paint_unmasked(planes, px, ctx);
+        debug_assert_eq!(out.len(), len);
+        if let Some(m) = mask {
+            for (k, c) in out.iter_mut().enumerate() {
+                let w = m.at(planes, k, px);
+                *c = c.map(|v| v * w);
+            }
+        }
+        out
+    }
+
+    fn paint_unmasked(&self, planes: &Planes, px: f64, ctx: &Context) -> Vec<[f32; 4]> {
+        let len = planes.len();
+        let inside = |k: usize| planes.n[k] == INTERIOR;
         let distance = |k: usize| {
             let (x, y) = (planes.dex[k] as f64, planes.dey[k] as f64);
             (x * x + y * y).sqrt() * px
         };
-        let premul = |c: [f32; 4]| [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]];
+        let each = |f: &(dyn Fn(usize) -> [f32; 4] + Sync)| -> Vec<[f32; 4]> { (0..len).map(f).collect() };
         match self {
-            Coloring::Smooth { palette, density, offset, transfer, interior } => (0..len)
-                .map(|k| {
-                    let n = planes.n[k];
-                    if n == INTERIOR {
+            Coloring::Smooth { palette, density, offset, transfer, interior } => each(&|k| {
+                if inside(k) {
+                    return premul(*interior);
+                }
+                let nu = planes.n[k] as f64 + planes.nf[k] as f64;
+                premul(palette.at(transfer.apply(nu) * density + offset))
+            }),
+            Coloring::Histogram { palette, cycles, offset, interior } => {
+                let fallback;
+                let hist = match &ctx.histogram {
+                    Some(h) => h,
+                    None => {
+                        fallback = Histogram::build([planes]);
+                        &fallback
+                    }
+                };
+                each(&|k| {
+                    if inside(k) {
                         return premul(*interior);
                     }
-                    let nu = n as f64 + planes.nf[k] as f64;
-                    premul(palette.at(transfer.apply(nu) * density + offset))
+                    premul(palette.at(hist.position(planes.n[k], planes.nf[k]) * cycles + offset))
                 })
-                .collect(),
-            Coloring::SoftDistance { k, palette } => (0..len)
-                .map(|i| {
-                    let d = if planes.n[i] == INTERIOR { 0.0 } else { distance(i) };
-                    let v = (k * d).powf(0.2).clamp(0.0, 1.0);
-                    match palette {
-                        Some(p) => premul(p.at(v.min(1.0 - 1e-9))),
-                        None => {
-                            let g = color::srgb_to_linear(v as f32);
-                            [g, g, g, 1.0]
-                        }
+            }
+            Coloring::Distance { style, palette, offset } => each(&|k| {
+                let d = if inside(k) { 0.0 } else { distance(k) };
+                let v = style.value(d);
+                match palette {
+                    // The soft style spans [0, 1]: keep 1 off the wrap-around point.
+                    Some(p) if matches!(style, DistanceStyle::Soft { .. }) => premul(p.at(v.min(1.0 - 1e-9) + offset)),
+                    Some(p) => premul(p.at(v + offset)),
+                    None => {
+                        let g = color::srgb_to_linear(v.clamp(0.0, 1.0) as f32);
+                        [g, g, g, 1.0]
                     }
-                })
-                .collect(),
-            Coloring::Boundary { width, color } => (0..len)
-                .map(|i| {
-                    let cover = if planes.n[i] == INTERIOR {
-                        1.0
-                    } else {
-                        (width * 0.5 + 0.5 - distance(i)).clamp(0.0, 1.0) as f32
-                    };
-                    premul([color[0], color[1], color[2], color[3] * cover])
-                })
-                .collect(),
+                }
+            }),
+            Coloring::Boundary { width, color } => each(&|k| {
+                let cover = if inside(k) { 1.0 } else { shading::boundary_cover(distance(k), *width) };
+                premul([color[0], color[1], color[2], color[3] * cover])
+            }),
+            Coloring::Slope { light } => each(&|k| {
+                if inside(k) {
+                    return [0.0; 4];
+                }
+                let g = light.shade(planes.dex[k], planes.dey[k]);
+                [g, g, g, 1.0]
+            }),
+            Coloring::Binary { colors } => each(&|k| {
+                if inside(k) {
+                    return [0.0; 4];
+                }
+                premul(colors[usize::from(planes.t[k] >= 0.5)])
+            }),
+            Coloring::Angle { palette, density, offset } => each(&|k| {
+                if inside(k) {
+                    return [0.0; 4];
+                }
+                premul(palette.at(planes.t[k] as f64 * density + offset))
+            }),
+            Coloring::Stripe { trap, palette, density, offset } => match &planes.traps[*trap] {
+                TrapPlane::Stripe { value, .. } => each(&|k| {
+                    if inside(k) {
+                        return [0.0; 4];
+                    }
+                    premul(palette.at(value[k] as f64 * density + offset))
+                }),
+                _ => vec![[0.0; 4]; len],
+            },
             Coloring::TrapDistance { trap, palette, density, offset } => match &planes.traps[*trap] {
                 TrapPlane::Distance(d) => d.iter().map(|&d| premul(palette.at(d as f64 * density + offset))).collect(),
-                TrapPlane::Color(_) => vec![[0.0; 4]; len],
+                _ => vec![[0.0; 4]; len],
             },
             Coloring::BitmapTrap { trap } => match &planes.traps[*trap] {
                 TrapPlane::Color(c) => c.clone(),
-                TrapPlane::Distance(_) => vec![[0.0; 4]; len],
+                _ => vec![[0.0; 4]; len],
+            },
+            Coloring::Interior { fill } => match fill {
+                InteriorFill::Solid(c) => each(&|k| if inside(k) { premul(*c) } else { [0.0; 4] }),
+                InteriorFill::Trap { trap, palette, density, offset } => match &planes.traps[*trap] {
+                    TrapPlane::Distance(d) => each(&|k| {
+                        if !inside(k) {
+                            return [0.0; 4];
+                        }
+                        premul(palette.at(d[k] as f64 * density + offset))
+                    }),
+                    _ => vec![[0.0; 4]; len],
+                },
             },
         }
     }
+}
+
+/// Premultiplies a linear RGBA colour by its alpha.
+#[inline]
+pub fn premul(c: [f32; 4]) -> [f32; 4] {
+    [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
 }

@@ -8,7 +8,7 @@
 
 use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
-use crate::coloring::Coloring;
+use crate::coloring::{Coloring, Context, Histogram, Mask};
 use crate::field::{Needs, Planes};
 use crate::palette::color::{linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
 use crate::trap::Trap;
@@ -76,6 +76,8 @@ pub struct Layer {
     pub blend: BlendMode,
     /// Its opacity in [0, 1].
     pub opacity: f32,
+    /// Where it applies (None: everywhere).
+    pub mask: Option<Mask>,
 }
 
 /// An ordered stack of layers over an opaque background.
@@ -92,17 +94,38 @@ impl Stack {
     pub fn needs(&self, traps: &[Trap]) -> Needs {
         let mut needs = Needs::default();
         for l in &self.layers {
-            let n = l.coloring.needs(traps);
+            let n = l.coloring.needs();
             needs.nf |= n.nf;
             needs.t |= n.t;
             needs.de |= n.de;
+            if let Some(m) = &l.mask {
+                let (nf, t, de) = m.needs();
+                needs.nf |= nf;
+                needs.t |= t;
+                needs.de |= de;
+            }
         }
         needs.traps = traps.to_vec();
         needs
     }
 
+    /// True when some layer needs image-wide data ([`Stack::context`]) before colouring.
+    pub fn is_global(&self) -> bool {
+        self.layers.iter().any(|l| l.coloring.is_global())
+    }
+
+    /// The image-wide data the layers need, from every strip of the image.
+    pub fn context<'a>(&self, strips: impl IntoIterator<Item = &'a Planes> + Clone) -> Context {
+        let histogram = self
+            .layers
+            .iter()
+            .any(|l| matches!(l.coloring, Coloring::Histogram { .. }))
+            .then(|| Histogram::build(strips));
+        Context { histogram }
+    }
+
     /// Composites the stack for every sample: opaque linear RGB.
-    pub fn composite(&self, planes: &Planes, aa: u32) -> Vec<[f32; 3]> {
+    pub fn composite(&self, planes: &Planes, aa: u32, ctx: &Context) -> Vec<[f32; 3]> {
         let bg = self.background;
         if let [layer] = self.layers.as_slice()
             && layer.blend == BlendMode::Normal
@@ -110,7 +133,7 @@ impl Stack {
         {
             return layer
                 .coloring
-                .paint(planes, aa)
+                .paint(planes, aa, ctx, layer.mask.as_ref())
                 .into_iter()
                 .map(|c| {
                     let t = 1.0 - c[3];
@@ -127,7 +150,7 @@ impl Stack {
         base.fill(bg8);
         let mut layer_pixmap = Pixmap::new(w, h).expect("same size as the base");
         for layer in &self.layers {
-            let colours = layer.coloring.paint(planes, aa);
+            let colours = layer.coloring.paint(planes, aa, ctx, layer.mask.as_ref());
             for (dst, c) in layer_pixmap.pixels_mut().iter_mut().zip(&colours) {
                 *dst = to_premultiplied_srgb8(*c);
             }

@@ -179,8 +179,20 @@ pub fn compute_strip(
     Ok(Strip { planes, iterations, counters: Counters::default() })
 }
 
-/// Writes N and the quantities derived from each orbit's end into the planes.
+/// Writes N and the quantities derived from each orbit's end into the planes, and smooths
+/// stripe averages across bands.
 fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, planes: &mut Planes) {
+    for plane in &mut planes.traps {
+        if let TrapPlane::Stripe { value, prev } = plane {
+            for (k, orbit) in orbits.iter().enumerate() {
+                if orbit.n != INTERIOR {
+                    let nf = quantities::smooth_fraction(orbit.z, ln_r);
+                    value[k] = crate::trap::stripe::smoothed(prev[k], value[k], nf);
+                }
+            }
+            *prev = Vec::new();
+        }
+    }
     for (k, orbit) in orbits.iter().enumerate() {
         planes.n[k] = orbit.n;
         if orbit.n == INTERIOR {

@@ -114,6 +114,14 @@ pub enum TrapPlane {
     Distance(Vec<f32>),
     /// Colour of the first bitmap hit, linear premultiplied RGBA (zero: no hit).
     Color(Vec<[f32; 4]>),
+    /// Stripe average, smoothed across bands ([`crate::trap::stripe`]); `prev` holds the
+    /// mean without the last term until the field finishes the strip, then is emptied.
+    Stripe {
+        /// The stripe value in [0, 1].
+        value: Vec<f32>,
+        /// Work space: mean without the escaping term.
+        prev: Vec<f32>,
+    },
 }
 
 impl TrapPlane {
@@ -124,6 +132,11 @@ impl TrapPlane {
         match (self, state) {
             (TrapPlane::Distance(d), TrapState::Distance(v)) => d[k] = v.min(f32::MAX as f64) as f32,
             (TrapPlane::Color(c), TrapState::Color { rgba, .. }) => c[k] = *rgba,
+            (TrapPlane::Stripe { value, prev }, TrapState::Stripe { sum, last, count }) => {
+                let (p, full) = crate::trap::stripe::means(*sum, *last, *count);
+                value[k] = full as f32;
+                prev[k] = p as f32;
+            }
             _ => {}
         }
     }
@@ -169,6 +182,7 @@ impl Planes {
                 .map(|t| match t {
                     Trap::Geometric(_) => TrapPlane::Distance(vec![f32::MAX; len]),
                     Trap::Bitmap(_) => TrapPlane::Color(vec![[0.0; 4]; len]),
+                    Trap::Stripe(_) => TrapPlane::Stripe { value: vec![0.0; len], prev: vec![0.0; len] },
                 })
                 .collect(),
         }

@@ -35,6 +35,7 @@ enum Source {
     Dey,
     TrapDistance(usize),
     TrapColor(usize, usize),
+    TrapStripe(usize),
     Color(usize),
 }
 
@@ -65,6 +66,7 @@ impl ExrLayout {
                     for (k, t) in traps.iter().enumerate() {
                         match t {
                             Trap::Geometric(_) => channels.push((format!("trap{k}.D"), Source::TrapDistance(k))),
+                            Trap::Stripe(_) => channels.push((format!("trap{k}.STRIPE"), Source::TrapStripe(k))),
                             Trap::Bitmap(_) => {
                                 for (i, n) in ["R", "G", "B", "A"].iter().enumerate() {
                                     channels.push((format!("trap{k}.{n}"), Source::TrapColor(k, i)));
@@ -227,8 +229,10 @@ impl ExrEncoder {
                         Source::T => push_f32(&mut data, &planes.t[r.clone()]),
                         Source::Dex => push_f32(&mut data, &planes.dex[r.clone()]),
                         Source::Dey => push_f32(&mut data, &planes.dey[r.clone()]),
-                        Source::TrapDistance(k) => match &planes.traps[k] {
-                            TrapPlane::Distance(d) => push_f32(&mut data, &d[r.clone()]),
+                        Source::TrapDistance(k) | Source::TrapStripe(k) => match &planes.traps[k] {
+                            TrapPlane::Distance(d) | TrapPlane::Stripe { value: d, .. } => {
+                                push_f32(&mut data, &d[r.clone()])
+                            }
                             TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),
                         },
                         Source::Color(i) => {
@@ -241,7 +245,7 @@ impl ExrEncoder {
                             TrapPlane::Color(c) => {
                                 c[r.clone()].iter().for_each(|p| data.extend_from_slice(&p[i].to_ne_bytes()))
                             }
-                            TrapPlane::Distance(_) => push_f32(&mut data, &vec![0.0; w]),
+                            _ => push_f32(&mut data, &vec![0.0; w]),
                         },
                     }
                 }

@@ -14,6 +14,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::coloring::Context;
 use crate::compose;
 use std::sync::{Arc, Mutex};
 
@@ -236,20 +237,26 @@ pub fn render<P: Send>(
     let rows_done = AtomicU64::new(0);
     let aa = scene.aa;
 
-    let compute = |&(row, rows): &(u32, u32)| -> Result<(RenderedStrip, P), RenderError> {
+    // The field of a strip: its raw planes.
+    let field_of = |&(row, rows): &(u32, u32)| -> Result<(u32, u32, Planes), RenderError> {
         let strip = field::compute_strip(&params, row * aa..(row + rows) * aa, cancel)?;
         iterations.fetch_add(strip.iterations, Ordering::Relaxed);
         if params.deep.is_some() {
             counters.lock().unwrap_or_else(|e| e.into_inner()).add(&strip.counters);
         }
-        let samples = scene.stack.composite(&strip.planes, aa);
-        let rgb = compose::downsample(&samples, strip.planes.width, aa as usize);
-        let samples = options.exr_channels.contains(Channel::Rgb).then_some(samples);
-        let done = RenderedStrip { row, rows, rgb, planes: strip.planes, samples };
-        let prepared = prepare(&done).map_err(RenderError::Sink)?;
         progress(Progress::Rows(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64));
+        Ok((row, rows, strip.planes))
+    };
+    // Colours, downsamples and prepares a computed strip.
+    let finish = |(row, rows, planes): (u32, u32, Planes), ctx: &Context| -> Result<(RenderedStrip, P), RenderError> {
+        let samples = scene.stack.composite(&planes, aa, ctx);
+        let rgb = compose::downsample(&samples, planes.width, aa as usize);
+        let samples = options.exr_channels.contains(Channel::Rgb).then_some(samples);
+        let done = RenderedStrip { row, rows, rgb, planes, samples };
+        let prepared = prepare(&done).map_err(RenderError::Sink)?;
         Ok((done, prepared))
     };
+    let local = Context::default();
 
     let (tx, rx) = mpsc::sync_channel::<(RenderedStrip, P)>(threads);
     let result = std::thread::scope(|s| {
@@ -260,16 +267,44 @@ pub fn render<P: Send>(
             Ok(())
         });
         let computed = pool.install(|| -> Result<(), RenderError> {
+            let send = |done: Vec<Result<(RenderedStrip, P), RenderError>>| -> Result<bool, RenderError> {
+                for strip in done {
+                    if tx.send(strip?).is_err() {
+                        // The writer stopped early: its error is reported below.
+                        return Ok(false);
+                    }
+                }
+                Ok(true)
+            };
+            if scene.stack.is_global() {
+                // Colourings that read the whole image (histograms) wait for every strip.
+                let mut fields = Vec::with_capacity(strips.len());
+                for chunk in strips.chunks(window) {
+                    if cancel.load(Ordering::Relaxed) {
+                        return Err(RenderError::Cancelled);
+                    }
+                    let done: Result<Vec<_>, RenderError> = chunk.par_iter().map(field_of).collect();
+                    fields.extend(done?);
+                }
+                let ctx = scene.stack.context(fields.iter().map(|(_, _, p)| p));
+                let mut fields = fields.into_iter();
+                loop {
+                    let chunk: Vec<_> = fields.by_ref().take(window).collect();
+                    if chunk.is_empty() {
+                        return Ok(());
+                    }
+                    if !send(chunk.into_par_iter().map(|f| finish(f, &ctx)).collect())? {
+                        return Ok(());
+                    }
+                }
+            }
             for chunk in strips.chunks(window) {
                 if cancel.load(Ordering::Relaxed) {
                     return Err(RenderError::Cancelled);
                 }
-                let done: Vec<Result<(RenderedStrip, P), RenderError>> = chunk.par_iter().map(compute).collect();
-                for strip in done {
-                    if tx.send(strip?).is_err() {
-                        // The writer stopped early: its error is reported below.
-                        return Ok(());
-                    }
+                let done = chunk.par_iter().map(|s| field_of(s).and_then(|f| finish(f, &local))).collect();
+                if !send(done)? {
+                    return Ok(());
                 }
             }
             Ok(())

@@ -5,11 +5,13 @@
 //! The scene also decides which engine can address the view ([`Scene::engine`]).
 
 pub mod kfr;
+mod layer;
 pub mod raw;
 mod validate;
 
 use std::path::{Path, PathBuf};
 
+pub use layer::{LAYER_KINDS, kind_list};
 pub use raw::SceneFile;
 pub use validate::BitmapLoader;
 

@@ -173,7 +173,7 @@ impl Default for RenderRaw {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct LayerRaw {
-    /// "smooth", "distance", "boundary", "trap" or "bitmap".
+    /// The colouring: see [`crate::scene::LAYER_KINDS`].
     pub kind: Spanned<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blend: Option<Spanned<BlendMode>>,
@@ -190,11 +190,21 @@ pub struct LayerRaw {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interior: Option<Spanned<String>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub style: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub color: Option<Spanned<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colors: Option<Spanned<[String; 2]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frequency: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<Spanned<String>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -209,6 +219,68 @@ pub struct LayerRaw {
     pub size: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub threshold: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<Spanned<i64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<Spanned<i64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_width: Option<Spanned<i64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mask: Option<Spanned<MaskRaw>>,
+}
+
+impl Default for LayerRaw {
+    fn default() -> Self {
+        Self {
+            kind: Spanned::new(0..0, String::new()),
+            blend: None,
+            opacity: None,
+            palette: None,
+            density: None,
+            offset: None,
+            transfer: None,
+            interior: None,
+            style: None,
+            k: None,
+            width: None,
+            color: None,
+            colors: None,
+            height: None,
+            strength: None,
+            frequency: None,
+            shape: None,
+            center: None,
+            angle: None,
+            radius: None,
+            image: None,
+            size: None,
+            threshold: None,
+            frames: None,
+            frame: None,
+            frame_width: None,
+            mask: None,
+        }
+    }
+}
+
+/// `[layer.mask]`: where a layer applies.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaskRaw {
+    /// "distance", "iteration", "phase" or "interior".
+    pub quantity: Spanned<String>,
+    /// Keep samples whose quantity is at least this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub above: Option<Spanned<f64>>,
+    /// Keep samples whose quantity is at most this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub below: Option<Spanned<f64>>,
+    /// Width of the soft edges.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feather: Option<Spanned<f64>>,
+    /// Keep the complement.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub invert: Option<Spanned<bool>>,
 }
 
 /// `[output]`.
@@ -226,25 +298,42 @@ pub struct OutputRaw {
 impl LayerRaw {
     /// A layer of the given kind with every option at its default.
     pub fn of_kind(kind: &str) -> Self {
-        Self {
-            kind: Spanned::new(0..0, kind.to_string()),
-            blend: None,
-            opacity: None,
-            palette: None,
-            density: None,
-            offset: None,
-            transfer: None,
-            interior: None,
-            k: None,
-            width: None,
-            color: None,
-            shape: None,
-            center: None,
-            angle: None,
-            radius: None,
-            image: None,
-            size: None,
-            threshold: None,
+        Self { kind: Spanned::new(0..0, kind.to_string()), ..Self::default() }
+    }
+
+    /// The keys present (other than `kind`), with their spans.
+    pub fn present(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        fn at<T>(v: &Option<Spanned<T>>) -> Option<std::ops::Range<usize>> {
+            v.as_ref().map(|s| s.span())
         }
+        let all = [
+            ("blend", at(&self.blend)),
+            ("opacity", at(&self.opacity)),
+            ("palette", at(&self.palette)),
+            ("density", at(&self.density)),
+            ("offset", at(&self.offset)),
+            ("transfer", at(&self.transfer)),
+            ("interior", at(&self.interior)),
+            ("style", at(&self.style)),
+            ("k", at(&self.k)),
+            ("width", at(&self.width)),
+            ("color", at(&self.color)),
+            ("colors", at(&self.colors)),
+            ("height", at(&self.height)),
+            ("strength", at(&self.strength)),
+            ("frequency", at(&self.frequency)),
+            ("shape", at(&self.shape)),
+            ("center", at(&self.center)),
+            ("angle", at(&self.angle)),
+            ("radius", at(&self.radius)),
+            ("image", at(&self.image)),
+            ("size", at(&self.size)),
+            ("threshold", at(&self.threshold)),
+            ("frames", at(&self.frames)),
+            ("frame", at(&self.frame)),
+            ("frame_width", at(&self.frame_width)),
+            ("mask", at(&self.mask)),
+        ];
+        all.into_iter().filter_map(|(k, s)| s.map(|s| (k, s))).collect()
     }
 }

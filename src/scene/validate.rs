@@ -1,31 +1,29 @@
 //! Validation: raw scene data to a typed [`Scene`], with located, explicit errors.
 
 use std::path::Path;
-use std::sync::Arc;
 
 use toml::Spanned;
 
-use super::raw::{CLI, LayerRaw, SceneFile};
+use super::raw::{CLI, SceneFile};
 use super::{EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_SAMPLES, MAX_SIDE, Scene};
-use crate::coloring::Coloring;
-use crate::compose::{Layer, Stack};
+use crate::compose::Stack;
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
 use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
-use crate::palette::{self, Palette, color};
+use crate::palette::{self, color};
 use crate::source::SourceError;
-use crate::trap::{Bitmap, BitmapTrap, Shape, Trap};
+use crate::trap::Bitmap;
 
 /// Loads a bitmap for a bitmap trap (provided by the I/O layer).
 pub type BitmapLoader<'a> = dyn Fn(&Path) -> Result<Bitmap, String> + 'a;
 
-struct Ctx<'a> {
+pub(super) struct Ctx<'a> {
     origin: &'a str,
     text: &'a str,
 }
 
 impl Ctx<'_> {
-    fn err<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SourceError> {
+    pub(super) fn err<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SourceError> {
         let message = message.into();
         if span == CLI {
             return Err(SourceError { origin: "command line".into(), position: None, message });
@@ -33,24 +31,24 @@ impl Ctx<'_> {
         Err(SourceError::at(self.origin, self.text, Some(span), message))
     }
 
-    fn decimal(&self, s: &Spanned<String>, what: &str) -> Result<Decimal, SourceError> {
+    pub(super) fn decimal(&self, s: &Spanned<String>, what: &str) -> Result<Decimal, SourceError> {
         Decimal::parse(s.get_ref()).or_else(|e| self.err(s.span(), format!("{what}: {e}")))
     }
 
-    fn pair(&self, s: &Spanned<[String; 2]>, what: &str) -> Result<[Decimal; 2], SourceError> {
+    pub(super) fn pair(&self, s: &Spanned<[String; 2]>, what: &str) -> Result<[Decimal; 2], SourceError> {
         let [re, im] = s.get_ref();
         let p = |t: &String| Decimal::parse(t).or_else(|e| self.err(s.span(), format!("{what}: {e}")));
         Ok([p(re)?, p(im)?])
     }
 
-    fn colour(&self, s: &Spanned<String>) -> Result<[f32; 4], SourceError> {
+    pub(super) fn colour(&self, s: &Spanned<String>) -> Result<[f32; 4], SourceError> {
         match color::parse_hex(s.get_ref()) {
             Some(c) => Ok([color::srgb_to_linear(c[0]), color::srgb_to_linear(c[1]), color::srgb_to_linear(c[2]), 1.0]),
             None => self.err(s.span(), format!("colour `{}` is not of the form \"#rrggbb\"", s.get_ref())),
         }
     }
 
-    fn range_i(&self, v: &Spanned<i64>, lo: i64, hi: i64, what: &str) -> Result<i64, SourceError> {
+    pub(super) fn range_i(&self, v: &Spanned<i64>, lo: i64, hi: i64, what: &str) -> Result<i64, SourceError> {
         let x = *v.get_ref();
         if x < lo || x > hi {
             return self.err(v.span(), format!("{what} must be in {lo} ..= {hi}, got {x}"));
@@ -58,7 +56,7 @@ impl Ctx<'_> {
         Ok(x)
     }
 
-    fn finite(&self, v: &Spanned<f64>, lo: f64, hi: f64, what: &str) -> Result<f64, SourceError> {
+    pub(super) fn finite(&self, v: &Spanned<f64>, lo: f64, hi: f64, what: &str) -> Result<f64, SourceError> {
         let x = *v.get_ref();
         if !(x.is_finite() && x >= lo && x <= hi) {
             return self.err(v.span(), format!("{what} must be a finite number in [{lo}, {hi}], got {x}"));
@@ -153,10 +151,13 @@ pub(super) fn validate(
 
     let mut traps = Vec::new();
     let mut layers = Vec::new();
-    let raw_layers =
-        if file.layers.is_empty() { vec![Spanned::new(0..0, default_layer())] } else { file.layers.clone() };
+    let raw_layers = if file.layers.is_empty() {
+        vec![Spanned::new(0..0, super::layer::default_layer())]
+    } else {
+        file.layers.clone()
+    };
     for l in &raw_layers {
-        layers.push(layer(&cx, l, base_dir, bitmaps, &mut traps)?);
+        layers.push(super::layer::layer(&cx, l, base_dir, bitmaps, &mut traps)?);
     }
 
     let png_bits = match &file.output.bits {
@@ -225,152 +226,4 @@ fn anchor_paths(file: &mut SceneFile, base_dir: &Path) {
             *pal.get_mut() = abs;
         }
     }
-}
-
-/// The layer used when a scene names none: smooth iteration through `classic`.
-fn default_layer() -> LayerRaw {
-    LayerRaw::of_kind("smooth")
-}
-
-fn layer(
-    cx: &Ctx<'_>,
-    spanned: &Spanned<LayerRaw>,
-    base_dir: &Path,
-    bitmaps: &BitmapLoader<'_>,
-    traps: &mut Vec<Trap>,
-) -> Result<Layer, SourceError> {
-    let l = spanned.get_ref();
-    let kind = l.kind.get_ref().as_str();
-    // Keys each kind accepts, beyond kind/blend/opacity.
-    let allowed: &[&str] = match kind {
-        "smooth" => &["palette", "density", "offset", "transfer", "interior"],
-        "distance" => &["k", "palette"],
-        "boundary" => &["width", "color"],
-        "trap" => &["shape", "center", "angle", "radius", "palette", "density", "offset"],
-        "bitmap" => &["image", "center", "size", "angle", "threshold"],
-        other => {
-            return cx.err(l.kind.span(), format!(
-                "unknown layer kind `{other}`; expected one of \"smooth\", \"distance\", \"boundary\", \"trap\", \"bitmap\""
-            ));
-        }
-    };
-    let present: [(&str, Option<std::ops::Range<usize>>); 16] = [
-        ("palette", l.palette.as_ref().map(|s| s.span())),
-        ("density", l.density.as_ref().map(|s| s.span())),
-        ("offset", l.offset.as_ref().map(|s| s.span())),
-        ("transfer", l.transfer.as_ref().map(|s| s.span())),
-        ("interior", l.interior.as_ref().map(|s| s.span())),
-        ("k", l.k.as_ref().map(|s| s.span())),
-        ("width", l.width.as_ref().map(|s| s.span())),
-        ("color", l.color.as_ref().map(|s| s.span())),
-        ("shape", l.shape.as_ref().map(|s| s.span())),
-        ("center", l.center.as_ref().map(|s| s.span())),
-        ("angle", l.angle.as_ref().map(|s| s.span())),
-        ("radius", l.radius.as_ref().map(|s| s.span())),
-        ("image", l.image.as_ref().map(|s| s.span())),
-        ("size", l.size.as_ref().map(|s| s.span())),
-        ("threshold", l.threshold.as_ref().map(|s| s.span())),
-        ("blend", None),
-    ];
-    for (key, span) in present {
-        if let Some(span) = span
-            && !allowed.contains(&key)
-        {
-            return cx
-                .err(span, format!("`{key}` does not apply to a `{kind}` layer (it takes: {})", allowed.join(", ")));
-        }
-    }
-    let num = |v: &Option<Spanned<f64>>, default: f64, lo: f64, hi: f64, what: &str| match v {
-        Some(v) => cx.finite(v, lo, hi, what),
-        None => Ok(default),
-    };
-    let pal = |name: Option<&Spanned<String>>, default: &str| -> Result<Palette, SourceError> {
-        let (text, span) = match name {
-            Some(n) => (n.get_ref().as_str(), n.span()),
-            None => (default, 0..0),
-        };
-        palette::load(text, Some(base_dir)).or_else(|e| cx.err(span, e.to_string()))
-    };
-    let center = l.center.as_ref().map_or([0.0, 0.0], |c| *c.get_ref());
-    if let Some(c) = &l.center
-        && !c.get_ref().iter().all(|v| v.is_finite())
-    {
-        return cx.err(c.span(), "center must be two finite numbers");
-    }
-    let angle = num(&l.angle, 0.0, -1e6, 1e6, "angle (degrees)")?;
-
-    let coloring = match kind {
-        "smooth" => Coloring::Smooth {
-            palette: pal(l.palette.as_ref(), "classic")?,
-            density: num(&l.density, 0.05, -1e9, 1e9, "density")?,
-            offset: num(&l.offset, 0.0, -1e9, 1e9, "offset")?,
-            transfer: l.transfer.as_ref().map_or(Default::default(), |t| *t.get_ref()),
-            interior: match &l.interior {
-                Some(c) => cx.colour(c)?,
-                None => [0.0, 0.0, 0.0, 1.0],
-            },
-        },
-        "distance" => Coloring::SoftDistance {
-            k: num(&l.k, 0.25, 0.0, 1e12, "k")?,
-            palette: l.palette.as_ref().map(|p| pal(Some(p), "")).transpose()?,
-        },
-        "boundary" => Coloring::Boundary {
-            width: num(&l.width, 1.0, 0.0, 1e6, "width (pixels)")?,
-            color: match &l.color {
-                Some(c) => cx.colour(c)?,
-                None => [0.0, 0.0, 0.0, 1.0],
-            },
-        },
-        "trap" => {
-            let dir = Shape::direction(angle);
-            let shape_name = l.shape.as_ref().map_or("point", |s| s.get_ref().as_str());
-            let shape = match shape_name {
-                "point" => Shape::Point { at: center },
-                "line" => Shape::Line { at: center, dir },
-                "cross" => Shape::Cross { at: center, dir },
-                "circle" => Shape::Circle { at: center, radius: num(&l.radius, 1.0, 0.0, 1e6, "radius")? },
-                other => {
-                    let span = l.shape.as_ref().map_or(0..0, |s| s.span());
-                    return cx.err(
-                        span,
-                        format!("unknown trap shape `{other}`; expected \"point\", \"line\", \"cross\" or \"circle\""),
-                    );
-                }
-            };
-            traps.push(Trap::Geometric(shape));
-            Coloring::TrapDistance {
-                trap: traps.len() - 1,
-                palette: pal(l.palette.as_ref(), "fire")?,
-                density: num(&l.density, 1.0, -1e9, 1e9, "density")?,
-                offset: num(&l.offset, 0.0, -1e9, 1e9, "offset")?,
-            }
-        }
-        _ => {
-            let Some(image) = &l.image else {
-                return cx.err(
-                    l.kind.span(),
-                    "a bitmap layer needs `image`, the path of a PNG (relative to the scene file)",
-                );
-            };
-            let path = base_dir.join(image.get_ref());
-            let bitmap = bitmaps(&path)
-                .or_else(|e| cx.err(image.span(), format!("cannot load bitmap {}: {e}", path.display())))?;
-            let size = num(&l.size, 1.0, 1e-300, 1e6, "size")?;
-            if size <= 0.0 {
-                return cx.err(l.size.as_ref().map_or(0..0, |s| s.span()), "size must be positive");
-            }
-            let a = angle.to_radians();
-            traps.push(Trap::Bitmap(BitmapTrap {
-                bitmap: Arc::new(bitmap),
-                center,
-                size,
-                rotation: [a.cos(), a.sin()],
-                threshold: num(&l.threshold, 0.1, 0.0, 1.0, "threshold")? as f32,
-            }));
-            Coloring::BitmapTrap { trap: traps.len() - 1 }
-        }
-    };
-    let opacity = num(&l.opacity, 1.0, 0.0, 1.0, "opacity")? as f32;
-    let blend = l.blend.as_ref().map_or(Default::default(), |b| *b.get_ref());
-    Ok(Layer { coloring, blend, opacity })
 }

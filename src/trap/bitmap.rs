@@ -22,14 +22,21 @@ impl Bitmap {
     /// Bilinear sample at texture coordinates (u, v), each clamped to [0, 1]; texel centres
     /// sit at (i + 0.5) / width, and coordinates beyond the outer centres clamp to the edge.
     pub fn sample(&self, u: f64, v: f64) -> [f32; 4] {
-        let fx = u.clamp(0.0, 1.0) * self.width as f64 - 0.5;
+        self.sample_columns(u, v, 0, self.width)
+    }
+
+    /// Bilinear sample of the sub-image of columns `first .. first + cols` (a frame of a
+    /// sprite sheet) at its own texture coordinates (u, v), clamped to [0, 1]; filtering
+    /// never reads a neighbouring frame.
+    pub fn sample_columns(&self, u: f64, v: f64, first: usize, cols: usize) -> [f32; 4] {
+        let fx = u.clamp(0.0, 1.0) * cols as f64 - 0.5;
         let fy = v.clamp(0.0, 1.0) * self.height as f64 - 0.5;
         let x0 = fx.floor();
         let y0 = fy.floor();
         let tx = (fx - x0) as f32;
         let ty = (fy - y0) as f32;
         let clampi = |a: f64, n: usize| (a.max(0.0) as usize).min(n - 1);
-        let (xa, xb) = (clampi(x0, self.width), clampi(x0 + 1.0, self.width));
+        let (xa, xb) = (first + clampi(x0, cols), first + clampi(x0 + 1.0, cols));
         let (ya, yb) = (clampi(y0, self.height), clampi(y0 + 1.0, self.height));
         let t = |x: usize, y: usize| self.texels[y * self.width + x];
         let (p00, p10, p01, p11) = (t(xa, ya), t(xb, ya), t(xa, yb), t(xb, yb));
@@ -56,6 +63,21 @@ pub struct BitmapTrap {
     pub rotation: [f64; 2],
     /// Alpha a sample must exceed to count as a hit.
     pub threshold: f32,
+    /// The frame of a sprite sheet to use, when the image is one.
+    pub frame: Option<Frame>,
+}
+
+/// A frame of a sprite sheet: the image holds `count` frames side by side, each
+/// `width` texels wide from the left edge (the seeds' animated trap: 6 frames of 40 texels
+/// in a 256-texel texture, frame = floor(20 t) mod 6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Frame {
+    /// Which frame (taken modulo `count`).
+    pub index: u32,
+    /// Frames in the sheet.
+    pub count: u32,
+    /// Width of one frame in texels.
+    pub width: u32,
 }
 
 impl BitmapTrap {
@@ -67,7 +89,8 @@ impl BitmapTrap {
         let [c, s] = self.rotation;
         let rx = c * dx + s * dy;
         let ry = -s * dx + c * dy;
-        let h = self.size * self.bitmap.height as f64 / self.bitmap.width as f64;
+        let w = self.frame.map_or(self.bitmap.width, |f| f.width as usize);
+        let h = self.size * self.bitmap.height as f64 / w as f64;
         (0.5 + rx / self.size, 0.5 - ry / h)
     }
 
@@ -75,7 +98,13 @@ impl BitmapTrap {
     #[inline]
     pub fn sample(&self, z: [f64; 2]) -> [f32; 4] {
         let (u, v) = self.uv(z);
-        self.bitmap.sample(u, v)
+        match self.frame {
+            None => self.bitmap.sample(u, v),
+            Some(f) => {
+                let first = ((f.index % f.count) * f.width) as usize;
+                self.bitmap.sample_columns(u, v, first, f.width as usize)
+            }
+        }
     }
 }
 
@@ -98,6 +127,30 @@ mod tests {
     }
 
     #[test]
+    fn frames_sample_their_own_columns() {
+        // 4x1 sheet of 2 frames, 2 texels each: red, green | blue, white.
+        let sheet = Bitmap {
+            width: 4,
+            height: 1,
+            texels: vec![[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0], [1.0; 4]],
+        };
+        assert_eq!(sheet.sample_columns(0.0, 0.5, 2, 2), [0.0, 0.0, 1.0, 1.0]);
+        assert_eq!(sheet.sample_columns(1.0, 0.5, 2, 2), [1.0; 4]);
+        // The right edge of frame 0 never bleeds into frame 1.
+        assert_eq!(sheet.sample_columns(1.0, 0.5, 0, 2), [0.0, 1.0, 0.0, 1.0]);
+        let trap = BitmapTrap {
+            bitmap: Arc::new(sheet),
+            center: [0.0, 0.0],
+            size: 2.0,
+            rotation: [1.0, 0.0],
+            threshold: 0.1,
+            frame: Some(Frame { index: 3, count: 2, width: 2 }),
+        };
+        // Frame 3 mod 2 = 1; the left edge of the plane square is the frame's left texel.
+        assert_eq!(trap.sample([-1.0, 0.0]), [0.0, 0.0, 1.0, 1.0]);
+    }
+
+    #[test]
     fn uv_maps_centre_and_corners() {
         let trap = BitmapTrap {
             bitmap: Arc::new(checker()),
@@ -105,6 +158,7 @@ mod tests {
             size: 2.0,
             rotation: [1.0, 0.0],
             threshold: 0.1,
+            frame: None,
         };
         assert_eq!(trap.uv([1.0, 2.0]), (0.5, 0.5));
         assert_eq!(trap.uv([0.0, 3.0]), (0.0, 0.0));

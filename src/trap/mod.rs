@@ -8,9 +8,11 @@
 
 mod bitmap;
 mod geometric;
+pub mod stripe;
 
-pub use bitmap::{Bitmap, BitmapTrap};
+pub use bitmap::{Bitmap, BitmapTrap, Frame};
 pub use geometric::Shape;
+pub use stripe::Stripe;
 
 /// A trap the kernel evaluates along each orbit.
 #[derive(Debug, Clone)]
@@ -19,6 +21,8 @@ pub enum Trap {
     Geometric(Shape),
     /// First bitmap sample whose alpha exceeds the threshold.
     Bitmap(BitmapTrap),
+    /// Stripe average of the orbit's arguments (not a trap, but observed the same way).
+    Stripe(Stripe),
 }
 
 /// Per-orbit running state of one trap.
@@ -33,6 +37,15 @@ pub enum TrapState {
         /// True once a sample exceeded the threshold.
         hit: bool,
     },
+    /// Running sum of the stripe function, its last term and the number of terms.
+    Stripe {
+        /// Sum of the terms so far.
+        sum: f64,
+        /// The latest term.
+        last: f64,
+        /// Terms so far.
+        count: u32,
+    },
 }
 
 impl Trap {
@@ -41,6 +54,7 @@ impl Trap {
         match self {
             Trap::Geometric(_) => TrapState::Distance(f64::INFINITY),
             Trap::Bitmap(_) => TrapState::Color { rgba: [0.0; 4], hit: false },
+            Trap::Stripe(_) => TrapState::Stripe { sum: 0.0, last: 0.0, count: 0 },
         }
     }
 
@@ -60,6 +74,11 @@ impl Trap {
                     *rgba = s;
                     *hit = true;
                 }
+            }
+            (Trap::Stripe(s), TrapState::Stripe { sum, last, count }) => {
+                *last = s.term(z);
+                *sum += *last;
+                *count += 1;
             }
             _ => {}
         }
