@@ -23,6 +23,117 @@ pub enum Command {
     /// Render a scene with every engine that can address it and measure each against a
     /// direct big-float ground truth on a sample of pixels.
     Compare(Box<CompareArgs>),
+    /// Recolour raw data (an EXR written by `render --exr`) without recomputing the fractal.
+    Recolor(Box<RecolorArgs>),
+    /// Lay the same raw data out in a grid, one labelled cell per colouring or palette.
+    Sheet(Box<SheetArgs>),
+    /// List, preview and import palettes.
+    Palettes(PalettesArgs),
+}
+
+/// `deepfield recolor`.
+#[derive(Debug, Args)]
+pub struct RecolorArgs {
+    /// Raw data: an OpenEXR file written by `deepfield render --exr`.
+    #[arg(value_name = "DATA.exr")]
+    pub data: PathBuf,
+    /// Colour with this scene's layers (default: the scene stored in the EXR).
+    #[arg(long, value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+    /// Palette for every layer that uses one: a built-in name or a palette file.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub palette: Option<String>,
+    /// Replace the layers: KIND[:key=value,...] (repeat for a stack, bottom first), e.g.
+    /// `--layer smooth:palette=fire,density=0.02 --layer slope:blend=multiply`.
+    #[arg(long = "layer", value_name = "SPEC")]
+    pub layers: Vec<String>,
+    /// Output PNG (default: the data file's name with .png).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// PNG bits per channel.
+    #[arg(long, value_parser = ["8", "16"])]
+    pub bits: Option<String>,
+    /// Worker threads (default: one per core). Output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Print the time spent reading, colouring and writing.
+    #[arg(long)]
+    pub stats: bool,
+}
+
+/// `deepfield sheet`.
+#[derive(Debug, Args)]
+pub struct SheetArgs {
+    /// The scene and flags that override it.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Colourings, one cell each (see `deepfield sheet --list`); `scene` is the scene's own layers.
+    #[arg(long, value_name = "A,B,...", value_delimiter = ',')]
+    pub colorings: Vec<String>,
+    /// Palettes, one cell each, applied to the scene's layers (or to each colouring).
+    #[arg(long, value_name = "A,B,...", value_delimiter = ',')]
+    pub palettes: Vec<String>,
+    /// Cells per row (default: about square).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub columns: Option<u32>,
+    /// Output PNG (default: the scene's name with -sheet.png).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Draw a scale bar with the length it spans in the complex plane.
+    #[arg(long)]
+    pub scale_bar: bool,
+    /// Mark a point of the plane: RE,IM, or `c` for a Julia scene's parameter.
+    #[arg(long, value_name = "RE,IM|c")]
+    pub marker: Option<String>,
+    /// List the colourings a sheet can show, and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// `deepfield palettes`.
+#[derive(Debug, Args)]
+pub struct PalettesArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub action: PalettesAction,
+}
+
+/// `deepfield palettes` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum PalettesAction {
+    /// List the built-in palettes.
+    List,
+    /// Write a preview strip of a palette (built-in name or file) as PNG.
+    Show {
+        /// Palette name or file (.toml, or any format `import` reads); omit with --all.
+        #[arg(value_name = "NAME|FILE", required_unless_present = "all")]
+        name: Option<String>,
+        /// Every built-in palette, one labelled strip each.
+        #[arg(long, conflicts_with = "name")]
+        all: bool,
+        /// Output PNG (default: NAME.png).
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        /// Strip size in pixels.
+        #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "512x48")]
+        size: (u32, u32),
+    },
+    /// Convert a palette file (.map, .ggr, .ugr, .kfp/.kfr, .cpt) to deepfield's TOML format.
+    Import {
+        /// The file to convert.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+        /// Output .toml file, or a folder (one file per palette; a .ugr holds several).
+        /// Default: print to standard output.
+        #[arg(short, long, value_name = "PATH")]
+        output: Option<PathBuf>,
+    },
 }
 
 /// `deepfield render`.

@@ -1,8 +1,6 @@
 //! `deepfield compare`: a table of engines, their speed and their error against the truth.
 
 use std::io::{IsTerminal, Write};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::anyhow;
 use deepfield::compare::{self, Row};
@@ -13,11 +11,7 @@ use super::args::CompareArgs;
 
 /// Runs `deepfield compare`.
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
+    let cancel = super::render::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)

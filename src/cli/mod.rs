@@ -8,8 +8,11 @@
 
 mod args;
 mod compare;
+mod palettes;
+mod recolor;
 mod render;
 mod scene;
+mod sheet;
 
 use std::process::ExitCode;
 
@@ -44,6 +47,9 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         args::Command::Render(r) => render::run(*r),
         args::Command::Compare(c) => compare::run(*c),
+        args::Command::Recolor(r) => recolor::run(*r),
+        args::Command::Sheet(s) => sheet::run(*s),
+        args::Command::Palettes(p) => palettes::run(p),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -18,11 +18,7 @@ use super::args::RenderArgs;
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
     // Ctrl-C sets a flag the kernels poll; installed first so that no output file can
     // exist before the handler does. Failing to install it only loses Ctrl-C handling.
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
+    let cancel = install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.path.as_deref()));
@@ -51,20 +47,8 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         None => (None, None),
     };
 
-    let bar = progress_bar(&args, scene.height as u64);
-    let progress = |p: render::Progress| {
-        if let Some(b) = &bar {
-            match p {
-                render::Progress::Reference { done, total } => {
-                    b.set_message(format!("reference orbit {done}/{total}"));
-                }
-                render::Progress::Rows(rows) => {
-                    b.set_message("");
-                    b.set_position(rows);
-                }
-            }
-        }
-    };
+    let bar = bar(args.quiet, scene.height as u64);
+    let progress = |p: render::Progress| show(&bar, p);
     let aa = scene.aa as usize;
     let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
         let bytes = png_enc.encode(&strip.rgb);
@@ -131,8 +115,31 @@ fn check_distinct(args: &RenderArgs, png: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-fn progress_bar(args: &RenderArgs, rows: u64) -> Option<ProgressBar> {
-    if args.quiet || !std::io::stderr().is_terminal() {
+/// Installs the Ctrl-C handler: the flag it sets is polled by the kernels. Failing to
+/// install it only loses Ctrl-C handling.
+pub fn install_ctrlc() -> Arc<AtomicBool> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
+    cancel
+}
+
+/// Shows render progress on the bar, if there is one.
+pub fn show(bar: &Option<ProgressBar>, p: render::Progress) {
+    if let Some(b) = bar {
+        match p {
+            render::Progress::Reference { done, total } => b.set_message(format!("reference orbit {done}/{total}")),
+            render::Progress::Rows(rows) => {
+                b.set_message("");
+                b.set_position(rows);
+            }
+        }
+    }
+}
+
+/// A progress bar over `rows` output rows, on a terminal only.
+pub fn bar(quiet: bool, rows: u64) -> Option<ProgressBar> {
+    if quiet || !std::io::stderr().is_terminal() {
         return None;
     }
     let bar = ProgressBar::new(rows);

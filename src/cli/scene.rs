@@ -14,40 +14,110 @@ use super::args::SceneArgs;
 pub fn load(args: &SceneArgs) -> Result<Scene, Failure> {
     let (origin, text, base_dir) = match &args.path {
         None => ("command line".to_string(), "version = 1\n".to_string(), PathBuf::from(".")),
-        Some(path) => {
-            let origin = path.display().to_string();
-            if !path.exists() {
-                return Err(Failure::Input(anyhow!("{origin}: no such scene file")));
-            }
-            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let is_png = std::fs::File::open(path)
-                .and_then(|mut f| {
-                    let mut magic = [0u8; 8];
-                    std::io::Read::read(&mut f, &mut magic).map(|n| n == 8 && magic == *b"\x89PNG\r\n\x1a\n")
-                })
-                .unwrap_or(false);
-            let text = if is_png {
-                io::read_png_scene(path)
-                    .map_err(Failure::input)?
-                    .ok_or_else(|| Failure::Input(anyhow!("{origin}: this PNG carries no deepfield scene")))?
-            } else {
-                std::fs::read_to_string(path)
-                    .with_context(|| format!("{origin}: cannot read scene"))
-                    .map_err(Failure::Input)?
-            };
-            let is_kfr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("kfr"));
-            if is_kfr {
-                // Validated as the scene it converts to; the converter checked what it read.
-                let toml = kfr::kfr_to_toml(&origin, &text).map_err(Failure::input)?;
-                (format!("{origin} (as a scene)"), toml, base)
-            } else {
-                (origin, text, base)
-            }
-        }
+        Some(path) => read_source(path)?,
     };
-    let mut file = Scene::parse_file(&origin, &text).map_err(Failure::input)?;
-    apply_flags(&mut file, args);
-    Scene::validate(file, &origin, &text, &base_dir, &io::load_bitmap).map_err(Failure::input)
+    load_text(&origin, &text, &base_dir, |file| apply_flags(file, args))
+}
+
+/// Parses scene text, lets `edit` change the raw scene, and validates it.
+pub fn load_text(
+    origin: &str,
+    text: &str,
+    base_dir: &Path,
+    edit: impl FnOnce(&mut SceneFile),
+) -> Result<Scene, Failure> {
+    let mut file = Scene::parse_file(origin, text).map_err(Failure::input)?;
+    edit(&mut file);
+    Scene::validate(file, origin, text, base_dir, &io::load_bitmap).map_err(Failure::input)
+}
+
+/// The scene text of a file: a TOML scene, a .kfr location (converted), or the scene
+/// embedded in a PNG or EXR written by deepfield. Returns (origin, text, folder).
+pub fn read_source(path: &Path) -> Result<(String, String, PathBuf), Failure> {
+    let origin = path.display().to_string();
+    if !path.exists() {
+        return Err(Failure::Input(anyhow!("{origin}: no such scene file")));
+    }
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut magic = [0u8; 8];
+    let head = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut magic)).unwrap_or(0);
+    let embedded = |found: Option<String>, what: &str| {
+        found.ok_or_else(|| Failure::Input(anyhow!("{origin}: this {what} carries no deepfield scene")))
+    };
+    let text = if head == 8 && magic == *b"\x89PNG\r\n\x1a\n" {
+        embedded(io::read_png_scene(path).map_err(Failure::input)?, "PNG")?
+    } else if head >= 4 && magic[..4] == [0x76, 0x2f, 0x31, 0x01] {
+        embedded(io::read_exr_scene(path).map_err(Failure::input)?, "EXR")?
+    } else {
+        std::fs::read_to_string(path).with_context(|| format!("{origin}: cannot read scene")).map_err(Failure::Input)?
+    };
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("kfr")) {
+        // Validated as the scene it converts to; the converter checked what it read.
+        let toml = kfr::kfr_to_toml(&origin, &text).map_err(Failure::input)?;
+        return Ok((format!("{origin} (as a scene)"), toml, base));
+    }
+    Ok((origin, text, base))
+}
+
+/// Parses a `--layer` specification `KIND[:key=value,...]` (values in TOML syntax, bare
+/// words taken as strings; `mask.quantity=distance` sets a mask key).
+pub fn layer_spec(spec: &str, index: usize) -> Result<LayerRaw, Failure> {
+    let origin = format!("--layer {index} ({spec})");
+    let (kind, rest) = spec.split_once(':').unwrap_or((spec, ""));
+    let mut text = format!("kind = {}\n", toml::Value::String(kind.trim().to_string()));
+    for pair in split_top_level(rest) {
+        let Some((key, value)) = pair.split_once('=') else {
+            return Err(Failure::Input(anyhow!("{origin}: `{pair}` is not key=value")));
+        };
+        let (key, value) = (key.trim(), value.trim());
+        let literal = toml::from_str::<toml::Table>(&format!("v = {value}")).is_ok();
+        let value = if literal { value.to_string() } else { toml::Value::String(value.to_string()).to_string() };
+        text += &format!("{key} = {value}\n");
+    }
+    toml::from_str::<LayerRaw>(&text).map_err(|e| Failure::Input(anyhow!("{origin}: {}", e.message())))
+}
+
+/// Splits on commas outside brackets and quotes.
+fn split_top_level(s: &str) -> Vec<&str> {
+    let (mut out, mut depth, mut quoted, mut start) = (Vec::new(), 0i32, false, 0);
+    for (i, ch) in s.char_indices() {
+        match ch {
+            '"' => quoted = !quoted,
+            '[' if !quoted => depth += 1,
+            ']' if !quoted => depth -= 1,
+            ',' if !quoted && depth == 0 => {
+                out.push(&s[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push(&s[start..]);
+    out.into_iter().filter(|p| !p.trim().is_empty()).collect()
+}
+
+/// Sets `palette` on every layer that uses one (adding the default layer to a scene that
+/// has none); a palette file named on the command line is relative to the current folder.
+pub fn apply_palette(file: &mut SceneFile, p: &str) {
+    let p = match std::fs::canonicalize(p) {
+        Ok(abs) if Path::new(p).is_file() => abs.display().to_string(),
+        _ => p.to_string(),
+    };
+    if file.layers.is_empty() {
+        file.layers.push(toml::Spanned::new(0..0, LayerRaw::of_kind("smooth")));
+    }
+    for l in &mut file.layers {
+        let l = l.get_mut();
+        // Distance and interior layers without a palette are grey or solid by design.
+        let uses_palette = match l.kind.get_ref().as_str() {
+            "smooth" | "histogram" | "angle" | "stripe" | "trap" => true,
+            "distance" | "interior" => l.palette.is_some(),
+            _ => false,
+        };
+        if uses_palette {
+            l.palette = Some(cli(p.clone()));
+        }
+    }
 }
 
 /// Writes the flags into the scene, so the PNG's embedded scene reproduces the render.
@@ -96,26 +166,7 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
         file.render.engine = cli(e.clone());
     }
     if let Some(p) = &a.palette {
-        // A palette file named on the command line is relative to the current folder.
-        let p = match std::fs::canonicalize(p) {
-            Ok(abs) if Path::new(p).is_file() => abs.display().to_string(),
-            _ => p.clone(),
-        };
-        if file.layers.is_empty() {
-            file.layers.push(toml::Spanned::new(0..0, LayerRaw::of_kind("smooth")));
-        }
-        for l in &mut file.layers {
-            let l = l.get_mut();
-            // Distance layers without a palette are grey by design; they keep that look.
-            let uses_palette = match l.kind.get_ref().as_str() {
-                "smooth" | "histogram" | "angle" | "stripe" | "trap" => true,
-                "distance" | "interior" => l.palette.is_some(),
-                _ => false,
-            };
-            if uses_palette {
-                l.palette = Some(cli(p.clone()));
-            }
-        }
+        apply_palette(file, p);
     }
     if let Some(set) = a.channels {
         file.output.channels = Some(cli(set.iter().map(|c| c.name().to_string()).collect()));

@@ -172,29 +172,49 @@ impl Coloring {
     /// Colours every sample of `planes`; `aa` is the supersampling factor and `mask` scales
     /// each sample's opacity. Output is linear light, premultiplied by alpha.
     pub fn paint(&self, planes: &Planes, aa: u32, ctx: &Context, mask: Option<&Mask>) -> Vec<[f32; 4]> {
-        let px = 1.0 / aa as f64;
-        let len = planes.len();
-        let mut out = self.paint_unmasked(planes, px, ctx);
-        debug_assert_eq!(out.len(), len);
-        if let Some(m) = mask {
-            for (k, c) in out.iter_mut().enumerate() {
-                let w = m.at(planes, k, px);
-                *c = c.map(|v| v * w);
-            }
-        }
+        let mut out = vec![[0.0f32; 4]; planes.len()];
+        self.paint_each(planes, aa, ctx, mask, &mut |k, c| out[k] = c);
         out
     }
 
-    fn paint_unmasked(&self, planes: &Planes, px: f64, ctx: &Context) -> Vec<[f32; 4]> {
+    /// Colours every sample of `planes`, handing each (index, premultiplied linear RGBA) to
+    /// `sink` in order (no intermediate buffer: the compositor writes its output directly).
+    pub fn paint_each(
+        &self,
+        planes: &Planes,
+        aa: u32,
+        ctx: &Context,
+        mask: Option<&Mask>,
+        sink: &mut impl FnMut(usize, [f32; 4]),
+    ) {
+        let px = 1.0 / aa as f64;
+        match mask {
+            None => self.paint_unmasked(planes, px, ctx, sink),
+            Some(m) => self.paint_unmasked(planes, px, ctx, &mut |k, c: [f32; 4]| {
+                let w = m.at(planes, k, px);
+                sink(k, c.map(|v| v * w))
+            }),
+        }
+    }
+
+    fn paint_unmasked(&self, planes: &Planes, px: f64, ctx: &Context, sink: &mut impl FnMut(usize, [f32; 4])) {
         let len = planes.len();
         let inside = |k: usize| planes.n[k] == INTERIOR;
         let distance = |k: usize| {
             let (x, y) = (planes.dex[k] as f64, planes.dey[k] as f64);
             (x * x + y * y).sqrt() * px
         };
-        let each = |f: &(dyn Fn(usize) -> [f32; 4] + Sync)| -> Vec<[f32; 4]> { (0..len).map(f).collect() };
+        // Statically dispatched per colouring: the closure inlines into the loop.
+        macro_rules! each {
+            (|$k:pat_param| $body:expr) => {{
+                let f = |$k: usize| -> [f32; 4] { $body };
+                for i in 0..len {
+                    sink(i, f(i));
+                }
+            }};
+        }
         match self {
-            Coloring::Smooth { palette, density, offset, transfer, interior } => each(&|k| {
+            Coloring::Smooth { palette, density, offset, transfer, interior } => each!(|k| {
                 if inside(k) {
                     return premul(*interior);
                 }
@@ -210,14 +230,14 @@ impl Coloring {
                         &fallback
                     }
                 };
-                each(&|k| {
+                each!(|k| {
                     if inside(k) {
                         return premul(*interior);
                     }
                     premul(palette.at(hist.position(planes.n[k], planes.nf[k]) * cycles + offset))
                 })
             }
-            Coloring::Distance { style, palette, offset } => each(&|k| {
+            Coloring::Distance { style, palette, offset } => each!(|k| {
                 let d = if inside(k) { 0.0 } else { distance(k) };
                 let v = style.value(d);
                 match palette {
@@ -230,56 +250,56 @@ impl Coloring {
                     }
                 }
             }),
-            Coloring::Boundary { width, color } => each(&|k| {
+            Coloring::Boundary { width, color } => each!(|k| {
                 let cover = if inside(k) { 1.0 } else { shading::boundary_cover(distance(k), *width) };
                 premul([color[0], color[1], color[2], color[3] * cover])
             }),
-            Coloring::Slope { light } => each(&|k| {
+            Coloring::Slope { light } => each!(|k| {
                 if inside(k) {
                     return [0.0; 4];
                 }
                 let g = light.shade(planes.dex[k], planes.dey[k]);
                 [g, g, g, 1.0]
             }),
-            Coloring::Binary { colors } => each(&|k| {
+            Coloring::Binary { colors } => each!(|k| {
                 if inside(k) {
                     return [0.0; 4];
                 }
                 premul(colors[usize::from(planes.t[k] >= 0.5)])
             }),
-            Coloring::Angle { palette, density, offset } => each(&|k| {
+            Coloring::Angle { palette, density, offset } => each!(|k| {
                 if inside(k) {
                     return [0.0; 4];
                 }
                 premul(palette.at(planes.t[k] as f64 * density + offset))
             }),
             Coloring::Stripe { trap, palette, density, offset } => match &planes.traps[*trap] {
-                TrapPlane::Stripe { value, .. } => each(&|k| {
+                TrapPlane::Stripe { value, .. } => each!(|k| {
                     if inside(k) {
                         return [0.0; 4];
                     }
                     premul(palette.at(value[k] as f64 * density + offset))
                 }),
-                _ => vec![[0.0; 4]; len],
+                _ => each!(|_| [0.0; 4]),
             },
             Coloring::TrapDistance { trap, palette, density, offset } => match &planes.traps[*trap] {
-                TrapPlane::Distance(d) => d.iter().map(|&d| premul(palette.at(d as f64 * density + offset))).collect(),
-                _ => vec![[0.0; 4]; len],
+                TrapPlane::Distance(d) => each!(|k| premul(palette.at(d[k] as f64 * density + offset))),
+                _ => each!(|_| [0.0; 4]),
             },
             Coloring::BitmapTrap { trap } => match &planes.traps[*trap] {
-                TrapPlane::Color(c) => c.clone(),
-                _ => vec![[0.0; 4]; len],
+                TrapPlane::Color(c) => each!(|k| c[k]),
+                _ => each!(|_| [0.0; 4]),
             },
             Coloring::Interior { fill } => match fill {
-                InteriorFill::Solid(c) => each(&|k| if inside(k) { premul(*c) } else { [0.0; 4] }),
+                InteriorFill::Solid(c) => each!(|k| if inside(k) { premul(*c) } else { [0.0; 4] }),
                 InteriorFill::Trap { trap, palette, density, offset } => match &planes.traps[*trap] {
-                    TrapPlane::Distance(d) => each(&|k| {
+                    TrapPlane::Distance(d) => each!(|k| {
                         if !inside(k) {
                             return [0.0; 4];
                         }
                         premul(palette.at(d[k] as f64 * density + offset))
                     }),
-                    _ => vec![[0.0; 4]; len],
+                    _ => each!(|_| [0.0; 4]),
                 },
             },
         }

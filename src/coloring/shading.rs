@@ -6,6 +6,8 @@
 //! image as a relief, the "slope" or "3D lighting" colouring of Ultra Fractal and Kalles
 //! Fraktaler (after the normal-map colouring described by Arnaud Chéritat).
 
+use crate::num::fastmath;
+
 /// How a distance layer maps distance (image pixels) to palette position or grey level.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DistanceStyle {
@@ -31,9 +33,9 @@ impl DistanceStyle {
     #[inline]
     pub fn value(self, d: f64) -> f64 {
         match self {
-            DistanceStyle::Soft { k } => (k * d).powf(0.2).clamp(0.0, 1.0),
+            DistanceStyle::Soft { k } => fastmath::powf(k * d, 0.2).clamp(0.0, 1.0),
             DistanceStyle::Linear { density } => d * density,
-            DistanceStyle::Log { density } => d.ln_1p() * density,
+            DistanceStyle::Log { density } => fastmath::ln_1p(d) * density,
         }
     }
 }
@@ -83,8 +85,8 @@ mod tests {
     fn soft_distance_matches_the_seed() {
         let s = DistanceStyle::Soft { k: 8.0 };
         assert_eq!(s.value(0.0), 0.0);
-        assert!((s.value(1.0) - 8f64.powf(0.2).min(1.0)).abs() < 1e-15);
-        assert!((s.value(1.0 / 32.0) - 0.25f64.powf(0.2)).abs() < 1e-15);
+        assert!((s.value(1.0) - 8f64.powf(0.2).min(1.0)).abs() < 1e-12);
+        assert!((s.value(1.0 / 32.0) - 0.25f64.powf(0.2)).abs() < 1e-12);
         assert_eq!(DistanceStyle::Log { density: 2.0 }.value(0.0), 0.0);
     }
 

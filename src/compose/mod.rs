@@ -6,6 +6,9 @@
 //! stays in linear f32 end to end, which is what keeps 16-bit PNGs truly 16-bit. The final
 //! downsampling of supersampled pixels always averages in linear light.
 
+pub mod sheet;
+pub mod text;
+
 use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
 use crate::coloring::{Coloring, Context, Histogram, Mask};
@@ -131,15 +134,12 @@ impl Stack {
             && layer.blend == BlendMode::Normal
             && layer.opacity == 1.0
         {
-            return layer
-                .coloring
-                .paint(planes, aa, ctx, layer.mask.as_ref())
-                .into_iter()
-                .map(|c| {
-                    let t = 1.0 - c[3];
-                    [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t]
-                })
-                .collect();
+            let mut out = vec![[0.0f32; 3]; planes.len()];
+            layer.coloring.paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| {
+                let t = 1.0 - c[3];
+                out[k] = [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t];
+            });
+            return out;
         }
         let (w, h) = (planes.width as u32, planes.rows as u32);
         let Some(mut base) = Pixmap::new(w, h) else {
@@ -150,10 +150,10 @@ impl Stack {
         base.fill(bg8);
         let mut layer_pixmap = Pixmap::new(w, h).expect("same size as the base");
         for layer in &self.layers {
-            let colours = layer.coloring.paint(planes, aa, ctx, layer.mask.as_ref());
-            for (dst, c) in layer_pixmap.pixels_mut().iter_mut().zip(&colours) {
-                *dst = to_premultiplied_srgb8(*c);
-            }
+            let dst = layer_pixmap.pixels_mut();
+            layer
+                .coloring
+                .paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| dst[k] = to_premultiplied_srgb8(c));
             let paint = PixmapPaint {
                 opacity: layer.opacity,
                 blend_mode: layer.blend.skia(),
@@ -191,9 +191,9 @@ fn to_premultiplied_srgb8(c: [f32; 4]) -> PremultipliedColorU8 {
 }
 
 /// Averages `aa x aa` blocks of samples (`width` samples per row) in linear light.
-pub fn downsample(samples: &[[f32; 3]], width: usize, aa: usize) -> Vec<[f32; 3]> {
+pub fn downsample(samples: Vec<[f32; 3]>, width: usize, aa: usize) -> Vec<[f32; 3]> {
     if aa == 1 {
-        return samples.to_vec();
+        return samples;
     }
     let rows = samples.len() / width;
     let (ow, oh) = (width / aa, rows / aa);
@@ -224,7 +224,7 @@ mod tests {
     #[test]
     fn downsample_averages_in_linear_light() {
         let s = vec![[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        assert_eq!(downsample(&s, 2, 2), vec![[0.25, 0.25, 0.25]]);
+        assert_eq!(downsample(s, 2, 2), vec![[0.25, 0.25, 0.25]]);
     }
 
     #[test]

@@ -83,6 +83,14 @@ impl PngWriter {
     }
 }
 
+/// Writes a whole 8-bit sRGB image (`width * height * 3` bytes) at once, atomically;
+/// `scene_toml` (may be empty) goes into the text chunk as for renders.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8], scene_toml: &str) -> Result<(), IoError> {
+    let mut w = PngWriter::create(path, width, height, 8, scene_toml)?;
+    w.write_encoded(rgb)?;
+    w.finish()
+}
+
 /// The scene TOML stored in a PNG written by deepfield, if any.
 pub fn read_png_scene(path: &Path) -> Result<Option<String>, IoError> {
     let file = File::open(path).map_err(|e| IoError::new(path, e))?;

@@ -7,6 +7,7 @@
 //! and deltas below the f64 range; `Real` lets one loop run on f64 or `FloatExp`.
 
 mod decimal;
+pub mod fastmath;
 mod floatexp;
 pub mod real;
 

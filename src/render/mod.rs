@@ -8,6 +8,10 @@
 //! encoding overlaps computing. No I/O happens here; cancellation and progress come in as
 //! an atomic flag and a callback.
 
+mod recolor;
+
+pub use recolor::recolor;
+
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::time::Instant;
@@ -250,8 +254,9 @@ pub fn render<P: Send>(
     // Colours, downsamples and prepares a computed strip.
     let finish = |(row, rows, planes): (u32, u32, Planes), ctx: &Context| -> Result<(RenderedStrip, P), RenderError> {
         let samples = scene.stack.composite(&planes, aa, ctx);
-        let rgb = compose::downsample(&samples, planes.width, aa as usize);
-        let samples = options.exr_channels.contains(Channel::Rgb).then_some(samples);
+        let kept = options.exr_channels.contains(Channel::Rgb).then(|| samples.clone());
+        let rgb = compose::downsample(samples, planes.width, aa as usize);
+        let samples = kept;
         let done = RenderedStrip { row, rows, rgb, planes, samples };
         let prepared = prepare(&done).map_err(RenderError::Sink)?;
         Ok((done, prepared))

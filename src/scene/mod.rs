@@ -6,6 +6,7 @@
 
 pub mod kfr;
 mod layer;
+pub mod presets;
 pub mod raw;
 mod validate;
 

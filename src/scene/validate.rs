@@ -169,7 +169,13 @@ pub(super) fn validate(
         },
     };
     let channels = match &file.output.channels {
-        None => ChannelSet::default_exr(),
+        // By default an EXR holds everything the layers read, so it recolours as rendered.
+        None if traps.is_empty() => ChannelSet::default_exr(),
+        None => {
+            let mut set = ChannelSet::default_exr();
+            set.insert(Channel::Traps);
+            set
+        }
         Some(list) => {
             let mut set = ChannelSet::default();
             for name in list.get_ref() {

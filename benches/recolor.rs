@@ -1,0 +1,75 @@
+//! Recolouring speed: raw planes already in memory -> 8-bit sRGB output bytes, at
+//! 3840x2160 (one sample per pixel), the target being under 0.3 s on 2 cores.
+//!
+//! The planes are those of `scenes/seahorse-valley.toml`'s view rendered at 3840x2160 with
+//! 1000 iterations (computed once, before timing). `cargo bench --bench recolor` times:
+//! - `smooth`: one smooth-iteration layer (the default look);
+//! - `seahorse_stack`: that scene's two layers (smooth with log transfer, soft distance
+//!   multiplied at 60%), which composite through tiny-skia;
+//! - `histogram`: histogram equalisation (sorts every escape count first).
+
+use std::sync::OnceLock;
+use std::sync::atomic::AtomicBool;
+
+use deepfield::field::{self, Planes};
+use deepfield::io::PngEncoder;
+use deepfield::scene::Scene;
+use divan::counter::ItemsCount;
+use rayon::prelude::*;
+
+fn main() {
+    divan::main();
+}
+
+const VIEW: &str = "version = 1\n[view]\ncenter = [\"-0.74515\", \"0.11255\"]\nzoom = \"3600\"\nwidth = 3840\nheight = 2160\n[iteration]\nmax = 1000\n";
+
+fn scene(layers: &str) -> Scene {
+    let text = format!("{VIEW}{layers}");
+    let file = Scene::parse_file("bench", &text).expect("parses");
+    Scene::validate(file, "bench", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).expect("valid")
+}
+
+/// The planes every colouring may read (N, NF, T, DE), 32-row strips.
+fn planes() -> &'static [Planes] {
+    static P: OnceLock<Vec<Planes>> = OnceLock::new();
+    P.get_or_init(|| {
+        let s = scene("[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"distance\"\n[[layer]]\nkind = \"angle\"\n");
+        let params = deepfield::render::field_params(&s, Default::default());
+        let cancel = AtomicBool::new(false);
+        (0..s.height.div_ceil(32))
+            .into_par_iter()
+            .map(|k| field::compute_strip(&params, k * 32..((k + 1) * 32).min(s.height), &cancel).unwrap().planes)
+            .collect()
+    })
+}
+
+fn bench_layers(bencher: divan::Bencher<'_, '_>, layers: &str) {
+    let s = scene(layers);
+    let planes = planes();
+    let enc = PngEncoder::new(8);
+    bencher.counter(ItemsCount::new((s.width * s.height) as u64)).bench(|| {
+        let rgb = deepfield::render::recolor(&s.stack, planes, 1);
+        rgb.par_iter().map(|strip| enc.encode(strip)).collect::<Vec<_>>()
+    });
+}
+
+/// One smooth-iteration layer.
+#[divan::bench(sample_count = 10)]
+fn smooth(bencher: divan::Bencher<'_, '_>) {
+    bench_layers(bencher, "[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ntransfer = \"log\"\ndensity = 0.5\n");
+}
+
+/// The seahorse scene's stack: smooth + soft distance (multiply, 60%).
+#[divan::bench(sample_count = 10)]
+fn seahorse_stack(bencher: divan::Bencher<'_, '_>) {
+    bench_layers(
+        bencher,
+        "[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ntransfer = \"log\"\ndensity = 0.5\n[[layer]]\nkind = \"distance\"\nk = 0.5\nblend = \"multiply\"\nopacity = 0.6\n",
+    );
+}
+
+/// Histogram equalisation.
+#[divan::bench(sample_count = 10)]
+fn histogram(bencher: divan::Bencher<'_, '_>) {
+    bench_layers(bencher, "[[layer]]\nkind = \"histogram\"\n");
+}

@@ -1,0 +1,133 @@
+//! `deepfield recolor`: raw data (EXR) + layers -> PNG, without recomputing the fractal.
+//!
+//! The layers come from the scene stored in the EXR (so a bare `recolor DATA.exr`
+//! reproduces the render), from `--scene`, or from `--layer` specifications; `--palette`
+//! overrides the palette of each. The view of the scene must match the data (same
+//! sample raster); planes a layer needs but the file lacks are named in the error.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::anyhow;
+use deepfield::field::{Channel, Needs};
+use deepfield::io::{self, PngEncoder, PngWriter, RawData, TrapKind};
+use deepfield::scene::Scene;
+use deepfield::scene::raw::cli;
+use deepfield::trap::Trap;
+
+use super::Failure;
+use super::args::RecolorArgs;
+
+/// Runs `deepfield recolor`.
+pub fn run(args: RecolorArgs) -> Result<(), Failure> {
+    let t0 = Instant::now();
+    if !args.data.exists() {
+        return Err(Failure::Input(anyhow!("{}: no such file", args.data.display())));
+    }
+    let out = args.output.clone().unwrap_or_else(|| args.data.with_extension("png"));
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    if abs(&out) == abs(&args.data) || args.scene.as_deref().is_some_and(|s| abs(s) == abs(&out)) {
+        return Err(Failure::Input(anyhow!("-o {} would overwrite an input; choose another name", out.display())));
+    }
+    let raw = io::read_exr_planes(&args.data, 32).map_err(Failure::input)?;
+    let read_s = t0.elapsed().as_secs_f64();
+    let (origin, text, base) = match &args.scene {
+        Some(path) => super::scene::read_source(path)?,
+        None => {
+            let text = raw.scene.clone().ok_or_else(|| {
+                Failure::Input(anyhow!("{}: the file carries no scene; give one with --scene", args.data.display()))
+            })?;
+            (format!("{} (stored scene)", args.data.display()), text, PathBuf::from("."))
+        }
+    };
+    let mut specs = Vec::new();
+    for (i, spec) in args.layers.iter().enumerate() {
+        specs.push(super::scene::layer_spec(spec, i + 1)?);
+    }
+    let scene = super::scene::load_text(&origin, &text, &base, |file| {
+        if !specs.is_empty() {
+            file.layers = specs.into_iter().map(cli).collect();
+        }
+        if let Some(p) = &args.palette {
+            super::scene::apply_palette(file, p);
+        }
+        if let Some(b) = &args.bits {
+            file.output.bits = Some(cli(b.parse().unwrap_or(8)));
+        }
+    })?;
+    check_fits(&scene, &raw, &args.data)?;
+
+    let t1 = Instant::now();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0) as usize)
+        .build()
+        .map_err(|e| Failure::Runtime(e.into()))?;
+    let enc = PngEncoder::new(scene.png_bits);
+    let encoded: Vec<Vec<u8>> = pool.install(|| {
+        use rayon::prelude::*;
+        let rgb = deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa);
+        rgb.par_iter().map(|strip| enc.encode(strip)).collect()
+    });
+    let color_s = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mut png =
+        PngWriter::create(&out, scene.width, scene.height, scene.png_bits, &scene.to_toml()).map_err(Failure::input)?;
+    for bytes in &encoded {
+        png.write_encoded(bytes).map_err(|e| Failure::Runtime(e.into()))?;
+    }
+    png.finish().map_err(|e| Failure::Runtime(e.into()))?;
+    if args.stats {
+        let line = format!(
+            "read {:.3} s, colour {:.3} s ({} x {} pixels, {} layers), write {:.3} s\n",
+            read_s,
+            color_s,
+            scene.width,
+            scene.height,
+            scene.stack.layers.len(),
+            t2.elapsed().as_secs_f64()
+        );
+        std::io::stdout().lock().write_all(line.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
+    }
+    Ok(())
+}
+
+/// Refuses a scene whose raster or layers the data cannot serve.
+fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<(), Failure> {
+    let name = data.display();
+    let (w, h) = ((scene.width * scene.aa) as usize, (scene.height * scene.aa) as usize);
+    if (w, h) != (raw.width, raw.height) {
+        return Err(Failure::Input(anyhow!(
+            "{name} holds {} x {} samples; the scene needs {w} x {h} ({} x {} pixels, aa {}): recolour with the scene that made it, or change only its layers",
+            raw.width,
+            raw.height,
+            scene.width,
+            scene.height,
+            scene.aa
+        )));
+    }
+    let needs: Needs = scene.stack.needs(&scene.traps);
+    for (on, channel) in
+        [(needs.nf, Channel::NF), (needs.t, Channel::T), (needs.de, Channel::DEX), (needs.de, Channel::DEY)]
+    {
+        if on && !raw.channels.contains(channel) {
+            return Err(Failure::Input(anyhow!(
+                "{name} has no {channel} channel, which the layers need; render it again with --exr and --channels including {channel}"
+            )));
+        }
+    }
+    let kinds = raw.trap_kinds();
+    for (k, trap) in scene.traps.iter().enumerate() {
+        let want = match trap {
+            Trap::Geometric(_) => TrapKind::Distance,
+            Trap::Stripe(_) => TrapKind::Stripe,
+            Trap::Bitmap(_) => TrapKind::Color,
+        };
+        if kinds.get(k) != Some(&want) {
+            return Err(Failure::Input(anyhow!(
+                "{name} has no {want:?} data for trap {k}, which the layers need (trap and stripe data are computed while iterating: render with the layers that use them)"
+            )));
+        }
+    }
+    Ok(())
+}
