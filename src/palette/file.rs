@@ -35,7 +35,35 @@ macro_rules! builtin {
     };
 }
 
-builtin!("classic", "electric", "fire", "forest", "grayscale", "ocean", "pastel", "twilight");
+builtin!(
+    "aurora",
+    "blueprint",
+    "candy",
+    "classic",
+    "copper",
+    "desert",
+    "earth",
+    "electric",
+    "emerald",
+    "fire",
+    "forest",
+    "gold",
+    "grayscale",
+    "ice",
+    "iq-rainbow",
+    "iq-sunrise",
+    "iq-teal",
+    "lava",
+    "magma",
+    "mono-blue",
+    "neon-noir",
+    "ocean",
+    "pastel",
+    "rainbow",
+    "sepia",
+    "sunset",
+    "twilight",
+);
 
 /// Names of the palettes compiled into the binary.
 pub fn builtin_names() -> Vec<&'static str> {
