@@ -83,7 +83,7 @@ pub struct SheetArgs {
     #[arg(long)]
     pub scale_bar: bool,
     /// Mark a point of the plane: RE,IM, or `c` for a Julia scene's parameter.
-    #[arg(long, value_name = "RE,IM|c")]
+    #[arg(long, value_name = "RE,IM|c", allow_hyphen_values = true)]
     pub marker: Option<String>,
     /// List the colourings a sheet can show, and exit.
     #[arg(long)]

@@ -140,3 +140,73 @@ fn bitmap_trap_samples_the_shipped_bitmap_exactly() {
         }
     }
 }
+
+/// Each colouring algorithm of the layer stack, one golden each.
+#[test]
+fn golden_colourings() {
+    let cases: &[(&str, &str)] = &[
+        ("histogram", "kind = \"histogram\"\npalette = \"sunset\"\n"),
+        ("smooth-cbrt", "kind = \"smooth\"\npalette = \"iq-rainbow\"\ntransfer = \"cbrt\"\ndensity = 0.5\n"),
+        ("smooth-loglog", "kind = \"smooth\"\npalette = \"aurora\"\ntransfer = \"log-log\"\ndensity = 2.0\n"),
+        ("distance-linear", "kind = \"distance\"\nstyle = \"linear\"\ndensity = 0.1\npalette = \"ice\"\n"),
+        ("distance-log", "kind = \"distance\"\nstyle = \"log\"\ndensity = 0.4\npalette = \"magma\"\n"),
+        ("slope", "kind = \"slope\"\nangle = 30\nheight = 1.5\nstrength = 0.8\n"),
+        ("binary", "kind = \"binary\"\ncolors = [\"#f0e0c0\", \"#302010\"]\n"),
+        ("angle", "kind = \"angle\"\npalette = \"rainbow\"\n"),
+        ("stripe", "kind = \"stripe\"\nfrequency = 4\npalette = \"gold\"\ndensity = 1.5\n"),
+        (
+            "interior-trap",
+            "kind = \"interior\"\npalette = \"emerald\"\nshape = \"circle\"\nradius = 0.3\ndensity = 3.0\n",
+        ),
+    ];
+    for (name, layer) in cases {
+        golden(&format!("coloring-{name}"), &format!("version = 1\n{VIEW}[iteration]\nmax = 300\n[[layer]]\n{layer}"));
+    }
+}
+
+/// A layer mask: slope lighting only within 3 pixels of the set, over smooth iteration.
+#[test]
+fn golden_mask() {
+    golden(
+        "mask-slope-near-boundary",
+        &format!(
+            "version = 1\n{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"desert\"\n[[layer]]\nkind = \"slope\"\nblend = \"multiply\"\n[layer.mask]\nquantity = \"distance\"\nbelow = 3.0\nfeather = 2.0\n"
+        ),
+    );
+}
+
+/// The seeds' animated bitmap trap: frame 1 of a 2-frame sheet (the star bitmap cut in two).
+#[test]
+fn golden_sprite_frame() {
+    golden(
+        "bitmap-frame",
+        "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[view]\ncenter = [\"0\", \"0\"]\nzoom = \"1.3\"\nwidth = 96\nheight = 72\n[[layer]]\nkind = \"distance\"\n[[layer]]\nkind = \"bitmap\"\nimage = \"scenes/bitmaps/star.png\"\ncenter = [0.0, 0.3]\nsize = 0.5\nthreshold = 0.5\nframes = 2\nframe = 1\n",
+    );
+}
+
+/// Every blend mode: a soft-distance layer at 80% over smooth iteration.
+#[test]
+fn golden_blend_modes() {
+    for mode in [
+        "normal",
+        "multiply",
+        "screen",
+        "overlay",
+        "darken",
+        "lighten",
+        "difference",
+        "soft-light",
+        "hard-light",
+        "color-dodge",
+        "color-burn",
+        "exclusion",
+        "plus",
+    ] {
+        golden(
+            &format!("blend-{mode}"),
+            &format!(
+                "version = 1\n{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"twilight\"\n[[layer]]\nkind = \"distance\"\nk = 0.3\npalette = \"copper\"\nblend = \"{mode}\"\nopacity = 0.8\n"
+            ),
+        );
+    }
+}

@@ -3,6 +3,7 @@
 
 mod accuracy;
 mod cli;
+mod coloring;
 mod deep;
 mod golden;
 mod reference;
