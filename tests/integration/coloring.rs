@@ -239,7 +239,7 @@ fn stripe_average_matches_its_definition() {
 fn stripe_average_at_depth_agrees_with_direct() {
     let text = format!("{VIEW}[[layer]]\nkind = \"stripe\"\n");
     let direct = scene(&text);
-    let deep = scene(&format!("{}[render]\nengine = \"perturb-f64\"\n", text.replace("[[layer]]", "[[layer]]")));
+    let deep = scene(&format!("{}[render]\nengine = \"perturb-f64\"\n", text));
     let plane = |s: &deepfield::scene::Scene| {
         let plan = s.engine().unwrap();
         let (params, _) =
