@@ -1,1 +1,0 @@
-//! Importers for the palette formats other programs write (work in progress).
