@@ -5,5 +5,6 @@ mod accuracy;
 mod cli;
 mod deep;
 mod golden;
+mod import;
 mod reference;
 mod util;
