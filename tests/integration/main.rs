@@ -6,5 +6,6 @@ mod cli;
 mod coloring;
 mod deep;
 mod golden;
+mod import;
 mod reference;
 mod util;
