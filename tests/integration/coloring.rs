@@ -191,6 +191,20 @@ fn palette_commands() {
     assert_eq!(img.dimensions(), (100, 10));
     // The strip's left end is the first stop's colour.
     assert_eq!(img.get_pixel(0, 5).0, [0x1b, 0x0b, 0x3a]);
+
+    // Import: a GIMP gradient to our format, then used by a scene; a .ugr holds several.
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/palettes");
+    let ggr = fixtures.join("sample.ggr");
+    ok(&deepfield(&["palettes", "import", ggr.to_str().unwrap(), "-o", "gimp.toml"], &dir));
+    std::fs::write(dir.join("s.toml"), format!("{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"gimp.toml\"\n"))
+        .unwrap();
+    ok(&deepfield(&["render", "s.toml", "-o", "s.png", "-q"], &dir));
+    let ugr = fixtures.join("sample.ugr");
+    ok(&deepfield(&["palettes", "import", ugr.to_str().unwrap(), "-o", "uf"], &dir));
+    assert_eq!(std::fs::read_dir(dir.join("uf")).unwrap().count(), 2);
+    ok(&deepfield(&["palettes", "show", ugr.to_str().unwrap(), "-o", "uf.png"], &dir));
+    std::fs::write(dir.join("bad.map"), "0 0 0\n255 x 0\n").unwrap();
+    refused(&deepfield(&["palettes", "import", "bad.map"], &dir), "bad.map:2:");
 }
 
 /// The stripe average against a direct f64 computation written here from its definition
