@@ -66,6 +66,9 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
     let enc = PngEncoder::new(scene.png_bits);
     let encoded: Vec<Vec<u8>> = pool.install(|| {
         use rayon::prelude::*;
+        if scene.png_bits == 8 {
+            return deepfield::render::recolor_rgb8(&scene.stack, &raw.strips, scene.aa);
+        }
         let rgb = deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa);
         rgb.par_iter().map(|strip| enc.encode(strip)).collect()
     });

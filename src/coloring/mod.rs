@@ -245,7 +245,7 @@ impl Coloring {
                     Some(p) if matches!(style, DistanceStyle::Soft { .. }) => premul(p.at(v.min(1.0 - 1e-9) + offset)),
                     Some(p) => premul(p.at(v + offset)),
                     None => {
-                        let g = color::srgb_to_linear(v.clamp(0.0, 1.0) as f32);
+                        let g = color::srgb_to_linear_lut(v as f32);
                         [g, g, g, 1.0]
                     }
                 }

@@ -130,10 +130,7 @@ impl Stack {
     /// Composites the stack for every sample: opaque linear RGB.
     pub fn composite(&self, planes: &Planes, aa: u32, ctx: &Context) -> Vec<[f32; 3]> {
         let bg = self.background;
-        if let [layer] = self.layers.as_slice()
-            && layer.blend == BlendMode::Normal
-            && layer.opacity == 1.0
-        {
+        if let Some(layer) = self.single_opaque() {
             let mut out = vec![[0.0f32; 3]; planes.len()];
             layer.coloring.paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| {
                 let t = 1.0 - c[3];
@@ -141,14 +138,53 @@ impl Stack {
             });
             return out;
         }
+        let Some(base) = self.blend(planes, aa, ctx) else { return vec![bg; planes.len()] };
+        // The base is opaque (background first), so its pixels need no demultiplying.
+        base.pixels()
+            .iter()
+            .map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())])
+            .collect()
+    }
+
+    /// The composited samples as 8-bit sRGB bytes (R, G, B per sample), exactly what
+    /// encoding [`Stack::composite`]'s output with [`linear_to_srgb8`] gives, without the
+    /// round trip through linear light where tiny-skia already holds sRGB bytes. The fast
+    /// path of recolouring at one sample per pixel.
+    pub fn composite_rgb8(&self, planes: &Planes, ctx: &Context) -> Vec<u8> {
+        let bg = self.background;
+        if let Some(layer) = self.single_opaque() {
+            let mut out = vec![0u8; planes.len() * 3];
+            layer.coloring.paint_each(planes, 1, ctx, layer.mask.as_ref(), &mut |k, c| {
+                let t = 1.0 - c[3];
+                out[3 * k] = linear_to_srgb8(c[0] + bg[0] * t);
+                out[3 * k + 1] = linear_to_srgb8(c[1] + bg[1] * t);
+                out[3 * k + 2] = linear_to_srgb8(c[2] + bg[2] * t);
+            });
+            return out;
+        }
+        match self.blend(planes, 1, ctx) {
+            Some(base) => base.pixels().iter().flat_map(|p| [p.red(), p.green(), p.blue()]).collect(),
+            None => bg.map(linear_to_srgb8).repeat(planes.len()),
+        }
+    }
+
+    /// The one layer of a stack that needs no blending, if that is what the stack is.
+    fn single_opaque(&self) -> Option<&Layer> {
+        match self.layers.as_slice() {
+            [layer] if layer.blend == BlendMode::Normal && layer.opacity == 1.0 => Some(layer),
+            _ => None,
+        }
+    }
+
+    /// Every layer blended by tiny-skia over the background, in premultiplied sRGB bytes.
+    fn blend(&self, planes: &Planes, aa: u32, ctx: &Context) -> Option<Pixmap> {
+        let bg = self.background;
         let (w, h) = (planes.width as u32, planes.rows as u32);
-        let Some(mut base) = Pixmap::new(w, h) else {
-            return vec![bg; planes.len()];
-        };
+        let mut base = Pixmap::new(w, h)?;
         let bg8 = tiny_skia::Color::from_rgba(linear_to_srgb(bg[0]), linear_to_srgb(bg[1]), linear_to_srgb(bg[2]), 1.0)
             .unwrap_or(tiny_skia::Color::BLACK);
         base.fill(bg8);
-        let mut layer_pixmap = Pixmap::new(w, h).expect("same size as the base");
+        let mut layer_pixmap = Pixmap::new(w, h)?;
         for layer in &self.layers {
             let dst = layer_pixmap.pixels_mut();
             layer
@@ -161,11 +197,7 @@ impl Stack {
             };
             base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
         }
-        // The base is opaque (background first), so its pixels need no demultiplying.
-        base.pixels()
-            .iter()
-            .map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())])
-            .collect()
+        Some(base)
     }
 }
 

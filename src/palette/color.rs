@@ -6,6 +6,19 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
 }
 
+/// [`srgb_to_linear`] by table (4096 steps, linear interpolation; within 4e-7 (a few f32 ulps; 16-bit output steps are 1.5e-5) of the exact
+/// curve): for per-sample colouring, where `powf` would dominate. Clamps to [0, 1].
+#[inline]
+pub fn srgb_to_linear_lut(v: f32) -> f32 {
+    const STEPS: usize = 4096;
+    static T: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    let t = T.get_or_init(|| (0..=STEPS + 1).map(|i| srgb_to_linear((i as f32 / STEPS as f32).min(1.0))).collect());
+    let f = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) * STEPS as f32 };
+    let i = f as usize;
+    let w = f - i as f32;
+    t[i] + (t[i + 1] - t[i]) * w
+}
+
 /// Linear-light component to sRGB encoding (0..1, clamped).
 #[inline]
 pub fn linear_to_srgb(v: f32) -> f32 {
@@ -19,12 +32,13 @@ struct Tables {
     decode: [f32; 256],
     /// Linear thresholds between consecutive codes (code k+1 starts at `encode[k]`).
     encode: [f32; 255],
-    /// Code at the start of each of `BUCKETS` equal steps of [0, 1]: a search starts here
-    /// and moves up at most a couple of codes.
+    /// Code at the start of each of `BUCKETS` equal steps of [0, 1]. Neighbouring code
+    /// boundaries are at least 1/(255 * 12.92) ~ 3e-4 apart, wider than a bucket, so at most
+    /// one boundary falls inside a bucket: one comparison finishes the search.
     start: Vec<u8>,
 }
 
-const BUCKETS: usize = 4096;
+const BUCKETS: usize = 1 << 16;
 
 fn tables() -> &'static Tables {
     static T: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
@@ -52,11 +66,10 @@ pub fn linear_to_srgb8(v: f32) -> u8 {
     if v >= 1.0 {
         return 255;
     }
-    let mut k = t.start[(v * BUCKETS as f32) as usize] as usize;
-    while k < 255 && v >= t.encode[k] {
-        k += 1;
-    }
-    k as u8
+    let k = t.start[(v * BUCKETS as f32) as usize];
+    // `encode` has 255 entries; code 255 has no boundary above it.
+    let above = t.encode.get(k as usize).is_some_and(|&b| v >= b);
+    k + u8::from(above)
 }
 
 /// Linear sRGB to OKLab.
@@ -143,6 +156,15 @@ mod tests {
         assert_eq!(parse_hex("#ff8000"), Some([1.0, 128.0 / 255.0, 0.0]));
         assert_eq!(parse_hex("ff8000"), None);
         assert_eq!(to_hex([1.0, 128.0 / 255.0, 0.0]), "#ff8000");
+        for i in 0..=10_000 {
+            let v = i as f32 / 10_000.0;
+            assert!(
+                (srgb_to_linear_lut(v) - srgb_to_linear(v)).abs() < 4e-7,
+                "{v}: {} vs {}",
+                srgb_to_linear_lut(v),
+                srgb_to_linear(v)
+            );
+        }
         let lab = linear_to_oklab([0.3, 0.6, 0.1]);
         let back = oklch_to_oklab(oklab_to_oklch(lab));
         assert!((0..3).all(|k| (back[k] - lab[k]).abs() < 1e-6));

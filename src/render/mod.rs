@@ -10,7 +10,7 @@
 
 mod recolor;
 
-pub use recolor::recolor;
+pub use recolor::{recolor, recolor_rgb8};
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;

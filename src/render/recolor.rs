@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use crate::coloring::Context;
 use crate::compose::{self, Stack};
 use crate::field::Planes;
+use crate::palette::color::linear_to_srgb8;
 
 /// Colours every strip (sample rows a multiple of `aa`) and downsamples it: linear RGB
 /// output pixels per strip, in order.
@@ -20,4 +21,16 @@ pub fn recolor(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<[f32; 3]>> 
             compose::downsample(samples, planes.width, aa as usize)
         })
         .collect()
+}
+
+/// Like [`recolor`], for 8-bit output: sRGB bytes per strip, identical to encoding
+/// [`recolor`]'s pixels, and faster at one sample per pixel (no round trip through linear
+/// light where the compositor already holds sRGB bytes).
+pub fn recolor_rgb8(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<u8>> {
+    if aa != 1 {
+        let encode = |rgb: &Vec<[f32; 3]>| rgb.iter().flat_map(|p| p.map(linear_to_srgb8)).collect();
+        return recolor(stack, strips, aa).par_iter().map(encode).collect();
+    }
+    let ctx = if stack.is_global() { stack.context(strips.iter()) } else { Context::default() };
+    strips.par_iter().map(|planes| stack.composite_rgb8(planes, &ctx)).collect()
 }
