@@ -9,6 +9,9 @@ Outputs (paths relative to the repository root, which is found from this file):
   Opaque (alpha 255) inside the star, with a radial gradient from pale yellow at the
   centre to deep orange at the tips; fully transparent (0, 0, 0, 0) outside, including
   a transparent border, because the trap clamps texture coordinates to the edge texels.
+- scenes/bitmaps/sprites.png: 192x48 sprite sheet for the animated bitmap trap (the seeds'
+  variant): 4 frames of 48x48 side by side, a five-pointed star turning by 18 degrees a
+  frame and shifting from gold to rose; transparent outside the star.
 - tests/fixtures/trap.png: 16x16 test fixture; the left 8 columns are opaque red
   (255, 0, 0, 255), the right 8 columns are fully transparent (0, 0, 0, 0).
 
@@ -85,6 +88,27 @@ def star_png(size=64):
     return size, size, pixels
 
 
+def sprite_sheet(frame=48, frames=4):
+    """Frames side by side: the star turned by 18 degrees per frame, gold turning rose."""
+    c = (frame - 1) / 2.0
+    r_outer = frame * 0.45
+    colours = [((255, 240, 170), (230, 150, 20)), ((255, 225, 190), (235, 110, 60)),
+               ((255, 215, 215), (220, 70, 110)), ((250, 210, 240), (190, 60, 160))]
+    pixels = [(0, 0, 0, 0)] * (frame * frames * frame)
+    for k in range(frames):
+        poly = star_polygon(c, c, r_outer, r_outer * 0.42)
+        a = math.radians(18 * k)
+        poly = [(c + (x - c) * math.cos(a) - (y - c) * math.sin(a), c + (x - c) * math.sin(a) + (y - c) * math.cos(a)) for x, y in poly]
+        centre, tips = colours[k]
+        for y in range(frame):
+            for x in range(frame):
+                if inside(poly, x, y):
+                    t = min(1.0, math.hypot(x - c, y - c) / r_outer)
+                    pixels[y * frame * frames + k * frame + x] = (
+                        lerp(centre[0], tips[0], t), lerp(centre[1], tips[1], t), lerp(centre[2], tips[2], t), 255)
+    return frame * frames, frame, pixels
+
+
 def trap_fixture():
     w = h = 16
     pixels = [(255, 0, 0, 255) if x < w // 2 else (0, 0, 0, 0) for y in range(h) for x in range(w)]
@@ -94,6 +118,7 @@ def trap_fixture():
 def main():
     outputs = {
         ROOT / "scenes" / "bitmaps" / "star.png": star_png(),
+        ROOT / "scenes" / "bitmaps" / "sprites.png": sprite_sheet(),
         ROOT / "tests" / "fixtures" / "trap.png": trap_fixture(),
     }
     for path, (w, h, pixels) in outputs.items():

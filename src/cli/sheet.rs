@@ -40,8 +40,12 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     let cancel = super::render::install_ctrlc();
     let base = super::scene::load(&args.scene)?;
     let colorings: Vec<String> = if args.colorings.is_empty() { vec!["scene".into()] } else { args.colorings.clone() };
-    let palettes: Vec<Option<String>> =
-        if args.palettes.is_empty() { vec![None] } else { args.palettes.iter().cloned().map(Some).collect() };
+    // `--palette` colours every cell; `--palettes` makes one cell per palette.
+    let palettes: Vec<Option<String>> = if args.palettes.is_empty() {
+        vec![args.scene.palette.clone()]
+    } else {
+        args.palettes.iter().cloned().map(Some).collect()
+    };
 
     // Every cell's layers, one after another, validated as one scene.
     let mut cells: Vec<(String, usize)> = Vec::new();
@@ -60,10 +64,10 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
             if let Some(p) = p {
                 super::scene::apply_palette(&mut file, p);
             }
-            let label = match (colorings.len() > 1 || args.palettes.is_empty(), p) {
-                (true, Some(p)) => format!("{c} / {p}"),
-                (false, Some(p)) => p.clone(),
-                (_, None) => c.clone(),
+            let label = match p {
+                Some(p) if !args.palettes.is_empty() && colorings.len() > 1 => format!("{c} / {p}"),
+                Some(p) if !args.palettes.is_empty() => p.clone(),
+                _ => c.clone(),
             };
             if file.layers.is_empty() {
                 file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));

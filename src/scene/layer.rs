@@ -153,7 +153,7 @@ pub(super) fn layer(
         "slope" => Coloring::Slope {
             light: Light::new(
                 num(&l.angle, 45.0, -1e6, 1e6, "angle (degrees)")?,
-                num(&l.height, 0.75, 0.0, 1e6, "height")?,
+                num(&l.height, 1.5, 0.0, 1e6, "height")?,
                 num(&l.strength, 1.0, 0.0, 1.0, "strength")?,
             ),
         },

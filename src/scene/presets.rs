@@ -48,7 +48,11 @@ pub const PRESETS: &[(&str, &str, &str)] = &[
     ),
     ("binary", "binary decomposition (sign of Im z_n)", "[[layer]]\nkind = \"binary\"\n"),
     ("angle", "final angle through a palette", "[[layer]]\nkind = \"angle\"\n"),
-    ("stripe", "stripe average, 5 stripes per turn", "[[layer]]\nkind = \"stripe\"\n"),
+    (
+        "stripe",
+        "stripe average, 5 stripes per turn, [0.25, 0.75] spread over the palette",
+        "[[layer]]\nkind = \"stripe\"\ndensity = 2.0\noffset = -0.5\n",
+    ),
     ("trap", "distance to a point trap at 0", "[[layer]]\nkind = \"trap\"\n"),
     (
         "interior",
