@@ -47,6 +47,9 @@ pub struct RecolorArgs {
     /// `--layer smooth:palette=fire,density=0.02 --layer slope:blend=multiply`.
     #[arg(long = "layer", value_name = "SPEC")]
     pub layers: Vec<String>,
+    /// Palette cycling: shift every palette by this many cycles.
+    #[arg(long, value_name = "CYCLES", allow_hyphen_values = true)]
+    pub cycle: Option<f64>,
     /// Output PNG (default: the data file's name with .png).
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -210,6 +213,9 @@ pub struct SceneArgs {
     /// Palette for every layer that uses one: a built-in name or a palette file.
     #[arg(long, value_name = "NAME|FILE")]
     pub palette: Option<String>,
+    /// Palette cycling: shift every palette by this many cycles (frames of an animation).
+    #[arg(long, value_name = "CYCLES", allow_hyphen_values = true)]
+    pub cycle: Option<f64>,
     /// EXR channels, comma-separated: N, NF, T, DEX, DEY, TRAPS (default N,NF,T,DEX,DEY).
     #[arg(long, value_name = "LIST", value_parser = parse_channels)]
     pub channels: Option<ChannelSet>,

@@ -52,6 +52,9 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
         if let Some(p) = &args.palette {
             super::scene::apply_palette(file, p);
         }
+        if let Some(c) = args.cycle {
+            file.render.cycle = Some(cli(c));
+        }
         if let Some(b) = &args.bits {
             file.output.bits = Some(cli(b.parse().unwrap_or(8)));
         }

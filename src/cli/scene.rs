@@ -159,6 +159,9 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
     if a.no_bla {
         file.render.bla = Some(cli(false));
     }
+    if let Some(c) = a.cycle {
+        file.render.cycle = Some(cli(c));
+    }
     if let Some(t) = a.bla_tolerance {
         file.render.bla_tolerance = Some(cli(t));
     }

@@ -41,12 +41,13 @@ pub(super) fn default_layer() -> LayerRaw {
     LayerRaw::of_kind("smooth")
 }
 
-/// Validates one layer; traps it needs are appended to `traps`.
+/// Validates one layer (its palettes cycled by `cycle`); traps it needs are appended to `traps`.
 pub(super) fn layer(
     cx: &Ctx<'_>,
     spanned: &Spanned<LayerRaw>,
     base_dir: &Path,
     bitmaps: &BitmapLoader<'_>,
+    cycle: f64,
     traps: &mut Vec<Trap>,
 ) -> Result<Layer, SourceError> {
     let l = spanned.get_ref();
@@ -74,7 +75,10 @@ pub(super) fn layer(
             Some(n) => (n.get_ref().as_str(), n.span()),
             None => (default, 0..0),
         };
-        palette::load(text, Some(base_dir)).or_else(|e| cx.err(span, e.to_string()))
+        let p = palette::load(text, Some(base_dir)).or_else(|e| cx.err(span, e.to_string()))?;
+        // Cycling moves every palette along by the same phase.
+        let (offset, density) = (p.offset + cycle, p.density);
+        Ok(p.adjusted(offset, density))
     };
     let colour = |v: &Option<Spanned<String>>, default: [f32; 4]| match v {
         Some(c) => cx.colour(c),

@@ -140,6 +140,9 @@ pub struct RenderRaw {
     /// BLA tolerance ε (default 1e-12).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bla_tolerance: Option<Spanned<f64>>,
+    /// Palette cycling: added to the offset of every palette, in cycles (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cycle: Option<Spanned<f64>>,
     /// Background colour below all layers, "#rrggbb".
     #[serde(default = "default_background")]
     pub background: Spanned<String>,
@@ -162,6 +165,7 @@ impl Default for RenderRaw {
             engine: default_engine(),
             bla: None,
             bla_tolerance: None,
+            cycle: None,
             background: default_background(),
         }
     }

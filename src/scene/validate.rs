@@ -148,6 +148,10 @@ pub(super) fn validate(
     };
     let bla = bla_on.then_some(tolerance);
     let bg = cx.colour(&file.render.background)?;
+    let cycle = match &file.render.cycle {
+        Some(c) => cx.finite(c, -1e9, 1e9, "render.cycle")?,
+        None => 0.0,
+    };
 
     let mut traps = Vec::new();
     let mut layers = Vec::new();
@@ -157,7 +161,7 @@ pub(super) fn validate(
         file.layers.clone()
     };
     for l in &raw_layers {
-        layers.push(super::layer::layer(&cx, l, base_dir, bitmaps, &mut traps)?);
+        layers.push(super::layer::layer(&cx, l, base_dir, bitmaps, cycle, &mut traps)?);
     }
 
     let png_bits = match &file.output.bits {

@@ -102,6 +102,18 @@ fn recolour_layers_from_the_command_line() {
     ));
     assert!(std::fs::read(dir.join("want.png")).unwrap() == std::fs::read(dir.join("got.png")).unwrap());
 
+    // Palette cycling: the same bytes as a render with the phase in the scene.
+    std::fs::write(
+        dir.join("cycled.toml"),
+        format!("{VIEW}[render]\ncycle = 0.3\n[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"distance\"\n"),
+    )
+    .unwrap();
+    ok(&deepfield(&["render", "cycled.toml", "-o", "cycled.png", "-q"], &dir));
+    ok(&deepfield(&["recolor", "data.exr", "--cycle", "0.3", "-o", "cycled-re.png"], &dir));
+    let cycled = std::fs::read(dir.join("cycled.png")).unwrap();
+    assert!(cycled == std::fs::read(dir.join("cycled-re.png")).unwrap());
+    assert!(cycled != std::fs::read(dir.join("a.png")).unwrap(), "cycling changed nothing");
+
     // Errors: unknown kind, unknown key, unknown palette, a layer the data cannot serve.
     refused(&deepfield(&["recolor", "data.exr", "--layer", "plasma"], &dir), "unknown layer kind `plasma`");
     refused(&deepfield(&["recolor", "data.exr", "--layer", "smooth:colour=red"], &dir), "colour");
