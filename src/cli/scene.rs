@@ -2,10 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, anyhow};
+use anyhow::anyhow;
 use deepfield::io;
 use deepfield::scene::raw::{LayerRaw, cli};
-use deepfield::scene::{Scene, SceneFile, kfr};
+use deepfield::scene::{Scene, SceneFile};
 
 use super::Failure;
 use super::args::SceneArgs;
@@ -34,29 +34,8 @@ pub fn load_text(
 /// The scene text of a file: a TOML scene, a .kfr location (converted), or the scene
 /// embedded in a PNG or EXR written by deepfield. Returns (origin, text, folder).
 pub fn read_source(path: &Path) -> Result<(String, String, PathBuf), Failure> {
-    let origin = path.display().to_string();
-    if !path.exists() {
-        return Err(Failure::Input(anyhow!("{origin}: no such scene file")));
-    }
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut magic = [0u8; 8];
-    let head = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut magic)).unwrap_or(0);
-    let embedded = |found: Option<String>, what: &str| {
-        found.ok_or_else(|| Failure::Input(anyhow!("{origin}: this {what} carries no deepfield scene")))
-    };
-    let text = if head == 8 && magic == *b"\x89PNG\r\n\x1a\n" {
-        embedded(io::read_png_scene(path).map_err(Failure::input)?, "PNG")?
-    } else if head >= 4 && magic[..4] == [0x76, 0x2f, 0x31, 0x01] {
-        embedded(io::read_exr_scene(path).map_err(Failure::input)?, "EXR")?
-    } else {
-        std::fs::read_to_string(path).with_context(|| format!("{origin}: cannot read scene")).map_err(Failure::Input)?
-    };
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("kfr")) {
-        // Validated as the scene it converts to; the converter checked what it read.
-        let toml = kfr::kfr_to_toml(&origin, &text).map_err(Failure::input)?;
-        return Ok((format!("{origin} (as a scene)"), toml, base));
-    }
-    Ok((origin, text, base))
+    let s = io::read_scene_source(path).map_err(Failure::input)?;
+    Ok((s.origin, s.text, s.base_dir))
 }
 
 /// Parses a `--layer` specification `KIND[:key=value,...]` (values in TOML syntax, bare

@@ -10,11 +10,13 @@ mod bitmap;
 mod exr;
 mod exr_read;
 mod png;
+mod scene_source;
 
 pub use atomic::AtomicFile;
 pub use bitmap::load_bitmap;
 pub use exr::{ExrEncoder, ExrLayout, ExrWriter, read_exr_scene};
 pub use exr_read::{RawData, TrapKind, read_exr_planes};
+pub use scene_source::{SceneSource, read_scene_source};
 pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene, write_png_rgb8};
 
 /// An I/O failure with the path it concerns.
