@@ -29,6 +29,23 @@ pub enum Command {
     Sheet(Box<SheetArgs>),
     /// List, preview and import palettes.
     Palettes(PalettesArgs),
+    /// Explore interactively (egui window; wgpu renderer).
+    View(ViewArgs),
+}
+
+/// `deepfield view`.
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Scene to open: TOML, .kfr, or a PNG/EXR written by deepfield (default: the last
+    /// session's scene, or the whole Mandelbrot set).
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+    /// Once the render is complete, save a screenshot of the whole window here and exit.
+    #[arg(long, value_name = "FILE")]
+    pub screenshot: Option<PathBuf>,
+    /// Window size (inner, in points).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
 }
 
 /// `deepfield recolor`.

@@ -13,6 +13,7 @@ mod recolor;
 mod render;
 mod scene;
 mod sheet;
+mod view;
 
 use std::process::ExitCode;
 
@@ -50,6 +51,7 @@ pub fn main() -> ExitCode {
         args::Command::Recolor(r) => recolor::run(*r),
         args::Command::Sheet(s) => sheet::run(*s),
         args::Command::Palettes(p) => palettes::run(p),
+        args::Command::View(v) => view::run(v),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

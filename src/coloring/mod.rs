@@ -164,6 +164,34 @@ impl Coloring {
         }
     }
 
+    /// The palette the colouring uses, if it has one.
+    pub fn palette(&self) -> Option<&Palette> {
+        match self {
+            Coloring::Smooth { palette, .. }
+            | Coloring::Histogram { palette, .. }
+            | Coloring::Angle { palette, .. }
+            | Coloring::Stripe { palette, .. }
+            | Coloring::TrapDistance { palette, .. }
+            | Coloring::Interior { fill: InteriorFill::Trap { palette, .. } } => Some(palette),
+            Coloring::Distance { palette, .. } => palette.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The palette the colouring uses, for replacing (the viewer's palette editor).
+    pub fn palette_mut(&mut self) -> Option<&mut Palette> {
+        match self {
+            Coloring::Smooth { palette, .. }
+            | Coloring::Histogram { palette, .. }
+            | Coloring::Angle { palette, .. }
+            | Coloring::Stripe { palette, .. }
+            | Coloring::TrapDistance { palette, .. }
+            | Coloring::Interior { fill: InteriorFill::Trap { palette, .. } } => Some(palette),
+            Coloring::Distance { palette, .. } => palette.as_mut(),
+            _ => None,
+        }
+    }
+
     /// True when the colouring reads image-wide data from a [`Context`].
     pub fn is_global(&self) -> bool {
         matches!(self, Coloring::Histogram { .. })

@@ -16,8 +16,8 @@ pub use atomic::AtomicFile;
 pub use bitmap::load_bitmap;
 pub use exr::{ExrEncoder, ExrLayout, ExrWriter, read_exr_scene};
 pub use exr_read::{RawData, TrapKind, read_exr_planes};
-pub use scene_source::{SceneSource, read_scene_source};
 pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene, write_png_rgb8};
+pub use scene_source::{SceneSource, read_scene_source};
 
 /// An I/O failure with the path it concerns.
 #[derive(Debug, thiserror::Error)]

@@ -9,3 +9,4 @@ mod golden;
 mod import;
 mod reference;
 mod util;
+mod viewer;

@@ -1,0 +1,23 @@
+//! `deepfield view`: opens the explorer window (the library's `viewer` module).
+
+use anyhow::anyhow;
+use deepfield::viewer::{self, ViewerError, ViewerOptions};
+
+use super::Failure;
+use super::args::ViewArgs;
+
+/// Runs `deepfield view`.
+pub fn run(args: ViewArgs) -> Result<(), Failure> {
+    if let Some(p) = &args.scene
+        && !p.exists()
+    {
+        return Err(Failure::Input(anyhow!("{}: no such scene file", p.display())));
+    }
+    let options = ViewerOptions { scene: args.scene, screenshot: args.screenshot, inline: false };
+    let size = args.size.map(|(w, h)| [w as f32, h as f32]);
+    match viewer::run(options, size) {
+        Ok(()) => Ok(()),
+        Err(ViewerError::Scene(e)) => Err(Failure::Input(anyhow!(e))),
+        Err(e) => Err(Failure::Runtime(anyhow!(e))),
+    }
+}

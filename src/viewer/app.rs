@@ -1,0 +1,1049 @@
+//! The explorer window: image, navigation, panels, progressive rendering, recolouring,
+//! Julia preview, export and headless screenshots.
+//!
+//! The raw scene file is the source of truth for everything but the view, which lives in
+//! [`Nav`] (exact decimal centre, zoom) with its history. Any change re-validates the scene;
+//! a change that only touches colouring (palettes, layers whose planes are already computed)
+//! recolours the last raw planes instead of rendering, so it costs milliseconds. While a new
+//! view renders, the last image is drawn where it belongs in the new view, so there is never
+//! a blank frame.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use eframe::egui::{self, Color32, ColorImage, Key, PointerButton, Pos2, Rect, Sense, TextureHandle, Vec2};
+use toml::Spanned;
+
+use super::export::{Export, ExportRequest};
+use super::nav::{History, Nav};
+use super::palette_editor::PaletteEditor;
+use super::worker::{Job, Report, Worker};
+use crate::field::{Needs, Planes};
+use crate::palette::{self, Palette};
+use crate::render;
+use crate::scene::raw::{LayerRaw, cli};
+use crate::scene::{LAYER_KINDS, Scene, SceneFile};
+
+/// How the image area shows the fractal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum ViewMode {
+    /// The CPU render (f64 or perturbation, as the engine choice says).
+    Cpu,
+    /// The GPU f32 shader, drawn by an egui paint callback.
+    GpuF32,
+    /// The GPU double-float shader.
+    GpuDf,
+    /// CPU left half, GPU (f32) right half.
+    SideBySide,
+    /// Per-pixel difference between the CPU image and the GPU image.
+    Difference,
+}
+
+/// What the viewer starts with.
+#[derive(Debug, Clone, Default)]
+pub struct ViewerOptions {
+    /// A scene file (TOML, .kfr, or a PNG/EXR written by deepfield).
+    pub scene: Option<PathBuf>,
+    /// Save a screenshot of the whole window here once the render is complete, then exit.
+    pub screenshot: Option<PathBuf>,
+    /// Render inline when polled (tests): no background thread.
+    pub inline: bool,
+}
+
+/// Counters a test (or the curious) can read.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Passes rendered.
+    pub renders: u64,
+    /// Recolours from raw planes.
+    pub recolours: u64,
+    /// Julia previews rendered.
+    pub julia_previews: u64,
+}
+
+/// State saved between runs.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Saved {
+    scene: String,
+    nav: Nav,
+    export_path: String,
+    scene_path: String,
+}
+
+/// The application.
+pub struct ViewerApp {
+    file: SceneFile,
+    origin: String,
+    base_dir: PathBuf,
+    /// The current view.
+    pub nav: Nav,
+    /// Back/forward history.
+    pub history: History,
+    scene: Option<Scene>,
+    error: Option<String>,
+    worker: Worker,
+    julia_worker: Worker,
+    image: Option<(TextureHandle, Nav, [u32; 2])>,
+    planes: Option<(Vec<Planes>, Scene)>,
+    overrides: BTreeMap<usize, Palette>,
+    selected_layer: usize,
+    editor: PaletteEditor,
+    /// How the image is shown.
+    pub mode: ViewMode,
+    size_px: [u32; 2],
+    job: u64,
+    progress: (u64, u64),
+    last_seconds: f64,
+    engine: String,
+    julia: Option<(TextureHandle, [f64; 2])>,
+    julia_wanted: Option<[f64; 2]>,
+    julia_asked: Option<[f64; 2]>,
+    box_start: Option<Pos2>,
+    recolours: u64,
+    julia_previews: u64,
+    export: Export,
+    scene_path: String,
+    screenshot: Option<PathBuf>,
+    screenshot_state: Arc<AtomicU64>,
+    started: Instant,
+    needs_render: bool,
+    image_rect: Rect,
+    last_wheel: Option<Instant>,
+}
+
+impl ViewerApp {
+    /// A viewer on the scene of `options` (or the last session's, or the default).
+    pub fn new(cc: &eframe::CreationContext<'_>, options: ViewerOptions) -> Result<Self, String> {
+        let saved: Option<Saved> = cc.storage.and_then(|s| eframe::get_value(s, "deepfield"));
+        let ctx = cc.egui_ctx.clone();
+        let worker = if options.inline {
+            Worker::inline()
+        } else {
+            let c = ctx.clone();
+            Worker::spawn(Arc::new(move || c.request_repaint()))
+        };
+        let julia_worker =
+            if options.inline { Worker::inline() } else { Worker::spawn(Arc::new(move || ctx.request_repaint())) };
+        let (origin, text, base_dir, nav) = match (&options.scene, &saved) {
+            (Some(path), _) => {
+                let s = crate::io::read_scene_source(path).map_err(|e| e.to_string())?;
+                (s.origin, s.text, s.base_dir, None)
+            }
+            (None, Some(saved)) => {
+                ("last session".to_string(), saved.scene.clone(), PathBuf::from("."), Some(saved.nav.clone()))
+            }
+            (None, None) => ("default".to_string(), "version = 1\n".to_string(), PathBuf::from("."), None),
+        };
+        let file = Scene::parse_file(&origin, &text).map_err(|e| e.to_string())?;
+        let nav = nav.unwrap_or_else(|| nav_of(&file));
+        let mut app = Self {
+            file,
+            origin,
+            base_dir,
+            nav,
+            history: History::default(),
+            scene: None,
+            error: None,
+            worker,
+            julia_worker,
+            image: None,
+            planes: None,
+            overrides: BTreeMap::new(),
+            selected_layer: 0,
+            editor: PaletteEditor::default(),
+            mode: ViewMode::Cpu,
+            size_px: [0, 0],
+            job: 0,
+            progress: (0, 0),
+            last_seconds: 0.0,
+            engine: String::new(),
+            julia: None,
+            julia_wanted: None,
+            julia_asked: None,
+            box_start: None,
+            recolours: 0,
+            julia_previews: 0,
+            export: Export::new(saved.as_ref().map(|s| s.export_path.clone())),
+            scene_path: saved.as_ref().map_or_else(|| "scene.toml".into(), |s| s.scene_path.clone()),
+            screenshot: options.screenshot,
+            screenshot_state: Arc::new(AtomicU64::new(0)),
+            started: Instant::now(),
+            needs_render: true,
+            image_rect: Rect::NOTHING,
+            last_wheel: None,
+        };
+        if app.file.layers.is_empty() {
+            app.file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
+        }
+        // Deep views work in the viewer as in `render`; the GPU paint path needs a wgpu
+        // render state (eframe's wgpu renderer provides it).
+        if let Some(rs) = cc.wgpu_render_state.as_ref() {
+            crate::gpu::paint::register(rs);
+        }
+        Ok(app)
+    }
+
+    /// The image area (points), as last laid out.
+    pub fn image_rect(&self) -> Rect {
+        self.image_rect
+    }
+
+    /// The image area's size in physical pixels (the render size).
+    pub fn image_size_px(&self) -> [u32; 2] {
+        self.size_px
+    }
+
+    /// Renders, recolours and previews done so far.
+    pub fn counters(&self) -> Counters {
+        Counters {
+            renders: self.worker.renders.load(Ordering::Relaxed),
+            recolours: self.recolours,
+            julia_previews: self.julia_previews,
+        }
+    }
+
+    /// The Julia parameter of the scene, if it is a Julia scene.
+    pub fn julia_c(&self) -> Option<[String; 2]> {
+        (self.file.formula.kind.get_ref() == "julia")
+            .then(|| self.file.formula.c.as_ref().map(|c| c.get_ref().clone()))?
+    }
+
+    /// The palette of layer `k` (the editor's copy when it has one).
+    pub fn layer_palette(&self, k: usize) -> Option<String> {
+        self.overrides
+            .get(&k)
+            .map(|p| p.name.clone())
+            .or_else(|| self.file.layers.get(k)?.get_ref().palette.as_ref().map(|p| p.get_ref().clone()))
+    }
+
+    /// Sets the palette of every layer that takes one (as `--palette` does).
+    pub fn set_palette(&mut self, name: &str) {
+        for (k, l) in self.file.layers.iter_mut().enumerate() {
+            let l = l.get_mut();
+            if matches!(l.kind.get_ref().as_str(), "smooth" | "histogram" | "angle" | "stripe" | "trap")
+                || l.palette.is_some()
+            {
+                l.palette = Some(cli(name.to_string()));
+                self.overrides.remove(&k);
+            }
+        }
+        self.changed();
+    }
+
+    /// Opens the Julia set of `c` (decimal strings) as the main view.
+    pub fn open_julia(&mut self, c: [String; 2]) {
+        self.history.push(self.nav.clone());
+        self.file.formula.kind = cli("julia".into());
+        self.file.formula.c = Some(cli(c));
+        self.nav = Nav { center: ["0".into(), "0".into()], log10_zoom: 1.3f64.log10() };
+        self.changed();
+    }
+
+    /// Goes to `nav`, recording the current view in the history.
+    pub fn go(&mut self, nav: Nav) {
+        if nav != self.nav {
+            self.history.push(self.nav.clone());
+            self.nav = nav;
+            self.needs_render = true;
+        }
+    }
+
+    /// Back in the history.
+    pub fn back(&mut self) {
+        if let Some(n) = self.history.back(self.nav.clone()) {
+            self.nav = n;
+            self.needs_render = true;
+        }
+    }
+
+    /// Forward in the history.
+    pub fn forward(&mut self) {
+        if let Some(n) = self.history.forward(self.nav.clone()) {
+            self.nav = n;
+            self.needs_render = true;
+        }
+    }
+
+    fn changed(&mut self) {
+        self.needs_render = true;
+    }
+
+    /// The scene for the current view at the image area's size.
+    fn scene_for_view(&self) -> Result<Scene, String> {
+        let mut file = self.file.clone();
+        file.view.center = cli(self.nav.center.clone());
+        file.view.zoom = Some(cli(self.nav.zoom_text()));
+        file.view.radius = None;
+        file.view.width = cli(self.size_px[0].max(1) as i64);
+        file.view.height = cli(self.size_px[1].max(1) as i64);
+        let text = toml::to_string(&file).map_err(|e| e.to_string())?;
+        let mut scene = Scene::validate(file, &self.origin, &text, &self.base_dir, &crate::io::load_bitmap)
+            .map_err(|e| e.to_string())?;
+        for (k, p) in &self.overrides {
+            if let Some(layer) = scene.stack.layers.get_mut(*k)
+                && let Some(slot) = layer.coloring.palette_mut()
+            {
+                *slot = p.clone();
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Starts a render of the current view, or recolours when only colouring changed.
+    fn update_render(&mut self) {
+        if !self.needs_render || self.size_px[0] == 0 {
+            return;
+        }
+        self.needs_render = false;
+        let scene = match self.scene_for_view() {
+            Ok(s) => s,
+            Err(e) => {
+                self.error = Some(e);
+                return;
+            }
+        };
+        self.error = None;
+        if let Some((strips, old)) = &self.planes
+            && recolourable(old, &scene)
+            && self.image.as_ref().is_some_and(|(_, n, _)| *n == self.nav)
+        {
+            let rgb8 = render::recolor_rgb8(&scene.stack, strips, old.aa).concat();
+            let (w, h) = (old.width as usize, old.height as usize);
+            if let Some((tex, _, _)) = &mut self.image {
+                tex.set(ColorImage::from_rgb([w, h], &rgb8), egui::TextureOptions::LINEAR);
+            }
+            self.recolours += 1;
+            let strips = strips.clone();
+            self.planes = Some((strips, scene.clone()));
+            self.scene = Some(scene);
+            return;
+        }
+        let passes = if scene.width * scene.height > 64 * 64 { vec![8, 2, 1] } else { vec![1] };
+        self.job = self.worker.submit(Job { scene: scene.clone(), nav: self.nav.clone(), passes });
+        self.progress = (0, scene.height as u64);
+        self.scene = Some(scene);
+    }
+
+    fn poll(&mut self, ctx: &egui::Context) {
+        for r in self.worker.poll() {
+            match r {
+                Report::Pass(p) if p.id == self.job => {
+                    let image = ColorImage::from_rgb([p.width as usize, p.height as usize], &p.rgb8);
+                    match &mut self.image {
+                        Some((tex, nav, size)) => {
+                            tex.set(image, egui::TextureOptions::LINEAR);
+                            *nav = p.nav.clone();
+                            *size = [p.width, p.height];
+                        }
+                        None => {
+                            let tex = ctx.load_texture("deepfield-image", image, egui::TextureOptions::LINEAR);
+                            self.image = Some((tex, p.nav.clone(), [p.width, p.height]));
+                        }
+                    }
+                    if p.last {
+                        self.planes = p.planes;
+                        self.progress = (self.progress.1, self.progress.1);
+                    }
+                    self.last_seconds = p.seconds;
+                    self.engine = p.engine;
+                }
+                Report::Progress { id, rows, total } if id == self.job => self.progress = (rows, total),
+                Report::Failed { id, message } if id == self.job => self.error = Some(message),
+                _ => {}
+            }
+        }
+        for r in self.julia_worker.poll() {
+            if let Report::Pass(p) = r {
+                let image = ColorImage::from_rgb([p.width as usize, p.height as usize], &p.rgb8);
+                let c = self.julia_asked.unwrap_or_default();
+                match &mut self.julia {
+                    Some((tex, at)) => {
+                        tex.set(image, egui::TextureOptions::LINEAR);
+                        *at = c;
+                    }
+                    None => {
+                        self.julia = Some((ctx.load_texture("deepfield-julia", image, egui::TextureOptions::LINEAR), c))
+                    }
+                }
+                self.julia_previews += 1;
+            }
+        }
+    }
+
+    /// Whether the last render is complete (no job in flight).
+    pub fn idle(&self) -> bool {
+        !self.needs_render && self.progress.0 >= self.progress.1 && self.planes.is_some()
+    }
+
+    fn request_julia(&mut self) {
+        let Some(c) = self.julia_wanted.take() else { return };
+        if self.julia_asked == Some(c) {
+            return;
+        }
+        let mut file = self.file.clone();
+        file.formula.kind = cli("julia".into());
+        file.formula.c = Some(cli([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]));
+        file.view = Default::default();
+        file.view.center = cli(["0".into(), "0".into()]);
+        file.view.zoom = Some(cli("1.3".into()));
+        file.view.width = cli(200);
+        file.view.height = cli(150);
+        file.render.aa = cli(1);
+        file.render.engine = cli("auto".into());
+        file.iteration.max = cli((*file.iteration.max.get_ref()).min(500));
+        let Ok(text) = toml::to_string(&file) else { return };
+        if let Ok(scene) = Scene::validate(file, "julia preview", &text, &self.base_dir, &crate::io::load_bitmap) {
+            self.julia_asked = Some(c);
+            self.julia_worker.submit(Job { scene, nav: Nav::home(), passes: vec![1] });
+        }
+    }
+}
+
+/// The view of a scene file.
+fn nav_of(file: &SceneFile) -> Nav {
+    let zoom = match (&file.view.zoom, &file.view.radius) {
+        (Some(z), _) => crate::num::Decimal::parse(z.get_ref()).map(|d| d.log10_abs()).unwrap_or(0.0),
+        (None, Some(r)) => crate::num::Decimal::parse(r.get_ref()).map(|d| 2f64.log10() - d.log10_abs()).unwrap_or(0.0),
+        (None, None) => 1.6f64.log10(),
+    };
+    Nav { center: file.view.center.get_ref().clone(), log10_zoom: zoom }
+}
+
+/// True when `new` differs from `old` only in colouring that `old`'s planes can serve.
+fn recolourable(old: &Scene, new: &Scene) -> bool {
+    let mut a = old.file.clone();
+    let mut b = new.file.clone();
+    a.layers.clear();
+    b.layers.clear();
+    a.render.background = cli(String::new());
+    b.render.background = cli(String::new());
+    a.render.cycle = None;
+    b.render.cycle = None;
+    if toml::to_string(&a).ok() != toml::to_string(&b).ok() || old.aa != new.aa {
+        return false;
+    }
+    let have: Needs = old.stack.needs(&old.traps);
+    let want: Needs = new.stack.needs(&new.traps);
+    let traps_same = format!("{:?}", old.traps) == format!("{:?}", new.traps) || new.traps.is_empty();
+    (have.nf || !want.nf) && (have.t || !want.t) && (have.de || !want.de) && traps_same
+}
+
+impl eframe::App for ViewerApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.poll(&ctx);
+        self.dropped_files(&ctx);
+        self.keys(&ctx);
+        egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::left("controls").resizable(true).default_size(280.0).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+        });
+        egui::CentralPanel::default().show(ui, |ui| self.image_area(ui));
+        self.update_render();
+        self.request_julia();
+        self.export.poll();
+        if self.export.running() || !self.idle() {
+            ctx.request_repaint();
+        }
+        self.screenshot_step(&ctx);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        let mut file = self.file.clone();
+        file.view.center = cli(self.nav.center.clone());
+        file.view.zoom = Some(cli(self.nav.zoom_text()));
+        file.view.radius = None;
+        if let Ok(scene) = toml::to_string(&file) {
+            let saved = Saved {
+                scene,
+                nav: self.nav.clone(),
+                export_path: self.export.path.clone(),
+                scene_path: self.scene_path.clone(),
+            };
+            eframe::set_value(storage, "deepfield", &saved);
+        }
+    }
+}
+
+impl ViewerApp {
+    fn toolbar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let (b, f) = self.history.lens();
+            if ui.add_enabled(b > 0, egui::Button::new("< Back")).on_hover_text("Backspace").clicked() {
+                self.back();
+            }
+            if ui.add_enabled(f > 0, egui::Button::new("Forward >")).clicked() {
+                self.forward();
+            }
+            if ui.button("Home").on_hover_text("Home: the whole set").clicked() {
+                self.go(Nav::home());
+            }
+            ui.separator();
+            ui.label("Show:");
+            for (m, name) in [
+                (ViewMode::Cpu, "CPU"),
+                (ViewMode::GpuF32, "GPU f32"),
+                (ViewMode::GpuDf, "GPU double-float"),
+                (ViewMode::SideBySide, "CPU | GPU"),
+                (ViewMode::Difference, "Difference"),
+            ] {
+                ui.selectable_value(&mut self.mode, m, name);
+            }
+        });
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let short = |t: &String| if t.len() > 24 { format!("{}…", &t[..24]) } else { t.clone() };
+            ui.label(format!(
+                "centre {} {:+}i",
+                short(&self.nav.center[0]),
+                short(&self.nav.center[1]).trim_start_matches('+')
+            ));
+            ui.separator();
+            ui.label(format!("zoom {}", fmt_zoom(self.nav.log10_zoom)));
+            ui.separator();
+            ui.label(format!("max iter {}", self.file.iteration.max.get_ref()));
+            ui.separator();
+            ui.label(format!("engine {}", if self.engine.is_empty() { "-" } else { &self.engine }));
+            ui.separator();
+            let (done, total) = self.progress;
+            if done < total {
+                ui.add(
+                    egui::ProgressBar::new(done as f32 / total.max(1) as f32).desired_width(120.0).show_percentage(),
+                );
+            } else {
+                ui.label(format!("{:.2} s", self.last_seconds));
+            }
+            if let Some(warning) = self.gpu_warning() {
+                ui.separator();
+                ui.colored_label(Color32::from_rgb(255, 170, 40), warning);
+            }
+            if let Some(e) = &self.error {
+                ui.separator();
+                ui.colored_label(Color32::from_rgb(255, 90, 90), e);
+            }
+        });
+    }
+
+    /// A warning when the GPU mode shown cannot resolve the current depth.
+    fn gpu_warning(&self) -> Option<String> {
+        let precision = match self.mode {
+            ViewMode::Cpu => return None,
+            ViewMode::GpuDf => crate::gpu::Precision::DoubleFloat,
+            _ => crate::gpu::Precision::F32,
+        };
+        let spacing = self.nav.spacing(self.size_px[1].max(1) as f64);
+        let c = self.nav.point_at([0.0, 0.0], 1.0);
+        precision
+            .exhausted(spacing, c)
+            .then(|| format!("GPU {precision:?} precision exhausted at this depth: pixels are wrong"))
+    }
+
+    fn controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Formula");
+        let mut julia = self.file.formula.kind.get_ref() == "julia";
+        ui.horizontal(|ui| {
+            let m = ui.radio_value(&mut julia, false, "Mandelbrot").changed();
+            let j = ui.radio_value(&mut julia, true, "Julia").changed();
+            if m || j {
+                self.file.formula.kind = cli(if julia { "julia" } else { "mandelbrot" }.into());
+                if julia && self.file.formula.c.is_none() {
+                    self.file.formula.c = Some(cli(["-0.8".into(), "0.156".into()]));
+                }
+                if !julia {
+                    self.file.formula.c = None;
+                }
+                self.changed();
+            }
+        });
+        if let Some(c) = &mut self.file.formula.c {
+            let mut v = c.get_ref().clone();
+            let field = |ui: &mut egui::Ui, name: &str, text: &mut String| {
+                let label = ui.label(name);
+                ui.text_edit_singleline(text).labelled_by(label.id)
+            };
+            let a = ui.horizontal(|ui| field(ui, "c re", &mut v[0])).inner;
+            let b = ui.horizontal(|ui| field(ui, "c im", &mut v[1])).inner;
+            if a.changed() || b.changed() {
+                *c = cli(v);
+                self.needs_render = true;
+            }
+        }
+        let mut max = *self.file.iteration.max.get_ref();
+        let edited = ui
+            .horizontal(|ui| {
+                let label = ui.label("max iterations");
+                ui.add(egui::DragValue::new(&mut max).range(1..=100_000_000).speed(10.0)).labelled_by(label.id)
+            })
+            .inner;
+        if edited.changed() {
+            self.file.iteration.max = cli(max);
+            self.changed();
+        }
+        ui.separator();
+        ui.heading("Layers");
+        let mut remove = None;
+        let mut changed = false;
+        let names = palette::builtin_names();
+        for k in 0..self.file.layers.len() {
+            let selected = self.selected_layer == k;
+            let l = self.file.layers[k].get_mut();
+            ui.horizontal(|ui| {
+                if ui.selectable_label(selected, format!("{k}: {}", l.kind.get_ref())).clicked() {
+                    self.selected_layer = k;
+                }
+                if ui.small_button("x").on_hover_text("remove this layer").clicked() {
+                    remove = Some(k);
+                }
+            });
+            if let Some(p) = &mut l.palette {
+                let mut name = p.get_ref().clone();
+                egui::ComboBox::new(("palette", k), "palette")
+                    .selected_text(self.overrides.get(&k).map_or(name.clone(), |o| format!("{} (edited)", o.name)))
+                    .show_ui(ui, |ui| {
+                        for n in &names {
+                            if ui.selectable_value(&mut name, n.to_string(), *n).clicked() {
+                                *p = cli(name.clone());
+                                self.overrides.remove(&k);
+                                changed = true;
+                            }
+                        }
+                    });
+            }
+            let mut density = l.density.as_ref().map(|d| *d.get_ref());
+            if let Some(d) = &mut density
+                && ui.add(egui::Slider::new(d, 0.001..=10.0).logarithmic(true).text("density")).changed()
+            {
+                l.density = Some(cli(*d));
+                changed = true;
+            }
+            let mut opacity = l.opacity.as_ref().map_or(1.0, |o| *o.get_ref());
+            if k > 0 && ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0).text("opacity")).changed() {
+                l.opacity = Some(cli(opacity));
+                changed = true;
+            }
+        }
+        if let Some(k) = remove
+            && self.file.layers.len() > 1
+        {
+            self.file.layers.remove(k);
+            self.overrides = std::mem::take(&mut self.overrides)
+                .into_iter()
+                .filter(|(i, _)| *i != k)
+                .map(|(i, p)| (if i > k { i - 1 } else { i }, p))
+                .collect();
+            self.selected_layer = 0;
+            changed = true;
+        }
+        ui.horizontal(|ui| {
+            egui::ComboBox::new("add-layer", "add a layer").selected_text("kind…").show_ui(ui, |ui| {
+                for (kind, _) in LAYER_KINDS {
+                    if matches!(kind, "bitmap") {
+                        continue;
+                    }
+                    if ui.selectable_label(false, kind).clicked() {
+                        let mut l = LayerRaw::of_kind(kind);
+                        if !self.file.layers.is_empty() && kind != "interior" {
+                            l.blend = Some(cli(crate::compose::BlendMode::Multiply));
+                        }
+                        if matches!(kind, "smooth" | "histogram" | "angle" | "stripe") {
+                            l.palette = Some(cli("classic".into()));
+                            l.density = Some(cli(if kind == "smooth" { 0.05 } else { 1.0 }));
+                        }
+                        self.file.layers.push(Spanned::new(0..0, l));
+                        changed = true;
+                    }
+                }
+            });
+        });
+        if changed {
+            self.changed();
+        }
+        ui.separator();
+        ui.heading("Palette editor");
+        let current = self
+            .scene
+            .as_ref()
+            .and_then(|s| s.stack.layers.get(self.selected_layer))
+            .and_then(|l| l.coloring.palette().cloned());
+        match current {
+            Some(p) => {
+                if let Some(edited) = self.editor.show(ui, &p) {
+                    self.overrides.insert(self.selected_layer, edited);
+                    self.changed();
+                }
+            }
+            None => {
+                ui.label("(the selected layer has no palette)");
+            }
+        }
+        ui.label(
+            "Drop a palette file (.map .ggr .ugr .kfp .cpt .toml) to use it here; drop a scene or image to open it.",
+        );
+        ui.separator();
+        ui.heading("Save and export");
+        ui.horizontal(|ui| {
+            let label = ui.label("scene");
+            ui.text_edit_singleline(&mut self.scene_path).labelled_by(label.id);
+            if ui.button("Save scene").clicked() {
+                self.error = self.save_scene().err();
+            }
+        });
+        let request = self.export.show(ui);
+        if let Some(req) = request {
+            self.start_export(req);
+        }
+    }
+
+    fn save_scene(&self) -> Result<(), String> {
+        let path = PathBuf::from(&self.scene_path);
+        let mut file = self.file.clone();
+        file.view.center = cli(self.nav.center.clone());
+        file.view.zoom = Some(cli(self.nav.zoom_text()));
+        file.view.radius = None;
+        // Edited palettes are saved beside the scene and referred to by file name.
+        for (k, p) in &self.overrides {
+            let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+            let name = format!("{stem}-layer{k}.toml");
+            let dir = path.parent().unwrap_or(Path::new("."));
+            std::fs::write(dir.join(&name), palette::to_toml(p)).map_err(|e| format!("{name}: {e}"))?;
+            if let Some(l) = file.layers.get_mut(*k) {
+                l.get_mut().palette = Some(cli(name));
+            }
+        }
+        let text = toml::to_string(&file).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    fn start_export(&mut self, req: ExportRequest) {
+        match self.scene_for_view() {
+            Ok(scene) => self.export.start(scene, req),
+            Err(e) => self.error = Some(e),
+        }
+    }
+
+    fn dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect()
+        });
+        for path in dropped {
+            self.error = self.open_path(&path).err();
+        }
+    }
+
+    /// Opens a dropped or named file: a palette (for the selected layer) or a scene.
+    pub fn open_path(&mut self, path: &Path) -> Result<(), String> {
+        let is_palette_file = palette::import::Format::from_path(path).is_some()
+            || (path.extension().is_some_and(|e| e == "toml")
+                && std::fs::read_to_string(path).is_ok_and(|t| !t.contains("version") && t.contains("name")));
+        if is_palette_file {
+            let p = if palette::import::Format::from_path(path).is_some() {
+                palette::import::import_file(path).map_err(|e| e.to_string())?.remove(0)
+            } else {
+                palette::load(&path.display().to_string(), None).map_err(|e| e.to_string())?
+            };
+            self.overrides.insert(self.selected_layer, p);
+            self.changed();
+            return Ok(());
+        }
+        let s = crate::io::read_scene_source(path).map_err(|e| e.to_string())?;
+        let file = Scene::parse_file(&s.origin, &s.text).map_err(|e| e.to_string())?;
+        self.history.push(self.nav.clone());
+        self.nav = nav_of(&file);
+        self.file = file;
+        self.origin = s.origin;
+        self.base_dir = s.base_dir;
+        self.overrides.clear();
+        self.selected_layer = 0;
+        if self.file.layers.is_empty() {
+            self.file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
+        }
+        self.changed();
+        Ok(())
+    }
+
+    fn keys(&mut self, ctx: &egui::Context) {
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        let h = self.size_px[1].max(1) as f64;
+        let step = h * 0.1;
+        let (left, right, up, down, plus, minus, home, back) = ctx.input(|i| {
+            (
+                i.key_pressed(Key::ArrowLeft),
+                i.key_pressed(Key::ArrowRight),
+                i.key_pressed(Key::ArrowUp),
+                i.key_pressed(Key::ArrowDown),
+                i.key_pressed(Key::Plus) || i.key_pressed(Key::Equals),
+                i.key_pressed(Key::Minus),
+                i.key_pressed(Key::Home),
+                i.key_pressed(Key::Backspace),
+            )
+        });
+        let pans = [(left, -step, 0.0), (right, step, 0.0), (up, 0.0, -step), (down, 0.0, step)];
+        for (pressed, dx, dy) in pans {
+            if pressed {
+                let n = self.nav.pan(dx, dy, h);
+                self.go(n);
+            }
+        }
+        if plus {
+            let n = self.nav.zoom_about(2.0, [0.0, 0.0], h);
+            self.go(n);
+        }
+        if minus {
+            let n = self.nav.zoom_about(0.5, [0.0, 0.0], h);
+            self.go(n);
+        }
+        if home {
+            self.go(Nav::home());
+        }
+        if back {
+            self.back();
+        }
+    }
+
+    fn image_area(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
+        if size != self.size_px {
+            self.size_px = size;
+            self.needs_render = true;
+        }
+        self.image_rect = rect;
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let painter = ui.painter_at(rect);
+        painter.rect_filled(rect, 0.0, Color32::from_gray(12));
+        let h = self.size_px[1] as f64;
+        // Pointer position in physical pixels from the image centre (y down).
+        let to_px = |p: Pos2| [((p.x - rect.center().x) * ppp) as f64, ((p.y - rect.center().y) * ppp) as f64];
+        self.draw_image(ui, rect, ppp);
+
+        // Wheel: zoom about the cursor.
+        if let Some(pos) = response.hover_pos() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll.abs() > 0.0 {
+                // One history entry per wheel gesture (smoothed scrolling spans frames).
+                if self.last_wheel.is_none_or(|t| t.elapsed().as_secs_f64() > 0.4) {
+                    self.history.push(self.nav.clone());
+                }
+                self.last_wheel = Some(Instant::now());
+                let factor = 2f64.powf(scroll as f64 / 120.0);
+                self.nav = self.nav.zoom_about(factor, to_px(pos), h);
+                self.needs_render = true;
+            }
+            if self.file.formula.kind.get_ref() == "mandelbrot" {
+                self.julia_wanted = Some(self.nav.point_at(to_px(pos), h));
+            }
+        }
+        // Drag: pan (the image follows the pointer); right-drag or shift-drag: box zoom.
+        let boxing = ui.input(|i| i.modifiers.shift) || response.dragged_by(PointerButton::Secondary);
+        if response.drag_started() && boxing {
+            self.box_start = response.interact_pointer_pos();
+        }
+        if response.dragged() && self.box_start.is_none() {
+            let d = response.drag_delta();
+            if d != Vec2::ZERO {
+                if response.drag_started() {
+                    self.history.push(self.nav.clone());
+                }
+                self.nav = self.nav.pan(-(d.x * ppp) as f64, -(d.y * ppp) as f64, h);
+                self.needs_render = true;
+            }
+        }
+        if let (Some(a), Some(b)) = (self.box_start, response.interact_pointer_pos()) {
+            painter.rect_stroke(
+                Rect::from_two_pos(a, b),
+                0.0,
+                egui::Stroke::new(1.5, Color32::WHITE),
+                egui::StrokeKind::Middle,
+            );
+            if response.drag_stopped() {
+                let n = self.nav.zoom_box(to_px(a), to_px(b), self.size_px[0] as f64, h);
+                self.box_start = None;
+                self.go(n);
+            }
+        }
+        if !response.dragged() && !response.drag_stopped() {
+            self.box_start = None;
+        }
+        // Ctrl-click on a Mandelbrot view: open the Julia set of the point.
+        if response.clicked()
+            && ui.input(|i| i.modifiers.command || i.modifiers.ctrl)
+            && self.file.formula.kind.get_ref() == "mandelbrot"
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            let c = self.nav.point_at(to_px(pos), h);
+            self.open_julia([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]);
+        }
+        // Julia preview inset.
+        if let Some((tex, c)) = &self.julia
+            && self.file.formula.kind.get_ref() == "mandelbrot"
+        {
+            let inset = Rect::from_min_size(rect.right_bottom() - Vec2::new(210.0, 160.0), Vec2::new(200.0, 150.0));
+            painter.image(tex.id(), inset, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
+            painter.rect_stroke(inset, 0.0, egui::Stroke::new(1.0, Color32::from_gray(200)), egui::StrokeKind::Outside);
+            painter.text(
+                inset.left_top() + Vec2::new(4.0, 2.0),
+                egui::Align2::LEFT_TOP,
+                format!("Julia c = {:.5} {:+.5}i (ctrl-click)", c[0], c[1]),
+                egui::FontId::proportional(11.0),
+                Color32::WHITE,
+            );
+        }
+    }
+
+    /// Draws the last image where it belongs in the current view, or the GPU image.
+    fn draw_image(&mut self, ui: &mut egui::Ui, rect: Rect, ppp: f32) {
+        let painter = ui.painter_at(rect);
+        let gpu_rect = match self.mode {
+            ViewMode::Cpu => None,
+            ViewMode::GpuF32 | ViewMode::GpuDf | ViewMode::Difference => Some(rect),
+            ViewMode::SideBySide => Some(Rect::from_min_max(Pos2::new(rect.center().x, rect.min.y), rect.max)),
+        };
+        if let Some((tex, nav, size)) = &self.image {
+            // Where the image's own view lies in the current one.
+            let h = self.size_px[1].max(1) as f64;
+            let scale = 10f64.powf(self.nav.log10_zoom - nav.log10_zoom) as f32;
+            let off = self.nav.offset_of(nav);
+            let s = self.nav.spacing(h);
+            let centre = rect.center() + Vec2::new((off[0] / s) as f32 / ppp, -(off[1] / s) as f32 / ppp);
+            let img_size =
+                Vec2::new(size[0] as f32, size[1] as f32) * (self.size_px[1] as f32 / size[1].max(1) as f32) * scale
+                    / ppp;
+            let at = Rect::from_center_size(centre, img_size);
+            let clip = match gpu_rect {
+                Some(g) if self.mode == ViewMode::SideBySide => {
+                    Rect::from_min_max(rect.min, Pos2::new(g.min.x, rect.max.y))
+                }
+                _ => rect,
+            };
+            if self.mode != ViewMode::GpuF32 && self.mode != ViewMode::GpuDf {
+                ui.painter_at(clip).image(
+                    tex.id(),
+                    at,
+                    Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                    Color32::WHITE,
+                );
+            }
+        }
+        if let Some(g) = gpu_rect {
+            let params = self.gpu_params(g, ppp);
+            if let Some(params) = params {
+                ui.painter_at(g).add(crate::gpu::paint::paint_callback(g, params));
+            }
+            if self.mode == ViewMode::Difference {
+                painter.text(
+                    rect.left_top() + Vec2::new(6.0, 6.0),
+                    egui::Align2::LEFT_TOP,
+                    "difference: |CPU - GPU| is shown by the GPU pass against the CPU texture",
+                    egui::FontId::proportional(12.0),
+                    Color32::WHITE,
+                );
+            }
+        }
+    }
+
+    fn gpu_params(&self, rect: Rect, ppp: f32) -> Option<crate::gpu::paint::PaintParams> {
+        let scene = self.scene.as_ref()?;
+        let h = self.size_px[1].max(1) as f64;
+        let spacing = self.nav.spacing(h);
+        // The GPU half of a side-by-side view shows the right half of the same view.
+        let dx = (rect.center().x - (rect.min.x + rect.max.x) / 2.0) as f64;
+        let centre = self.nav.point_at([dx, 0.0], h);
+        let (palette, density, offset) = scene
+            .stack
+            .layers
+            .iter()
+            .find_map(|l| match &l.coloring {
+                crate::coloring::Coloring::Smooth { palette, density, offset, .. } => {
+                    Some((palette.clone(), *density, *offset))
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| {
+                (
+                    palette::builtin("classic").unwrap_or_else(|| {
+                        Palette::new("grey", palette::Space::Linear, palette::Mode::Repeat, Vec::new())
+                    }),
+                    0.05,
+                    0.0,
+                )
+            });
+        let distance_k = scene.stack.layers.iter().find_map(|l| match &l.coloring {
+            crate::coloring::Coloring::Distance { style: crate::coloring::DistanceStyle::Soft { k }, .. } => {
+                Some(*k as f32)
+            }
+            _ => None,
+        });
+        // One period of the layer's palette position (the palette's own density, offset and
+        // mode applied); the shader wraps position = nu * density + offset into it.
+        let lut: Vec<[f32; 4]> = (0..1024).map(|i| palette.at(i as f64 / 1024.0)).collect();
+        Some(crate::gpu::paint::PaintParams {
+            center: centre,
+            spacing,
+            size_px: [(rect.width() * ppp) as u32, (rect.height() * ppp) as u32],
+            julia: match &scene.family {
+                crate::scene::FamilySpec::Julia { c } => Some([c[0].to_f64(), c[1].to_f64()]),
+                crate::scene::FamilySpec::Mandelbrot => None,
+            },
+            max_iter: scene.max_iter,
+            escape_radius: scene.escape_radius,
+            precision: if self.mode == ViewMode::GpuDf {
+                crate::gpu::Precision::DoubleFloat
+            } else {
+                crate::gpu::Precision::F32
+            },
+            palette: lut,
+            density: density as f32,
+            offset: offset as f32,
+            distance_k,
+        })
+    }
+
+    fn screenshot_step(&mut self, ctx: &egui::Context) {
+        let Some(path) = self.screenshot.clone() else { return };
+        match self.screenshot_state.load(Ordering::Relaxed) {
+            // Wait for the final pass (and a couple of frames to draw it).
+            0 if self.idle() && self.started.elapsed().as_secs_f64() > 0.5 => {
+                self.screenshot_state.store(1, Ordering::Relaxed);
+                let state = self.screenshot_state.clone();
+                let c = ctx.clone();
+                ctx.request_screenshot(move |image| {
+                    let (w, h) = (image.size[0] as u32, image.size[1] as u32);
+                    let rgba: Vec<u8> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+                    let ok = image::save_buffer(&path, &rgba, w, h, image::ColorType::Rgba8).is_ok();
+                    state.store(if ok { 2 } else { 3 }, Ordering::Relaxed);
+                    c.request_repaint();
+                });
+            }
+            2 | 3 => ctx.send_viewport_cmd(egui::ViewportCommand::Close),
+            _ => ctx.request_repaint(),
+        }
+    }
+
+    /// True once a requested screenshot was written (or failed: false).
+    pub fn screenshot_written(&self) -> Option<bool> {
+        match self.screenshot_state.load(Ordering::Relaxed) {
+            2 => Some(true),
+            3 => Some(false),
+            _ => None,
+        }
+    }
+}
+
+/// Formats a zoom given as log10.
+fn fmt_zoom(log10: f64) -> String {
+    if log10.abs() < 6.0 {
+        format!("{:.3}", 10f64.powf(log10))
+    } else {
+        let e = log10.floor();
+        format!("{:.3}e{}", 10f64.powf(log10 - e), e)
+    }
+}

@@ -1,0 +1,199 @@
+//! Export from the viewer: PNG (and optionally EXR) at a chosen size and supersampling,
+//! through the same render path and writers as `deepfield render`, on a background thread
+//! with progress and cancel.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use eframe::egui;
+
+use crate::field::ChannelSet;
+use crate::io::{ExrLayout, ExrWriter, PngEncoder, PngWriter};
+use crate::render::{self, Options};
+use crate::scene::Scene;
+
+/// What the user asked for.
+#[derive(Debug, Clone)]
+pub struct ExportRequest {
+    /// PNG path.
+    pub png: PathBuf,
+    /// Optional EXR path.
+    pub exr: Option<PathBuf>,
+    /// Size in pixels.
+    pub size: [u32; 2],
+    /// Supersampling.
+    pub aa: u32,
+}
+
+/// The export panel's state and the running export.
+pub struct Export {
+    /// PNG path typed by the user.
+    pub path: String,
+    exr: bool,
+    size: [u32; 2],
+    aa: u32,
+    running: Option<Running>,
+    message: Option<String>,
+}
+
+struct Running {
+    cancel: Arc<AtomicBool>,
+    rows: Arc<AtomicU64>,
+    total: u64,
+    thread: JoinHandle<Result<f64, String>>,
+}
+
+impl Export {
+    /// An idle export panel (with the last session's path, if any).
+    pub fn new(path: Option<String>) -> Self {
+        Self {
+            path: path.unwrap_or_else(|| "deepfield-export.png".into()),
+            exr: false,
+            size: [1920, 1080],
+            aa: 2,
+            running: None,
+            message: None,
+        }
+    }
+
+    /// True while an export runs.
+    pub fn running(&self) -> bool {
+        self.running.is_some()
+    }
+
+    /// Draws the panel; returns a request when the user starts an export.
+    pub fn show(&mut self, ui: &mut egui::Ui) -> Option<ExportRequest> {
+        ui.horizontal(|ui| {
+            let label = ui.label("PNG");
+            ui.text_edit_singleline(&mut self.path).labelled_by(label.id);
+        });
+        ui.horizontal(|ui| {
+            ui.add(egui::DragValue::new(&mut self.size[0]).range(1..=65536).prefix("w "));
+            ui.add(egui::DragValue::new(&mut self.size[1]).range(1..=65536).prefix("h "));
+            ui.add(egui::DragValue::new(&mut self.aa).range(1..=8).prefix("aa "));
+            ui.checkbox(&mut self.exr, "EXR too");
+        });
+        let mut request = None;
+        match &self.running {
+            Some(r) => {
+                ui.horizontal(|ui| {
+                    let done = r.rows.load(Ordering::Relaxed);
+                    ui.add(egui::ProgressBar::new(done as f32 / r.total.max(1) as f32).show_percentage());
+                    if ui.button("Cancel").clicked() {
+                        r.cancel.store(true, Ordering::Relaxed);
+                    }
+                });
+            }
+            None => {
+                if ui.button("Export").clicked() {
+                    let png = PathBuf::from(&self.path);
+                    request = Some(ExportRequest {
+                        exr: self.exr.then(|| png.with_extension("exr")),
+                        png,
+                        size: self.size,
+                        aa: self.aa,
+                    });
+                }
+            }
+        }
+        if let Some(m) = &self.message {
+            ui.label(m);
+        }
+        request
+    }
+
+    /// Starts rendering `scene` (the current view) at the requested size.
+    pub fn start(&mut self, mut scene: Scene, req: ExportRequest) {
+        scene.width = req.size[0];
+        scene.height = req.size[1];
+        scene.aa = req.aa;
+        scene.file.view.width = crate::scene::raw::cli(req.size[0] as i64);
+        scene.file.view.height = crate::scene::raw::cli(req.size[1] as i64);
+        scene.file.render.aa = crate::scene::raw::cli(req.aa as i64);
+        let cancel = Arc::new(AtomicBool::new(false));
+        let rows = Arc::new(AtomicU64::new(0));
+        let (c, r) = (cancel.clone(), rows.clone());
+        let total = scene.height as u64;
+        let thread = std::thread::spawn(move || export(&scene, &req, &c, &r));
+        self.message = None;
+        self.running = Some(Running { cancel, rows, total, thread });
+    }
+
+    /// Collects a finished export.
+    pub fn poll(&mut self) {
+        if self.running.as_ref().is_some_and(|r| r.thread.is_finished())
+            && let Some(r) = self.running.take()
+        {
+            self.message = Some(match r.thread.join() {
+                Ok(Ok(s)) => format!("exported in {s:.2} s"),
+                Ok(Err(e)) => e,
+                Err(_) => "the export thread panicked".into(),
+            });
+        }
+    }
+}
+
+/// Renders and writes; the files appear only when complete (atomic writers).
+fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &AtomicU64) -> Result<f64, String> {
+    let toml = scene.to_toml();
+    let png = Mutex::new(Some(
+        PngWriter::create(&req.png, scene.width, scene.height, scene.png_bits, &toml).map_err(|e| e.to_string())?,
+    ));
+    let enc = PngEncoder::new(scene.png_bits);
+    let channels = if req.exr.is_some() { scene.channels } else { ChannelSet::default() };
+    let (exr, exr_enc) = match &req.exr {
+        Some(path) => {
+            let layout = ExrLayout::new(channels, &scene.traps);
+            let (w, e) = ExrWriter::create(
+                path,
+                scene.width * scene.aa,
+                scene.height * scene.aa,
+                layout,
+                &toml,
+                "viewer export",
+            )
+            .map_err(|e| e.to_string())?;
+            (Some(Mutex::new(w)), Some(e))
+        }
+        None => (None, None),
+    };
+    let aa = scene.aa as usize;
+    let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
+        let chunks = match &exr_enc {
+            Some(e) => Some(e.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref())?),
+            None => None,
+        };
+        Ok((enc.encode(&strip.rgb), chunks))
+    };
+    let progress = |p: render::Progress| {
+        if let render::Progress::Rows(r) = p {
+            rows.store(r, Ordering::Relaxed);
+        }
+    };
+    let stats = render::render(
+        scene,
+        Options { threads: 0, exr_channels: channels },
+        cancel,
+        &progress,
+        &prepare,
+        |_, (bytes, chunks)| {
+            if let Some(w) = png.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+                w.write_encoded(&bytes).map_err(|e| e.to_string())?;
+            }
+            if let (Some(w), Some(c)) = (&exr, chunks) {
+                w.lock().unwrap_or_else(|e| e.into_inner()).write(c)?;
+            }
+            Ok(())
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    if let Some(w) = png.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        w.finish().map_err(|e| e.to_string())?;
+    }
+    if let Some(w) = exr {
+        w.into_inner().unwrap_or_else(|e| e.into_inner()).finish().map_err(|e| e.to_string())?;
+    }
+    Ok(stats.wall_seconds)
+}

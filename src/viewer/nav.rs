@@ -1,0 +1,230 @@
+//! Navigation: the view as exact decimal centre and zoom, changed by pans, zooms about a
+//! point and box zooms, with back/forward history. Pure functions, so that "the point under
+//! the cursor stays fixed" is a property tested here rather than in pixels.
+//!
+//! Centres are decimal strings (as in scene files) updated with exact rational arithmetic
+//! (malachite), so navigation works at any depth; they are rounded to a few digits finer
+//! than the pixel spacing, which keeps them exact for rendering and short to store.
+
+use malachite_base::num::arithmetic::traits::{Pow, RoundToMultiple};
+use malachite_base::num::conversion::traits::FromSciString;
+use malachite_base::rounding_modes::RoundingMode;
+use malachite_q::Rational;
+
+/// A view: centre (decimal strings, [re, im]) and log10 of the zoom (the image height spans
+/// 4 / zoom).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Nav {
+    /// Centre, decimal strings.
+    pub center: [String; 2],
+    /// log10 of the zoom.
+    pub log10_zoom: f64,
+}
+
+impl Nav {
+    /// The whole Mandelbrot set.
+    pub fn home() -> Self {
+        Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10() }
+    }
+
+    /// Plane units per pixel for an image `height` pixels high.
+    pub fn spacing(&self, height: f64) -> f64 {
+        4.0 / height * 10f64.powf(-self.log10_zoom)
+    }
+
+    /// The zoom as a decimal string for a scene file.
+    pub fn zoom_text(&self) -> String {
+        let e = self.log10_zoom.floor();
+        let m = 10f64.powf(self.log10_zoom - e);
+        format!("{m:.6}e{e}")
+    }
+
+    /// Moves the centre by (dx, dy) pixels of an image `height` pixels high (x right, y down
+    /// on screen; the imaginary axis points up).
+    pub fn pan(&self, dx: f64, dy: f64, height: f64) -> Self {
+        let s = self.spacing(height);
+        self.shifted(dx * s, -dy * s, height)
+    }
+
+    /// Zooms by `factor` (> 1 zooms in) keeping the point `at` (pixels from the image centre,
+    /// y down) where it is on screen.
+    pub fn zoom_about(&self, factor: f64, at: [f64; 2], height: f64) -> Self {
+        let s = self.spacing(height);
+        let k = 1.0 - 1.0 / factor;
+        let mut out = self.shifted(at[0] * s * k, -at[1] * s * k, height);
+        out.log10_zoom += factor.log10();
+        out.round(height)
+    }
+
+    /// Zooms to the box between pixel positions `a` and `b` (from the image centre, y down)
+    /// of an image `width` x `height`: the box's centre becomes the centre and the box fits.
+    pub fn zoom_box(&self, a: [f64; 2], b: [f64; 2], width: f64, height: f64) -> Self {
+        let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let (bw, bh) = ((a[0] - b[0]).abs().max(1.0), (a[1] - b[1]).abs().max(1.0));
+        let factor = (width / bw).min(height / bh);
+        let mut out = self.pan(mid[0], mid[1], height);
+        out.log10_zoom += factor.log10();
+        out.round(height)
+    }
+
+    /// The plane offset of another view's centre from this one's (f64; for placing an old
+    /// image under a new view while the new one renders).
+    pub fn offset_of(&self, other: &Nav) -> [f64; 2] {
+        let d = |a: &String, b: &String| -> f64 { f64::rounding_from(&(rat(b) - rat(a))) };
+        [d(&self.center[0], &other.center[0]), d(&self.center[1], &other.center[1])]
+    }
+
+    /// The point of the plane at pixel `at` (from the image centre, y down), as f64.
+    pub fn point_at(&self, at: [f64; 2], height: f64) -> [f64; 2] {
+        let s = self.spacing(height);
+        let c = |t: &String| f64::rounding_from(&rat(t));
+        [c(&self.center[0]) + at[0] * s, c(&self.center[1]) - at[1] * s]
+    }
+
+    fn shifted(&self, dre: f64, dim: f64, height: f64) -> Self {
+        let add = |t: &String, d: f64| rat(t) + Rational::try_from(d).unwrap_or_default();
+        let out = Self {
+            center: [text(&add(&self.center[0], dre), 0), text(&add(&self.center[1], dim), 0)],
+            log10_zoom: self.log10_zoom,
+        };
+        out.round(height)
+    }
+
+    /// Rounds the centre to 1/1000 of the pixel spacing (in decimal digits).
+    fn round(&self, height: f64) -> Self {
+        let digits = (-(self.spacing(height) / 1000.0).log10()).ceil().max(1.0) as u64;
+        let r = |t: &String| text(&rat(t), digits);
+        Self { center: [r(&self.center[0]), r(&self.center[1])], log10_zoom: self.log10_zoom }
+    }
+}
+
+trait RoundingFrom {
+    fn rounding_from(r: &Rational) -> f64;
+}
+
+impl RoundingFrom for f64 {
+    fn rounding_from(r: &Rational) -> f64 {
+        use malachite_base::num::conversion::traits::RoundingFrom as RF;
+        <f64 as RF<&Rational>>::rounding_from(r, RoundingMode::Nearest).0
+    }
+}
+
+fn rat(t: &str) -> Rational {
+    let t = t.trim();
+    Rational::from_sci_string(t.strip_prefix('+').unwrap_or(t)).unwrap_or_default()
+}
+
+/// `r` as a decimal string rounded to `digits` digits after the point (0: 60 digits, for
+/// intermediate values that are rounded again), trailing zeros dropped.
+fn text(r: &Rational, digits: u64) -> String {
+    let digits = if digits == 0 { 60 } else { digits };
+    let scale = Rational::from(10u32).pow(digits);
+    let scaled = (r * &scale).round_to_multiple(Rational::from(1u32), RoundingMode::Nearest).0;
+    let int = malachite_base::num::conversion::traits::RoundingFrom::rounding_from(&scaled, RoundingMode::Exact).0;
+    let int: malachite_nz::integer::Integer = int;
+    let full = int.to_string();
+    let neg = full.starts_with('-');
+    let mut s = full.trim_start_matches('-').to_string();
+    while s.len() <= digits as usize {
+        s.insert(0, '0');
+    }
+    s.insert(s.len() - digits as usize, '.');
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if neg && s != "0" { format!("-{s}") } else { s }
+}
+
+/// Back/forward history of views.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct History {
+    back: Vec<Nav>,
+    forward: Vec<Nav>,
+}
+
+impl History {
+    /// Records `from` before moving to a new view (clears the forward list).
+    pub fn push(&mut self, from: Nav) {
+        if self.back.last() != Some(&from) {
+            self.back.push(from);
+        }
+        self.forward.clear();
+    }
+
+    /// The previous view, if any; `current` goes onto the forward list.
+    pub fn back(&mut self, current: Nav) -> Option<Nav> {
+        let prev = self.back.pop()?;
+        self.forward.push(current);
+        Some(prev)
+    }
+
+    /// The next view, if any; `current` goes onto the back list.
+    pub fn forward(&mut self, current: Nav) -> Option<Nav> {
+        let next = self.forward.pop()?;
+        self.back.push(current);
+        Some(next)
+    }
+
+    /// Views behind and ahead.
+    pub fn lens(&self) -> (usize, usize) {
+        (self.back.len(), self.forward.len())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zoom_about_keeps_the_point_under_the_cursor() {
+        let n = Nav { center: ["-0.75".into(), "0.1".into()], log10_zoom: 0.3 };
+        let at = [123.0, -45.0];
+        let before = n.point_at(at, 600.0);
+        for factor in [2.0, 0.5, 1.1, 10.0] {
+            let z = n.zoom_about(factor, at, 600.0);
+            let after = z.point_at(at, 600.0);
+            let s = z.spacing(600.0);
+            assert!((before[0] - after[0]).abs() < s * 0.01 && (before[1] - after[1]).abs() < s * 0.01, "{factor}");
+        }
+    }
+
+    #[test]
+    fn deep_pans_are_exact() {
+        let n = Nav {
+            center: ["-1.7400623825793399052208441670658".into(), "0.0281753397792110489924115211361".into()],
+            log10_zoom: 28.0,
+        };
+        let p = n.pan(100.0, 0.0, 1000.0).pan(-100.0, 0.0, 1000.0);
+        assert_eq!(p.center, n.center);
+        let q = n.pan(1.0, 0.0, 1000.0);
+        let d = n.offset_of(&q);
+        assert!((d[0] / n.spacing(1000.0) - 1.0).abs() < 1e-9, "{d:?}");
+        assert!(q.center[0].len() > 30);
+    }
+
+    #[test]
+    fn box_zoom_fits_the_box() {
+        let n = Nav::home();
+        let z = n.zoom_box([-100.0, -50.0], [100.0, 50.0], 800.0, 600.0);
+        // A 200 x 100 box in an 800 x 600 image: limited by width, 4x.
+        assert!((z.log10_zoom - n.log10_zoom - 4f64.log10()).abs() < 1e-12);
+        assert_eq!(z.center, n.center);
+    }
+
+    #[test]
+    fn history_goes_back_and_forward() {
+        let mut h = History::default();
+        let a = Nav::home();
+        let b = a.pan(10.0, 0.0, 600.0);
+        h.push(a.clone());
+        assert_eq!(h.back(b.clone()), Some(a.clone()));
+        assert_eq!(h.forward(a.clone()), Some(b));
+        assert_eq!(h.lens(), (1, 0));
+    }
+
+    #[test]
+    fn decimal_text() {
+        assert_eq!(text(&rat("-0.75"), 5), "-0.75");
+        assert_eq!(text(&rat("1e-3"), 2), "0");
+        assert_eq!(text(&rat("123.456"), 2), "123.46");
+        assert_eq!(text(&rat("-0.0001"), 3), "0");
+    }
+}

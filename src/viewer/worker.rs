@@ -1,0 +1,246 @@
+//! Background rendering for the viewer: progressive passes of a scene through the library's
+//! render path, on a thread of its own, cancelled as soon as a newer job arrives.
+//!
+//! A job is rendered coarse first (1/8 of the resolution, one sample per pixel: within
+//! ~100 ms for shallow views) and then finer, each pass replacing the last on screen; the
+//! final pass keeps its raw planes so colouring changes recolour without recomputing.
+//! In tests the worker runs inline ([`Worker::inline`]): jobs run when polled, so a test
+//! sees exactly which renders happened.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use crate::field::{ChannelSet, Planes};
+use crate::palette::color::linear_to_srgb8;
+use crate::render::{self, Options, RenderError};
+use crate::scene::Scene;
+
+use super::nav::Nav;
+
+/// Something to render.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The scene (its size is the final pass's).
+    pub scene: Scene,
+    /// The view it shows.
+    pub nav: Nav,
+    /// Resolution divisors of the passes, coarse to fine (the last is usually 1).
+    pub passes: Vec<u32>,
+}
+
+/// A finished pass.
+#[derive(Debug, Clone)]
+pub struct Pass {
+    /// The job's serial number.
+    pub id: u64,
+    /// The view it shows.
+    pub nav: Nav,
+    /// Pixels.
+    pub width: u32,
+    /// Pixels.
+    pub height: u32,
+    /// 8-bit sRGB, RGB.
+    pub rgb8: Vec<u8>,
+    /// This was the job's last pass.
+    pub last: bool,
+    /// Raw planes of the last pass (strips, sample raster) and the scene that made them.
+    pub planes: Option<(Vec<Planes>, Scene)>,
+    /// Seconds since the job started.
+    pub seconds: f64,
+    /// The engine that ran.
+    pub engine: String,
+}
+
+/// What the worker reports.
+#[derive(Debug, Clone)]
+pub enum Report {
+    /// A pass is done.
+    Pass(Box<Pass>),
+    /// Rows done in the current pass, of `total`.
+    Progress {
+        /// The job.
+        id: u64,
+        /// Rows done.
+        rows: u64,
+        /// Rows in the pass.
+        total: u64,
+    },
+    /// The job failed (a view no engine can address, ...).
+    Failed {
+        /// The job.
+        id: u64,
+        /// Why.
+        message: String,
+    },
+}
+
+type Wake = Arc<dyn Fn() + Send + Sync>;
+
+/// A render thread (or, for tests, an inline runner).
+pub struct Worker {
+    jobs: Option<Sender<(u64, Job)>>,
+    reports: Receiver<Report>,
+    report_tx: Sender<Report>,
+    cancel: Arc<Mutex<Arc<AtomicBool>>>,
+    next_id: u64,
+    pending: Option<(u64, Job)>,
+    inline: bool,
+    /// Renders started (passes), for tests and the status bar.
+    pub renders: Arc<AtomicU64>,
+}
+
+impl Worker {
+    /// A worker thread; `wake` is called after each report (to request a repaint).
+    pub fn spawn(wake: Wake) -> Self {
+        let (jobs, job_rx) = mpsc::channel::<(u64, Job)>();
+        let (report_tx, reports) = mpsc::channel();
+        let cancel = Arc::new(Mutex::new(Arc::new(AtomicBool::new(false))));
+        let renders = Arc::new(AtomicU64::new(0));
+        let (tx, flag, count) = (report_tx.clone(), cancel.clone(), renders.clone());
+        std::thread::Builder::new()
+            .name("deepfield-render".into())
+            .spawn(move || {
+                while let Ok(mut job) = job_rx.recv() {
+                    // Only the newest job matters.
+                    while let Ok(newer) = job_rx.try_recv() {
+                        job = newer;
+                    }
+                    let cancel = flag.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                    run_job(job.0, &job.1, &cancel, &count, &|r| {
+                        let _ = tx.send(r);
+                        wake();
+                    });
+                }
+            })
+            .expect("spawn the render thread");
+        Self { jobs: Some(jobs), reports, report_tx, cancel, next_id: 0, pending: None, inline: false, renders }
+    }
+
+    /// A worker that renders only when [`Worker::poll`] is called, on the caller's thread.
+    pub fn inline() -> Self {
+        let (report_tx, reports) = mpsc::channel();
+        Self {
+            jobs: None,
+            reports,
+            report_tx,
+            cancel: Arc::new(Mutex::new(Arc::new(AtomicBool::new(false)))),
+            next_id: 0,
+            pending: None,
+            inline: true,
+            renders: Arc::new(AtomicU64::new(0)),
+        }
+    }
+
+    /// Starts `job`, cancelling whatever is in flight; returns its serial number.
+    pub fn submit(&mut self, job: Job) -> u64 {
+        self.next_id += 1;
+        let id = self.next_id;
+        {
+            let mut flag = self.cancel.lock().unwrap_or_else(|e| e.into_inner());
+            flag.store(true, Ordering::Relaxed);
+            *flag = Arc::new(AtomicBool::new(false));
+        }
+        match &self.jobs {
+            Some(tx) => {
+                let _ = tx.send((id, job));
+            }
+            None => self.pending = Some((id, job)),
+        }
+        id
+    }
+
+    /// Cancels the job in flight.
+    pub fn cancel(&mut self) {
+        self.cancel.lock().unwrap_or_else(|e| e.into_inner()).store(true, Ordering::Relaxed);
+        self.pending = None;
+    }
+
+    /// Reports since the last poll (an inline worker first runs its pending job).
+    pub fn poll(&mut self) -> Vec<Report> {
+        if self.inline
+            && let Some((id, job)) = self.pending.take()
+        {
+            let cancel = Arc::new(AtomicBool::new(false));
+            let tx = self.report_tx.clone();
+            run_job(id, &job, &cancel, &self.renders, &|r| {
+                let _ = tx.send(r);
+            });
+        }
+        self.reports.try_iter().collect()
+    }
+}
+
+fn run_job(id: u64, job: &Job, cancel: &AtomicBool, renders: &AtomicU64, report: &(dyn Fn(Report) + Sync)) {
+    let start = Instant::now();
+    for (k, &div) in job.passes.iter().enumerate() {
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let last = k + 1 == job.passes.len();
+        let mut scene = job.scene.clone();
+        if div > 1 {
+            scene.width = (scene.width / div).max(1);
+            scene.height = (scene.height / div).max(1);
+            scene.aa = 1;
+        }
+        renders.fetch_add(1, Ordering::Relaxed);
+        match render_pass(id, &scene, last, cancel, report) {
+            Ok((rgb8, planes, engine)) => report(Report::Pass(Box::new(Pass {
+                id,
+                nav: job.nav.clone(),
+                width: scene.width,
+                height: scene.height,
+                rgb8,
+                last,
+                planes: planes.map(|p| (p, scene.clone())),
+                seconds: start.elapsed().as_secs_f64(),
+                engine,
+            }))),
+            Err(RenderError::Cancelled) => return,
+            Err(e) => {
+                report(Report::Failed { id, message: e.to_string() });
+                return;
+            }
+        }
+    }
+}
+
+type PassOutput = (Vec<u8>, Option<Vec<Planes>>, String);
+
+fn render_pass(
+    id: u64,
+    scene: &Scene,
+    keep_planes: bool,
+    cancel: &AtomicBool,
+    report: &(dyn Fn(Report) + Sync),
+) -> Result<PassOutput, RenderError> {
+    let rows = Mutex::new(Vec::new());
+    let planes = Mutex::new(Vec::new());
+    let total = scene.height as u64;
+    let progress = |p: render::Progress| {
+        if let render::Progress::Rows(r) = p {
+            report(Report::Progress { id, rows: r, total });
+        }
+    };
+    let prepare = |strip: &render::RenderedStrip| -> Result<Vec<u8>, String> {
+        Ok(strip.rgb.iter().flat_map(|p| p.map(linear_to_srgb8)).collect())
+    };
+    let stats = render::render(
+        scene,
+        Options { threads: 0, exr_channels: ChannelSet::default() },
+        cancel,
+        &progress,
+        &prepare,
+        |strip, bytes| {
+            rows.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(&bytes);
+            if keep_planes {
+                planes.lock().unwrap_or_else(|e| e.into_inner()).push(strip.planes);
+            }
+            Ok(())
+        },
+    )?;
+    let planes = planes.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok((rows.into_inner().unwrap_or_else(|e| e.into_inner()), keep_planes.then_some(planes), stats.engine))
+}

@@ -1,0 +1,220 @@
+//! The viewer, driven through egui_kittest on a software wgpu adapter (lavapipe): the
+//! interactions (zoom about the cursor, pan, history, recolouring instead of rendering,
+//! Julia pick), snapshot images of the main states, and a real window under Xvfb.
+//!
+//! The render worker runs inline in these tests, so each test knows exactly which renders
+//! happened. Snapshots: `UPDATE_SNAPSHOTS=1 cargo test viewer` rewrites
+//! `tests/snapshots/*.png`; the tolerance is in `tests/snapshots/tolerance.toml`.
+
+use std::path::{Path, PathBuf};
+
+use deepfield::viewer::{ViewerApp, ViewerOptions};
+use eframe::egui::{self, Event, Modifiers, MouseWheelUnit, PointerButton, Pos2, Vec2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, SnapshotOptions};
+
+use super::util::scratch;
+
+fn scene_file(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const SCENE: &str = "version = 1\n[view]\ncenter = [\"-0.74515\", \"0.11255\"]\nzoom = \"900\"\n[iteration]\nmax = 400\n[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ntransfer = \"log\"\ndensity = 0.5\n[[layer]]\nkind = \"distance\"\nk = 0.5\nblend = \"multiply\"\nopacity = 0.6\n";
+
+fn harness(dir: &Path, text: &str) -> Harness<'static, ViewerApp> {
+    let path = scene_file(dir, text);
+    let mut h =
+        Harness::builder().with_size(Vec2::new(900.0, 560.0)).with_max_steps(200).wgpu().build_eframe(move |cc| {
+            ViewerApp::new(cc, ViewerOptions { scene: Some(path.clone()), screenshot: None, inline: true })
+                .expect("viewer starts")
+        });
+    settle(&mut h);
+    h
+}
+
+/// Steps until the render is complete.
+fn settle(h: &mut Harness<'static, ViewerApp>) {
+    for _ in 0..50 {
+        h.run_steps(2);
+        if h.state().idle() {
+            h.run_steps(1);
+            return;
+        }
+    }
+    panic!("the viewer never finished rendering");
+}
+
+fn wheel(h: &Harness<'static, ViewerApp>, at: Pos2, dy: f32) {
+    h.hover_at(at);
+    h.event(Event::MouseWheel {
+        unit: MouseWheelUnit::Point,
+        delta: Vec2::new(0.0, dy),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Wheel,
+        modifiers: Modifiers::NONE,
+    });
+}
+
+/// Physical pixels from the image centre, as the viewer's navigation counts them.
+fn px(h: &Harness<'static, ViewerApp>, p: Pos2) -> [f64; 2] {
+    let r = h.state().image_rect();
+    [(p.x - r.center().x) as f64, (p.y - r.center().y) as f64]
+}
+
+#[test]
+fn wheel_zoom_keeps_the_point_under_the_cursor_fixed() {
+    let dir = scratch("viewer-zoom");
+    let mut h = harness(&dir, SCENE);
+    let r = h.state().image_rect();
+    let at = r.center() + Vec2::new(140.0, -70.0);
+    let height = h.state().image_size_px()[1] as f64;
+    let before = h.state().nav.point_at(px(&h, at), height);
+    let zoom0 = h.state().nav.log10_zoom;
+    wheel(&h, at, 240.0);
+    settle(&mut h);
+    let nav = h.state().nav.clone();
+    assert!(nav.log10_zoom > zoom0 + 0.3, "zoomed in: {} -> {}", zoom0, nav.log10_zoom);
+    let after = nav.point_at(px(&h, at), height);
+    let s = nav.spacing(height);
+    assert!((before[0] - after[0]).abs() < s && (before[1] - after[1]).abs() < s, "{before:?} -> {after:?}");
+}
+
+#[test]
+fn drag_pans_and_history_goes_back_and_forward() {
+    let dir = scratch("viewer-pan");
+    let mut h = harness(&dir, SCENE);
+    let start = h.state().nav.clone();
+    let height = h.state().image_size_px()[1] as f64;
+    let r = h.state().image_rect();
+    let (a, b) = (r.center(), r.center() + Vec2::new(-100.0, 40.0));
+    h.drag_at(a);
+    h.run_steps(1);
+    h.hover_at(b);
+    h.run_steps(1);
+    h.event(Event::PointerButton {
+        pos: b,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    settle(&mut h);
+    let moved = h.state().nav.clone();
+    // Dragging left by 100 px moves the view right by 100 pixel spacings (y: up is +).
+    let d = start.offset_of(&moved);
+    let s = start.spacing(height);
+    assert!((d[0] / s - 100.0).abs() < 1.0 && (d[1] / s - 40.0).abs() < 1.0, "{:?}", [d[0] / s, d[1] / s]);
+    h.key_press(egui::Key::Backspace);
+    settle(&mut h);
+    assert_eq!(h.state().nav, start, "Backspace goes back");
+    h.get_by_label("Forward >").click();
+    settle(&mut h);
+    assert_eq!(h.state().nav, moved, "Forward returns");
+    h.key_press(egui::Key::Home);
+    settle(&mut h);
+    assert!((h.state().nav.log10_zoom - 1.6f64.log10()).abs() < 1e-12, "Home shows the whole set");
+}
+
+#[test]
+fn palette_change_recolours_without_rendering() {
+    let dir = scratch("viewer-recolour");
+    let mut h = harness(&dir, SCENE);
+    let before = h.state().counters();
+    assert!(before.renders >= 1);
+    h.state_mut().set_palette("fire");
+    settle(&mut h);
+    let after = h.state().counters();
+    assert_eq!(after.renders, before.renders, "a palette change must not render");
+    assert_eq!(after.recolours, before.recolours + 1);
+    assert_eq!(h.state().layer_palette(0).as_deref(), Some("fire"));
+    // A change of view does render.
+    h.key_press(egui::Key::Plus);
+    settle(&mut h);
+    assert!(h.state().counters().renders > after.renders);
+}
+
+#[test]
+fn ctrl_click_opens_the_julia_set_of_the_point() {
+    let dir = scratch("viewer-julia");
+    let mut h = harness(&dir, SCENE);
+    let r = h.state().image_rect();
+    let at = r.center() + Vec2::new(-60.0, 30.0);
+    let height = h.state().image_size_px()[1] as f64;
+    let want = h.state().nav.point_at(px(&h, at), height);
+    h.hover_at(at);
+    h.run_steps(2);
+    assert!(h.state().counters().julia_previews >= 1, "hovering previews the Julia set");
+    ctrl_click(&mut h, at);
+    settle(&mut h);
+    let c = h.state().julia_c().expect("a Julia scene now");
+    let got = [c[0].parse::<f64>().unwrap(), c[1].parse::<f64>().unwrap()];
+    let s = 4.0 / height / 900.0;
+    assert!((got[0] - want[0]).abs() < s && (got[1] - want[1]).abs() < s, "{got:?} vs {want:?}");
+}
+
+/// A click with Ctrl held (pressed a frame before, released a frame after).
+fn ctrl_click(h: &mut Harness<'static, ViewerApp>, at: Pos2) {
+    h.event(Event::ModifiersChanged(Modifiers::CTRL));
+    h.run_steps(1);
+    h.event(Event::PointerButton {
+        pos: at,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::CTRL,
+    });
+    h.run_steps(1);
+    h.event(Event::PointerButton {
+        pos: at,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::CTRL,
+    });
+    h.run_steps(1);
+    h.event(Event::ModifiersChanged(Modifiers::NONE));
+}
+
+fn tolerance() -> SnapshotOptions {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots/tolerance.toml")).unwrap();
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    SnapshotOptions::new()
+        .threshold(t["threshold"].as_float().unwrap() as f32)
+        .max_failed_pixels(t["failed_pixels"].as_integer().unwrap() as usize)
+}
+
+#[test]
+fn snapshots_of_the_main_states() {
+    let dir = scratch("viewer-snapshots");
+    let mut h = harness(&dir, SCENE);
+    h.snapshot_options("viewer-mandelbrot", &tolerance());
+    let r = h.state().image_rect();
+    let at = r.center() + Vec2::new(-60.0, 30.0);
+    h.hover_at(at);
+    h.run_steps(2);
+    ctrl_click(&mut h, at);
+    settle(&mut h);
+    h.snapshot_options("viewer-julia", &tolerance());
+}
+
+/// A real window under Xvfb: start, render, screenshot, exit 0.
+#[test]
+fn real_window_under_xvfb() {
+    if std::env::var_os("DEEPFIELD_NO_DISPLAY").is_some() {
+        return;
+    }
+    let dir = scratch("viewer-xvfb");
+    let scene = scene_file(&dir, SCENE);
+    let shot = dir.join("shot.png");
+    let out = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_deepfield"))
+        .args(["view", scene.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--size", "800x500"])
+        .env("XDG_CONFIG_HOME", &dir)
+        .env("XDG_DATA_HOME", &dir)
+        .output()
+        .expect("xvfb-run is needed (apt-get install xvfb xauth); DEEPFIELD_NO_DISPLAY=1 skips this test");
+    assert!(out.status.success(), "exit {:?}: {}", out.status.code(), String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&shot).expect("a screenshot");
+    assert!(img.width() >= 800 && img.height() >= 500, "{}x{}", img.width(), img.height());
+}
