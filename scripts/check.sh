@@ -1,9 +1,23 @@
 #!/usr/bin/env bash
 # Runs exactly what CI runs (.ci/run calls this): formatting, lints, the whole test suite.
-# Needs only cargo; system packages that future window/GPU tests need are installed here
-# when missing, so this one command works on a fresh machine.
+# Needs only cargo to build; the viewer and GPU tests need a display server and a Vulkan
+# adapter at run time (Xvfb, and Mesa's lavapipe software Vulkan), installed here when
+# missing so this one command works on a fresh machine (as root, or with sudo).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+need=()
+command -v xvfb-run > /dev/null || need+=(xvfb xauth)
+ls /usr/share/vulkan/icd.d/lvp_icd*.json > /dev/null 2>&1 || need+=(mesa-vulkan-drivers libvulkan1)
+if [ ${#need[@]} -gt 0 ]; then
+    echo "== installing ${need[*]} (for the viewer and GPU tests)"
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${need[@]}" > /dev/null
+fi
+# Tests run headless: no user session, so give the window system a runtime folder.
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 
 echo "== rustfmt"
 cargo fmt --all -- --check
