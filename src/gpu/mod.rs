@@ -14,12 +14,14 @@
 //! * [`uniforms`]: the single uniform block all pipelines share.
 //! * [`shaders`]: the WGSL text and how modules are assembled from shared pieces.
 //! * [`field`]: raw planes of a strip of the sample grid ([`field::compute_planes`]).
+//! * [`ifs`]: the seeds' minimal IFS density field, on the CPU and on the GPU.
 //! * `runner`: chunked compute dispatches with readback.
 //!
 //! The GPU owns no maths types: planes come back as the same [`crate::field::Planes`] the
 //! CPU kernels fill, and the rest of the program (colouring, files) cannot tell them apart.
 
 pub mod field;
+pub mod ifs;
 mod runner;
 pub mod shaders;
 pub mod uniforms;

@@ -13,13 +13,22 @@ pub const DF_WGSL: &str = include_str!("df.wgsl");
 pub const UNIFORMS_WGSL: &str = include_str!("uniforms.wgsl");
 /// Escape-time orbits, per-sample quantities, bitmap trap; compute entry points.
 pub const ESCAPE_WGSL: &str = include_str!("escape.wgsl");
+/// The IFS density field.
+pub const IFS_WGSL: &str = include_str!("ifs.wgsl");
 
 /// Compute entry point of the f32 escape-time kernel.
 pub const ESCAPE_F32_ENTRY: &str = "escape_f32_main";
 /// Compute entry point of the double-float escape-time kernel.
 pub const ESCAPE_DF_ENTRY: &str = "escape_df_main";
+/// Compute entry point of the IFS field.
+pub const IFS_ENTRY: &str = "ifs_main";
 
 /// The escape-time compute module.
 pub fn escape_module() -> String {
     [DF_WGSL, UNIFORMS_WGSL, ESCAPE_WGSL].concat()
+}
+
+/// The IFS compute module.
+pub fn ifs_module() -> String {
+    [DF_WGSL, UNIFORMS_WGSL, IFS_WGSL].concat()
 }
