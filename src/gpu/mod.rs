@@ -7,7 +7,7 @@
 //! (an unevaluated sum of two f32s, about 46 bits), which reaches roughly 10^7 times
 //! deeper at a fraction of the speed. Neither replaces the f64 or perturbation engines:
 //! renders use the GPU only when asked (`--engine gpu` or `gpu-df`), and `auto` never
-//! picks it.
+//! picks it. The viewer draws with it ([`paint`]) because it is interactive at any size.
 //!
 //! * [`GpuContext`]: a headless device (any backend, a software rasteriser such as
 //!   lavapipe included) and the compute pipelines, built once and cached.
@@ -15,6 +15,7 @@
 //! * [`shaders`]: the WGSL text and how modules are assembled from shared pieces.
 //! * [`field`]: raw planes of a strip of the sample grid ([`field::compute_planes`]).
 //! * [`ifs`]: the seeds' minimal IFS density field, on the CPU and on the GPU.
+//! * [`paint`]: the egui paint callback that draws the escape-time image in the viewer.
 //! * `runner`: chunked compute dispatches with readback.
 //!
 //! The GPU owns no maths types: planes come back as the same [`crate::field::Planes`] the
@@ -22,6 +23,7 @@
 
 pub mod field;
 pub mod ifs;
+pub mod paint;
 mod runner;
 pub mod shaders;
 pub mod uniforms;

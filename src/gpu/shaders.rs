@@ -13,6 +13,8 @@ pub const DF_WGSL: &str = include_str!("df.wgsl");
 pub const UNIFORMS_WGSL: &str = include_str!("uniforms.wgsl");
 /// Escape-time orbits, per-sample quantities, bitmap trap; compute entry points.
 pub const ESCAPE_WGSL: &str = include_str!("escape.wgsl");
+/// The viewer's paint callback: full-viewport triangle, palette, distance shading.
+pub const PAINT_WGSL: &str = include_str!("paint.wgsl");
 /// The IFS density field.
 pub const IFS_WGSL: &str = include_str!("ifs.wgsl");
 
@@ -22,10 +24,21 @@ pub const ESCAPE_F32_ENTRY: &str = "escape_f32_main";
 pub const ESCAPE_DF_ENTRY: &str = "escape_df_main";
 /// Compute entry point of the IFS field.
 pub const IFS_ENTRY: &str = "ifs_main";
+/// Vertex entry point of the paint callback.
+pub const PAINT_VS_ENTRY: &str = "paint_vs";
+/// Fragment entry point of the paint callback, f32 orbits.
+pub const PAINT_F32_ENTRY: &str = "paint_f32_fs";
+/// Fragment entry point of the paint callback, double-float orbits.
+pub const PAINT_DF_ENTRY: &str = "paint_df_fs";
 
 /// The escape-time compute module.
 pub fn escape_module() -> String {
     [DF_WGSL, UNIFORMS_WGSL, ESCAPE_WGSL].concat()
+}
+
+/// The paint module: the escape-time module plus the vertex and fragment shaders.
+pub fn paint_module() -> String {
+    [DF_WGSL, UNIFORMS_WGSL, ESCAPE_WGSL, PAINT_WGSL].concat()
 }
 
 /// The IFS compute module.
