@@ -3,7 +3,8 @@
 //! The library is layered as DESIGN.md describes: numbers and maps at the bottom
 //! ([`num`], [`formula`]), raw per-sample data above them ([`field`], [`trap`]), colour on top
 //! of raw data ([`palette`], [`coloring`], [`compose`]), and scenes, rendering and files
-//! around it all ([`scene`], [`render`], [`io`]). The command line lives in the binary.
+//! around it all ([`scene`], [`render`], [`io`]); [`gpu`] runs the 2D paths on a GPU through
+//! wgpu. The command line lives in the binary.
 
 pub mod coloring;
 pub mod compare;

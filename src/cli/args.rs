@@ -218,8 +218,12 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=16))]
     pub aa: Option<u64>,
     /// Engine: auto picks the cheapest exact enough for the view (f64 direct, then
-    /// perturbation with f64 deltas, then with FloatExp deltas); the others force one.
-    #[arg(long, value_parser = ["auto", "f64", "perturb-f64", "perturb-floatexp"])]
+    /// perturbation with f64 deltas, then with FloatExp deltas); the others force one:
+    /// f64, perturb-f64, perturb-floatexp, or the GPU (never picked by auto; any Vulkan,
+    /// Metal, DX12 or GL adapter, lavapipe will do): gpu (f32) or gpu-df (double-float),
+    /// refused where neighbouring pixels stop being distinct numbers (zoom ~3e4 and ~3e11
+    /// at 1080 rows) and close to exact to about zoom 50 and 5e8.
+    #[arg(long, value_parser = ["auto", "f64", "perturb-f64", "perturb-floatexp", "gpu", "gpu-df"])]
     pub engine: Option<String>,
     /// Turn off bilinear approximation in the perturbation engines.
     #[arg(long)]

@@ -17,7 +17,14 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
         .map_err(|e| Failure::Runtime(e.into()))?;
-    let variants = compare::variants(&scene);
+    let mut variants = compare::variants(&scene);
+    if variants.iter().any(|v| v.kind.is_gpu())
+        && let Err(e) = deepfield::gpu::GpuContext::shared()
+    {
+        // No GPU is no failure: the comparison goes on without the GPU rows.
+        eprintln!("note: leaving out the gpu and gpu-df rows: {e}");
+        variants.retain(|v| !v.kind.is_gpu());
+    }
     if variants.is_empty() {
         return Err(Failure::Input(anyhow!(
             "no engine can address this view: it is too deep for direct iteration, and iteration.max = {} is above the perturbation engines' limit of {}",
@@ -50,7 +57,10 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             if let Some(b) = &bar {
                 b.set_message(v.name.clone());
             }
-            let m = compare::run(&scene, v, &pixels, args.sample_only, &cancel).map_err(|_| Failure::Cancelled)?;
+            let m = compare::run(&scene, v, &pixels, args.sample_only, &cancel).map_err(|e| match e {
+                compare::RunError::Cancelled => Failure::Cancelled,
+                compare::RunError::Gpu(e) => Failure::Runtime(anyhow!(e)),
+            })?;
             rows.push(compare::score(&v.name, &m, &truths, scene.escape_radius));
             if let Some(b) = &bar {
                 b.set_position(k as u64 + 1);

@@ -9,6 +9,9 @@
 //! the sampled pixels only: N mismatches (pixels whose orbit passes within 1e-9 of the
 //! escape circle excepted), |NF - NF_true| where N agrees, and the relative error of the
 //! distance-estimate vector.
+//!
+//! The GPU engines (`gpu`, `gpu-df`) are listed where they can address the view; whether a
+//! GPU adapter exists is for the caller to check ([`crate::gpu::GpuContext::shared`]).
 
 mod truth;
 
@@ -21,9 +24,10 @@ use rayon::prelude::*;
 pub use truth::Truth;
 
 use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes};
+use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::orbit::{self, Numbers, bigfloat};
 use crate::render::{self, Progress};
-use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::scene::{EngineChoice, EngineKind, EnginePlan, FamilySpec, Scene};
 
 /// One engine configuration to compare.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,6 +45,32 @@ pub enum VariantKind {
     F32,
     /// An engine plan (direct f64 or perturbation).
     Engine(EngineKind),
+    /// Direct iteration on the GPU.
+    Gpu(Precision),
+}
+
+impl VariantKind {
+    /// True for the GPU variants.
+    pub fn is_gpu(self) -> bool {
+        matches!(self, VariantKind::Gpu(_))
+    }
+}
+
+/// Why a variant did not run to the end.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Cancelled by the user.
+    #[error("cancelled")]
+    Cancelled,
+    /// The GPU failed.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+impl From<Cancelled> for RunError {
+    fn from(_: Cancelled) -> Self {
+        RunError::Cancelled
+    }
 }
 
 /// One row of the comparison.
@@ -81,13 +111,18 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
     if ulps64 >= DIRECT_MIN_ULPS {
         out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct) });
     }
+    for (choice, precision) in [(EngineChoice::Gpu, Precision::F32), (EngineChoice::GpuDf, Precision::DoubleFloat)] {
+        if scene.engine_for(choice).is_ok() {
+            out.push(Variant { name: precision.name().into(), kind: VariantKind::Gpu(precision) });
+        }
+    }
     if scene.max_iter > crate::scene::MAX_PERTURB_ITER {
         // The perturbation engines refuse such limits (their reference is stored whole).
         return out;
     }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
     let mut numbers = vec![];
-    if scene.engine_for(crate::scene::EngineChoice::PerturbF64).is_ok() {
+    if scene.engine_for(EngineChoice::PerturbF64).is_ok() {
         numbers.push((Numbers::F64, "perturb-f64"));
     }
     numbers.push((Numbers::FloatExp, "perturb-floatexp"));
@@ -179,20 +214,33 @@ pub fn run(
     pixels: &[(u32, u32)],
     sample_only: bool,
     cancel: &AtomicBool,
-) -> Result<Measured, Cancelled> {
+) -> Result<Measured, RunError> {
     let start = Instant::now();
     let kind = match variant.kind {
         VariantKind::F32 => EngineKind::Direct,
         VariantKind::Engine(k) => k,
+        VariantKind::Gpu(p) => return run_gpu(scene, p, pixels, sample_only, cancel),
     };
     let plan = EnginePlan { name: "compare", kind, reason: String::new() };
     let (mut params, _) = render::prepare_field(scene, &plan, ChannelSet::default_exr(), cancel, &|_: Progress| {})?;
     params.single = variant.kind == VariantKind::F32;
-    let height = params.grid.height;
+    // Bands of up to 16 consecutive rows, computed in parallel.
+    let bands = bands(params.grid.height, pixels, sample_only);
+    let computed: Vec<(u32, Planes, u64)> = bands
+        .par_iter()
+        .map(|&(s, e)| field::compute_strip(&params, s..e, cancel).map(|st| (s, st.planes, st.iterations)))
+        .collect::<Result<_, _>>()?;
+    let seconds = start.elapsed().as_secs_f64();
+    let iterations = computed.iter().map(|c| c.2).sum();
+    Ok(Measured { values: pick(&computed, pixels), iterations, seconds })
+}
+
+/// Rows of the sample grid to compute: all, or those holding `pixels`, in bands of up to
+/// 16 consecutive rows.
+fn bands(height: u32, pixels: &[(u32, u32)], sample_only: bool) -> Vec<(u32, u32)> {
     let mut rows: Vec<u32> = if sample_only { pixels.iter().map(|p| p.1).collect() } else { (0..height).collect() };
     rows.sort_unstable();
     rows.dedup();
-    // Bands of up to 16 consecutive rows, computed in parallel.
     let mut bands: Vec<(u32, u32)> = Vec::new();
     for r in rows {
         match bands.last_mut() {
@@ -200,21 +248,47 @@ pub fn run(
             _ => bands.push((r, r + 1)),
         }
     }
-    let computed: Vec<(u32, Planes, u64)> = bands
-        .par_iter()
-        .map(|&(s, e)| field::compute_strip(&params, s..e, cancel).map(|st| (s, st.planes, st.iterations)))
-        .collect::<Result<_, _>>()?;
-    let seconds = start.elapsed().as_secs_f64();
-    let iterations = computed.iter().map(|c| c.2).sum();
-    let values = pixels
+    bands
+}
+
+/// The values at `pixels` from bands of planes (first row, planes, iterations).
+fn pick(computed: &[(u32, Planes, u64)], pixels: &[(u32, u32)]) -> Vec<(u32, f32, f32, f32)> {
+    pixels
         .iter()
         .map(|&(i, j)| {
             let (s, planes, _) = computed.iter().rev().find(|c| c.0 <= j).expect("row computed");
             let k = ((j - s) as usize) * planes.width + i as usize;
             (planes.n[k], planes.nf[k], planes.dex[k], planes.dey[k])
         })
-        .collect();
-    Ok(Measured { values, iterations, seconds })
+        .collect()
+}
+
+/// [`run`] for the GPU variants: the whole grid in one call (or the sampled bands one after
+/// another), on the shared context; iterations are estimated from N.
+fn run_gpu(
+    scene: &Scene,
+    precision: Precision,
+    pixels: &[(u32, u32)],
+    sample_only: bool,
+    cancel: &AtomicBool,
+) -> Result<Measured, RunError> {
+    let start = Instant::now();
+    let ctx = GpuContext::shared()?;
+    let params = render::field_params(scene, ChannelSet::default_exr());
+    let height = params.grid.height;
+    let bands = if sample_only { bands(height, pixels, true) } else { vec![(0, height)] };
+    let mut computed = Vec::with_capacity(bands.len());
+    for (s, e) in bands {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(RunError::Cancelled);
+        }
+        let planes = crate::gpu::field::compute_planes(&ctx, &params, precision, s..e)?;
+        let its = crate::gpu::field::estimated_iterations(&params, s..e, &planes);
+        computed.push((s, planes, its));
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let iterations = computed.iter().map(|c| c.2).sum();
+    Ok(Measured { values: pick(&computed, pixels), iterations, seconds })
 }
 
 /// The value at fraction q of a sorted list (0 when empty).

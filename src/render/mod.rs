@@ -24,6 +24,7 @@ use std::sync::{Arc, Mutex};
 
 use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
+use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec};
 use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
 
@@ -121,13 +122,14 @@ pub struct Stats {
     /// The deep engine's figures.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub deep: Option<DeepStats>,
-    /// Instruction set the kernels ran with.
+    /// Instruction set the kernels ran with (for the GPU engines: "GPU: " and the adapter).
     pub simd: String,
     /// Output pixels.
     pub pixels: u64,
     /// Samples computed (pixels times aa^2).
     pub samples: u64,
-    /// Iterations the orbit loops performed (skipped samples count zero).
+    /// Iterations the orbit loops performed (skipped samples count zero; the GPU engines
+    /// estimate them from N, counting interior samples at the full limit).
     pub iterations: u64,
     /// Wall-clock seconds.
     pub wall_seconds: f64,
@@ -223,6 +225,13 @@ pub fn render<P: Send>(
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
     let plan = scene.engine().map_err(RenderError::Engine)?;
+    // The GPU engines iterate on the process-wide device; its absence is an engine error.
+    let gpu = match plan.kind {
+        EngineKind::Gpu(precision) => {
+            Some((gpu::GpuContext::shared().map_err(|e| RenderError::Engine(e.to_string()))?, precision))
+        }
+        _ => None,
+    };
     let (params, reference_seconds) = prepare_field(scene, &plan, options.exr_channels, cancel, progress)?;
     let counters = Mutex::new(Counters::default());
     let pool = rayon::ThreadPoolBuilder::new()
@@ -241,15 +250,32 @@ pub fn render<P: Send>(
     let rows_done = AtomicU64::new(0);
     let aa = scene.aa;
 
-    // The field of a strip: its raw planes.
+    // The field of a strip: its raw planes. The GPU engines report iterations estimated
+    // from N (see `gpu::field::estimated_iterations`): they count none themselves.
     let field_of = |&(row, rows): &(u32, u32)| -> Result<(u32, u32, Planes), RenderError> {
-        let strip = field::compute_strip(&params, row * aa..(row + rows) * aa, cancel)?;
-        iterations.fetch_add(strip.iterations, Ordering::Relaxed);
-        if params.deep.is_some() {
-            counters.lock().unwrap_or_else(|e| e.into_inner()).add(&strip.counters);
-        }
+        let sample_rows = row * aa..(row + rows) * aa;
+        let planes = match &gpu {
+            Some((ctx, precision)) => {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(RenderError::Cancelled);
+                }
+                let planes = gpu::field::compute_planes(ctx, &params, *precision, sample_rows.clone())
+                    .map_err(|e| RenderError::Engine(e.to_string()))?;
+                let its = gpu::field::estimated_iterations(&params, sample_rows, &planes);
+                iterations.fetch_add(its, Ordering::Relaxed);
+                planes
+            }
+            None => {
+                let strip = field::compute_strip(&params, sample_rows, cancel)?;
+                iterations.fetch_add(strip.iterations, Ordering::Relaxed);
+                if params.deep.is_some() {
+                    counters.lock().unwrap_or_else(|e| e.into_inner()).add(&strip.counters);
+                }
+                strip.planes
+            }
+        };
         progress(Progress::Rows(rows_done.fetch_add(rows as u64, Ordering::Relaxed) + rows as u64));
-        Ok((row, rows, strip.planes))
+        Ok((row, rows, planes))
     };
     // Colours, downsamples and prepares a computed strip.
     let finish = |(row, rows, planes): (u32, u32, Planes), ctx: &Context| -> Result<(RenderedStrip, P), RenderError> {
@@ -348,6 +374,7 @@ pub fn render<P: Send>(
             "reference {} bits; deltas FloatExp (53-bit mantissa, 32-bit exponent) below 2^-480, f64 above",
             deep.as_ref().map_or(0, |d| d.reference_bits)
         ),
+        EngineKind::Gpu(p) => p.describe().to_string(),
     };
     Ok(Stats {
         engine: plan.name.to_string(),
@@ -355,7 +382,10 @@ pub fn render<P: Send>(
         precision,
         glitched_pixels: c.glitches,
         deep,
-        simd: simd_name(),
+        simd: match &gpu {
+            Some((ctx, _)) => format!("GPU: {}", ctx.adapter_name()),
+            None => simd_name(),
+        },
         pixels,
         samples: pixels * (aa as u64).pow(2),
         iterations: its,

@@ -18,6 +18,7 @@ pub use validate::BitmapLoader;
 
 use crate::compose::Stack;
 use crate::field::ChannelSet;
+use crate::gpu::Precision;
 use crate::num::Decimal;
 use crate::orbit::{Numbers, Scale};
 use crate::source::SourceError;
@@ -60,11 +61,15 @@ pub enum EngineChoice {
     PerturbF64,
     /// Perturbation with FloatExp deltas where f64 would underflow.
     PerturbFloatExp,
+    /// Direct iteration on the GPU in f32 (never chosen by `auto`).
+    Gpu,
+    /// Direct iteration on the GPU in double-float, two f32s (never chosen by `auto`).
+    GpuDf,
 }
 
 impl EngineChoice {
     /// Every accepted spelling, for messages.
-    pub const NAMES: &'static str = "\"auto\", \"f64\", \"perturb-f64\" or \"perturb-floatexp\"";
+    pub const NAMES: &'static str = "\"auto\", \"f64\", \"perturb-f64\", \"perturb-floatexp\", \"gpu\" or \"gpu-df\"";
 
     /// Parses an engine name.
     pub fn parse(name: &str) -> Option<Self> {
@@ -73,6 +78,8 @@ impl EngineChoice {
             "f64" => EngineChoice::F64,
             "perturb-f64" => EngineChoice::PerturbF64,
             "perturb-floatexp" => EngineChoice::PerturbFloatExp,
+            "gpu" => EngineChoice::Gpu,
+            "gpu-df" => EngineChoice::GpuDf,
             _ => return None,
         })
     }
@@ -90,12 +97,14 @@ pub enum EngineKind {
         /// BLA tolerance (None: no BLA).
         bla: Option<f64>,
     },
+    /// Direct iteration on the GPU ([`crate::gpu`]) in the given precision.
+    Gpu(Precision),
 }
 
 /// The engine that will run, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnginePlan {
-    /// Short name ("f64", "perturb-f64", "perturb-floatexp").
+    /// Short name ("f64", "perturb-f64", "perturb-floatexp", "gpu", "gpu-df").
     pub name: &'static str,
     /// How it iterates.
     pub kind: EngineKind,
@@ -235,7 +244,7 @@ impl Scene {
         let perturb = |numbers| EngineKind::Perturb { numbers, bla };
         let needs_perturbation = match choice {
             EngineChoice::Auto => !f64_ok,
-            EngineChoice::F64 => false,
+            EngineChoice::F64 | EngineChoice::Gpu | EngineChoice::GpuDf => false,
             EngineChoice::PerturbF64 | EngineChoice::PerturbFloatExp => true,
         };
         if needs_perturbation && self.max_iter > MAX_PERTURB_ITER {
@@ -288,6 +297,57 @@ impl Scene {
                 kind: perturb(Numbers::FloatExp),
                 reason: format!("forced{bla_note}"),
             }),
+            EngineChoice::Gpu => self.gpu_plan(Precision::F32),
+            EngineChoice::GpuDf => self.gpu_plan(Precision::DoubleFloat),
         }
+    }
+
+    /// The GPU engine in `precision`, or why it cannot address the scene: traps other than
+    /// one bitmap trap, the stripe average, an escape radius past 2^60, a view past the f64
+    /// range, or a view deeper than the precision resolves ([`Precision::exhausted`]).
+    fn gpu_plan(&self, precision: Precision) -> Result<EnginePlan, String> {
+        let name = precision.name();
+        crate::gpu::field::supported_trap(&self.traps)
+            .map_err(|e| format!("--engine {name}: {e}; use --engine auto"))?;
+        if self.escape_radius > crate::gpu::MAX_ESCAPE_RADIUS {
+            return Err(format!(
+                "--engine {name}: iteration.escape_radius = {:e} is above the GPU's limit of 2^60 (|z|^2 must stay finite in f32)",
+                self.escape_radius
+            ));
+        }
+        let depth = -self.log10_radius + 2f64.log10();
+        let spacing = 2.0 * self.radius / (self.height * self.aa) as f64;
+        if !(self.radius.is_normal() && spacing.is_normal()) {
+            return Err(format!(
+                "--engine {name}: the view is too deep for direct iteration (zoom 1e{depth:.1} is past the f64 range); use --engine auto"
+            ));
+        }
+        let center = self.center_f64();
+        let ulps = precision.ulps_per_sample(spacing, center);
+        if precision.exhausted(spacing, center) {
+            let better = match precision {
+                Precision::F32 => "--engine gpu-df, f64 or auto",
+                Precision::DoubleFloat => "--engine auto",
+            };
+            return Err(format!(
+                "--engine {name}: the view is too deep for {}: at zoom 1e{depth:.1} neighbouring samples are {ulps:.2} rounding units apart \
+                 (at least 1 is needed); use {better}",
+                precision.describe()
+            ));
+        }
+        Ok(EnginePlan {
+            name,
+            kind: EngineKind::Gpu(precision),
+            reason: if ulps >= crate::gpu::AGREEMENT_ULPS {
+                format!("forced; a sample spans {ulps:.3e} {} rounding units", precision.describe())
+            } else {
+                format!(
+                    "forced; a sample spans only {ulps:.3e} {} rounding units: below ~{} expect N to differ from exact \
+                     arithmetic on more than 1% of pixels near the boundary",
+                    precision.describe(),
+                    crate::gpu::AGREEMENT_ULPS
+                )
+            },
+        })
     }
 }

@@ -131,7 +131,7 @@ pub struct RenderRaw {
     /// Supersampling factor N (N x N samples per pixel).
     #[serde(default = "default_aa")]
     pub aa: Spanned<i64>,
-    /// "auto", "f64", "perturb-f64" or "perturb-floatexp".
+    /// "auto", "f64", "perturb-f64", "perturb-floatexp", "gpu" or "gpu-df".
     #[serde(default = "default_engine")]
     pub engine: Spanned<String>,
     /// Bilinear approximation in the perturbation engines (default true).

@@ -6,6 +6,7 @@ mod cli;
 mod coloring;
 mod deep;
 mod golden;
+mod gpu;
 mod import;
 mod reference;
 mod util;
