@@ -112,6 +112,8 @@ pub struct ViewerApp {
     needs_render: bool,
     image_rect: Rect,
     last_wheel: Option<Instant>,
+    diff: Option<super::difference::Pending>,
+    diff_shown: Option<(TextureHandle, u64, f64)>,
 }
 
 impl ViewerApp {
@@ -174,14 +176,18 @@ impl ViewerApp {
             needs_render: true,
             image_rect: Rect::NOTHING,
             last_wheel: None,
+            diff: None,
+            diff_shown: None,
         };
         if app.file.layers.is_empty() {
             app.file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
         }
         // Deep views work in the viewer as in `render`; the GPU paint path needs a wgpu
         // render state (eframe's wgpu renderer provides it).
-        if let Some(rs) = cc.wgpu_render_state.as_ref() {
-            crate::gpu::paint::register(rs);
+        if let Some(rs) = cc.wgpu_render_state.as_ref()
+            && let Err(e) = crate::gpu::paint::register(rs)
+        {
+            app.error = Some(format!("GPU paint path unavailable: {e}"));
         }
         Ok(app)
     }
@@ -355,6 +361,7 @@ impl ViewerApp {
                 _ => {}
             }
         }
+        self.poll_difference(ctx);
         for r in self.julia_worker.poll() {
             if let Report::Pass(p) = r {
                 let image = ColorImage::from_rgb([p.width as usize, p.height as usize], &p.rgb8);
@@ -370,6 +377,39 @@ impl ViewerApp {
                 }
                 self.julia_previews += 1;
             }
+        }
+    }
+
+    /// The fraction of samples whose N differs between the CPU render and the GPU f32
+    /// shader, once the difference mode has compared the current render.
+    pub fn difference_mismatch(&self) -> Option<f64> {
+        self.diff_shown.as_ref().filter(|(_, job, _)| *job == self.job).map(|(_, _, m)| *m)
+    }
+
+    /// Starts or collects the CPU-vs-GPU comparison the difference mode shows.
+    fn poll_difference(&mut self, ctx: &egui::Context) {
+        if let Some(p) = &self.diff
+            && let Some(result) = p.poll()
+        {
+            self.diff = None;
+            match result {
+                Ok(d) => {
+                    let image = ColorImage::from_rgb([d.size[0] as usize, d.size[1] as usize], &d.rgb8);
+                    let tex = ctx.load_texture("deepfield-difference", image, egui::TextureOptions::NEAREST);
+                    self.diff_shown = Some((tex, d.job, d.n_mismatch));
+                }
+                Err(e) => self.error = Some(format!("GPU comparison failed: {e}")),
+            }
+        }
+        let current = self.diff_shown.as_ref().is_some_and(|(_, job, _)| *job == self.job);
+        if self.mode == ViewMode::Difference
+            && self.diff.is_none()
+            && !current
+            && self.progress.0 >= self.progress.1
+            && let Some((strips, scene)) = &self.planes
+        {
+            self.diff =
+                Some(super::difference::start(self.job, scene.clone(), strips.clone(), crate::gpu::Precision::F32));
         }
     }
 
@@ -904,7 +944,8 @@ impl ViewerApp {
         let painter = ui.painter_at(rect);
         let gpu_rect = match self.mode {
             ViewMode::Cpu => None,
-            ViewMode::GpuF32 | ViewMode::GpuDf | ViewMode::Difference => Some(rect),
+            ViewMode::GpuF32 | ViewMode::GpuDf => Some(rect),
+            ViewMode::Difference => None,
             ViewMode::SideBySide => Some(Rect::from_min_max(Pos2::new(rect.center().x, rect.min.y), rect.max)),
         };
         if let Some((tex, nav, size)) = &self.image {
@@ -924,7 +965,7 @@ impl ViewerApp {
                 }
                 _ => rect,
             };
-            if self.mode != ViewMode::GpuF32 && self.mode != ViewMode::GpuDf {
+            if matches!(self.mode, ViewMode::Cpu | ViewMode::SideBySide) {
                 ui.painter_at(clip).image(
                     tex.id(),
                     at,
@@ -933,30 +974,56 @@ impl ViewerApp {
                 );
             }
         }
-        if let Some(g) = gpu_rect {
-            let params = self.gpu_params(g, ppp);
-            if let Some(params) = params {
-                ui.painter_at(g).add(crate::gpu::paint::paint_callback(g, params));
-            }
-            if self.mode == ViewMode::Difference {
-                painter.text(
-                    rect.left_top() + Vec2::new(6.0, 6.0),
-                    egui::Align2::LEFT_TOP,
-                    "difference: |CPU - GPU| is shown by the GPU pass against the CPU texture",
-                    egui::FontId::proportional(12.0),
-                    Color32::WHITE,
-                );
+        match self.mode {
+            ViewMode::Difference => match &self.diff_shown {
+                Some((tex, job, mismatch)) if *job == self.job => {
+                    painter.image(tex.id(), rect, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
+                    let text = format!("|CPU - GPU f32| x 4; N differs on {:.3}% of samples", mismatch * 100.0);
+                    painter.text(
+                        rect.left_top() + Vec2::new(6.0, 6.0),
+                        egui::Align2::LEFT_TOP,
+                        text,
+                        egui::FontId::proportional(13.0),
+                        Color32::WHITE,
+                    );
+                }
+                _ => {
+                    painter.text(
+                        rect.center(),
+                        egui::Align2::CENTER_CENTER,
+                        "comparing with the GPU…",
+                        egui::FontId::proportional(16.0),
+                        Color32::WHITE,
+                    );
+                }
+            },
+            _ => {
+                if let Some(g) = gpu_rect
+                    && let Some(params) = self.gpu_params(rect, g, ppp)
+                {
+                    ui.painter_at(g).add(crate::gpu::paint::paint_callback(g, params));
+                }
             }
         }
     }
 
-    fn gpu_params(&self, rect: Rect, ppp: f32) -> Option<crate::gpu::paint::PaintParams> {
+    /// The paint callback's parameters for drawing the part `rect` of the image area `full`.
+    fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::gpu::paint::PaintParams> {
         let scene = self.scene.as_ref()?;
         let h = self.size_px[1].max(1) as f64;
         let spacing = self.nav.spacing(h);
         // The GPU half of a side-by-side view shows the right half of the same view.
-        let dx = (rect.center().x - (rect.min.x + rect.max.x) / 2.0) as f64;
+        let dx = ((rect.center().x - full.center().x) * ppp) as f64;
         let centre = self.nav.point_at([dx, 0.0], h);
+        let interior = scene
+            .stack
+            .layers
+            .iter()
+            .find_map(|l| match &l.coloring {
+                crate::coloring::Coloring::Smooth { interior, .. } => Some(*interior),
+                _ => None,
+            })
+            .unwrap_or([0.0, 0.0, 0.0, 1.0]);
         let (palette, density, offset) = scene
             .stack
             .layers
@@ -984,7 +1051,7 @@ impl ViewerApp {
         });
         // One period of the layer's palette position (the palette's own density, offset and
         // mode applied); the shader wraps position = nu * density + offset into it.
-        let lut: Vec<[f32; 4]> = (0..1024).map(|i| palette.at(i as f64 / 1024.0)).collect();
+        let lut = crate::gpu::paint::palette_table(&palette, 1024);
         Some(crate::gpu::paint::PaintParams {
             center: centre,
             spacing,
@@ -1004,6 +1071,7 @@ impl ViewerApp {
             density: density as f32,
             offset: offset as f32,
             distance_k,
+            interior,
         })
     }
 

@@ -5,11 +5,13 @@
 //!   history (pure, tested);
 //! - [`worker`]: progressive rendering on a background thread, cancelled by newer views;
 //! - [`app`]: the window: image, panels, input, recolouring, Julia preview, GPU modes;
-//! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export.
+//! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export;
+//! - [`difference`]: the CPU-vs-GPU per-pixel difference view.
 //!
 //! eframe (and egui) live only here, as DESIGN.md asks; the rest of the crate never sees them.
 
 pub mod app;
+pub mod difference;
 pub mod export;
 pub mod nav;
 pub mod palette_editor;

@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
-use deepfield::viewer::{ViewerApp, ViewerOptions};
+use deepfield::viewer::{ViewMode, ViewerApp, ViewerOptions};
 use eframe::egui::{self, Event, Modifiers, MouseWheelUnit, PointerButton, Pos2, Vec2};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, SnapshotOptions};
@@ -195,6 +195,33 @@ fn snapshots_of_the_main_states() {
     ctrl_click(&mut h, at);
     settle(&mut h);
     h.snapshot_options("viewer-julia", &tolerance());
+}
+
+/// The GPU modes: side by side through the paint callback, and the per-pixel difference,
+/// whose N agreement on the whole set is the f32 shader's (>= 99%).
+#[test]
+fn gpu_side_by_side_and_difference() {
+    let dir = scratch("viewer-gpu");
+    let full =
+        "version = 1\n[iteration]\nmax = 300\n[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ndensity = 0.1\n";
+    let mut h = harness(&dir, full);
+    h.state_mut().mode = ViewMode::SideBySide;
+    settle(&mut h);
+    h.snapshot_options("viewer-side-by-side", &tolerance());
+    h.state_mut().mode = ViewMode::Difference;
+    let mut mismatch = None;
+    for _ in 0..200 {
+        h.run_steps(1);
+        mismatch = h.state().difference_mismatch();
+        if mismatch.is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let m = mismatch.expect("the GPU comparison finished");
+    assert!(m < 0.01, "N differs on {:.3}% of samples", m * 100.0);
+    h.run_steps(2);
+    h.snapshot_options("viewer-difference", &tolerance());
 }
 
 /// A real window under Xvfb: start, render, screenshot, exit 0.
