@@ -128,6 +128,7 @@ fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<(), Failure> 
             Trap::Geometric(_) => TrapKind::Distance,
             Trap::Stripe(_) => TrapKind::Stripe,
             Trap::Bitmap(_) => TrapKind::Color,
+            Trap::Ifs(_) => TrapKind::Density,
         };
         if kinds.get(k) != Some(&want) {
             return Err(Failure::Input(anyhow!(

@@ -122,6 +122,18 @@ pub enum Coloring {
         /// Index of the trap in the field's trap list.
         trap: usize,
     },
+    /// The seeds' IFS density field (a 2D layer independent of the fractal): through a
+    /// palette at `v * density + offset`, or as white with opacity v when there is none.
+    Ifs {
+        /// Index of the field's plane in the trap list.
+        trap: usize,
+        /// Optional palette.
+        palette: Option<Palette>,
+        /// Palette cycles per unit of density.
+        density: f64,
+        /// Palette offset in cycles.
+        offset: f64,
+    },
     /// Interior colouring: only samples inside the set, by a solid colour or by the
     /// orbit's closest approach to a geometric trap through a palette.
     Interior {
@@ -160,6 +172,7 @@ impl Coloring {
             Coloring::Stripe { .. }
             | Coloring::TrapDistance { .. }
             | Coloring::BitmapTrap { .. }
+            | Coloring::Ifs { .. }
             | Coloring::Interior { .. } => Needs::default(),
         }
     }
@@ -173,7 +186,7 @@ impl Coloring {
             | Coloring::Stripe { palette, .. }
             | Coloring::TrapDistance { palette, .. }
             | Coloring::Interior { fill: InteriorFill::Trap { palette, .. } } => Some(palette),
-            Coloring::Distance { palette, .. } => palette.as_ref(),
+            Coloring::Distance { palette, .. } | Coloring::Ifs { palette, .. } => palette.as_ref(),
             _ => None,
         }
     }
@@ -187,7 +200,7 @@ impl Coloring {
             | Coloring::Stripe { palette, .. }
             | Coloring::TrapDistance { palette, .. }
             | Coloring::Interior { fill: InteriorFill::Trap { palette, .. } } => Some(palette),
-            Coloring::Distance { palette, .. } => palette.as_mut(),
+            Coloring::Distance { palette, .. } | Coloring::Ifs { palette, .. } => palette.as_mut(),
             _ => None,
         }
     }
@@ -316,6 +329,16 @@ impl Coloring {
             },
             Coloring::BitmapTrap { trap } => match &planes.traps[*trap] {
                 TrapPlane::Color(c) => each!(|k| c[k]),
+                _ => each!(|_| [0.0; 4]),
+            },
+            Coloring::Ifs { trap, palette, density, offset } => match &planes.traps[*trap] {
+                TrapPlane::Density(d) => each!(|k| match palette {
+                    Some(p) => premul(p.at(d[k] as f64 * density + offset)),
+                    None => {
+                        let a = d[k].clamp(0.0, 1.0);
+                        [a, a, a, a]
+                    }
+                }),
                 _ => each!(|_| [0.0; 4]),
             },
             Coloring::Interior { fill } => match fill {

@@ -150,6 +150,8 @@ pub fn compute_strip(
     let ln_r = params.orbit.escape_radius.ln();
     let spacing = grid.spacing();
     let mut orbits = vec![Orbit::interior(); count];
+    // The IFS field observes no orbit: alone it leaves the vectorised kernel in charge.
+    let orbit_free = params.needs.traps.iter().all(|t| !t.observes_orbit());
     let iterations = match params.needs.traps.as_slice() {
         _ if params.single => {
             let mut its = 0;
@@ -160,7 +162,7 @@ pub fn compute_strip(
             }
             its
         }
-        [] => simd::iterate(&params.orbit, &points, &mut orbits, cancel)?,
+        _ if orbit_free => simd::iterate(&params.orbit, &points, &mut orbits, cancel)?,
         // One geometric trap (the common case) runs vectorised; several traps or a bitmap
         // (a texture lookup per step) run in the scalar kernel.
         [Trap::Geometric(shape)] => {
@@ -176,7 +178,19 @@ pub fn compute_strip(
         traps => scalar::iterate_with_traps(&params.orbit, traps, &points, &mut orbits, &mut planes.traps, cancel)?,
     };
     fill_quantities(&params.needs, &orbits, ln_r, spacing, &mut planes);
+    fill_ifs(&params.needs.traps, &points, &mut planes);
     Ok(Strip { planes, iterations, counters: Counters::default() })
+}
+
+/// Writes the IFS density of each sample's point into the IFS planes.
+fn fill_ifs(traps: &[Trap], points: &[[f64; 2]], planes: &mut Planes) {
+    for (trap, plane) in traps.iter().zip(planes.traps.iter_mut()) {
+        if let (Trap::Ifs(p), TrapPlane::Density(d)) = (trap, plane) {
+            for (v, pt) in d.iter_mut().zip(points) {
+                *v = crate::gpu::ifs::density(p, pt[0] as f32, pt[1] as f32);
+            }
+        }
+    }
 }
 
 /// Writes N and the quantities derived from each orbit's end into the planes, and smooths
@@ -232,7 +246,7 @@ fn deep_strip(
             return Err(Cancelled);
         }
         let row_start = (j - rows.start) as usize * width;
-        if traps.is_empty() {
+        if traps.iter().all(|t| !t.observes_orbit()) {
             let offsets: Vec<[f64; 2]> = (0..grid.width).map(|i| grid.offset(i, j)).collect();
             deep.orbits(&offsets, row, &mut counters);
             continue;
@@ -248,5 +262,10 @@ fn deep_strip(
         }
     }
     fill_quantities(&params.needs, &orbits, params.orbit.escape_radius.ln(), 1.0, planes);
+    if traps.iter().any(|t| !t.observes_orbit()) {
+        let points: Vec<[f64; 2]> =
+            rows.flat_map(|j| (0..grid.width).map(move |i| (i, j))).map(|(i, j)| grid.point(i, j)).collect();
+        fill_ifs(traps, &points, planes);
+    }
     Ok(counters)
 }

@@ -114,6 +114,8 @@ pub enum TrapPlane {
     Distance(Vec<f32>),
     /// Colour of the first bitmap hit, linear premultiplied RGBA (zero: no hit).
     Color(Vec<[f32; 4]>),
+    /// IFS density at each sample's point.
+    Density(Vec<f32>),
     /// Stripe average, smoothed across bands ([`crate::trap::stripe`]); `prev` holds the
     /// mean without the last term until the field finishes the strip, then is emptied.
     Stripe {
@@ -183,6 +185,7 @@ impl Planes {
                     Trap::Geometric(_) => TrapPlane::Distance(vec![f32::MAX; len]),
                     Trap::Bitmap(_) => TrapPlane::Color(vec![[0.0; 4]; len]),
                     Trap::Stripe(_) => TrapPlane::Stripe { value: vec![0.0; len], prev: vec![0.0; len] },
+                    Trap::Ifs(_) => TrapPlane::Density(vec![0.0; len]),
                 })
                 .collect(),
         }

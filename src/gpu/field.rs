@@ -32,6 +32,9 @@ pub fn supported_trap(traps: &[Trap]) -> Result<Option<&BitmapTrap>, GpuError> {
             "geometric orbit traps (point, line, cross, circle) run only on the CPU engines".into(),
         )),
         [Trap::Stripe(_)] => Err(GpuError::Unsupported("the stripe average runs only on the CPU engines".into())),
+        [Trap::Ifs(_)] => Err(GpuError::Unsupported(
+            "the IFS layer is computed with the CPU engines (its shader runs headless and in tests)".into(),
+        )),
         _ => Err(GpuError::Unsupported(format!(
             "the scene uses {} orbit traps; the GPU runs at most one, a bitmap trap",
             traps.len()

@@ -67,6 +67,7 @@ impl ExrLayout {
                         match t {
                             Trap::Geometric(_) => channels.push((format!("trap{k}.D"), Source::TrapDistance(k))),
                             Trap::Stripe(_) => channels.push((format!("trap{k}.STRIPE"), Source::TrapStripe(k))),
+                            Trap::Ifs(_) => channels.push((format!("trap{k}.IFS"), Source::TrapStripe(k))),
                             Trap::Bitmap(_) => {
                                 for (i, n) in ["R", "G", "B", "A"].iter().enumerate() {
                                     channels.push((format!("trap{k}.{n}"), Source::TrapColor(k, i)));
@@ -230,7 +231,7 @@ impl ExrEncoder {
                         Source::Dex => push_f32(&mut data, &planes.dex[r.clone()]),
                         Source::Dey => push_f32(&mut data, &planes.dey[r.clone()]),
                         Source::TrapDistance(k) | Source::TrapStripe(k) => match &planes.traps[k] {
-                            TrapPlane::Distance(d) | TrapPlane::Stripe { value: d, .. } => {
+                            TrapPlane::Distance(d) | TrapPlane::Stripe { value: d, .. } | TrapPlane::Density(d) => {
                                 push_f32(&mut data, &d[r.clone()])
                             }
                             TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),

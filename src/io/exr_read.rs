@@ -38,6 +38,8 @@ pub enum TrapKind {
     Stripe,
     /// `trapK.R/G/B/A`.
     Color,
+    /// `trapK.IFS`.
+    Density,
 }
 
 impl RawData {
@@ -50,6 +52,7 @@ impl RawData {
                     TrapPlane::Distance(_) => TrapKind::Distance,
                     TrapPlane::Stripe { .. } => TrapKind::Stripe,
                     TrapPlane::Color(_) => TrapKind::Color,
+                    TrapPlane::Density(_) => TrapKind::Density,
                 })
                 .collect()
         })
@@ -102,6 +105,8 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
             traps.push((TrapKind::Distance, vec![d]));
         } else if let Some(s) = get("STRIPE") {
             traps.push((TrapKind::Stripe, vec![s]));
+        } else if let Some(s) = get("IFS") {
+            traps.push((TrapKind::Density, vec![s]));
         } else if let (Some(r), Some(g), Some(b), Some(a)) = (get("R"), get("G"), get("B"), get("A")) {
             traps.push((TrapKind::Color, vec![r, g, b, a]));
         } else {
@@ -119,6 +124,7 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
             .map(|(kind, chans)| match kind {
                 TrapKind::Distance => TrapPlane::Distance(chans[0][span.clone()].to_vec()),
                 TrapKind::Stripe => TrapPlane::Stripe { value: chans[0][span.clone()].to_vec(), prev: Vec::new() },
+                TrapKind::Density => TrapPlane::Density(chans[0][span.clone()].to_vec()),
                 TrapKind::Color => TrapPlane::Color(
                     span.clone().map(|i| [chans[0][i], chans[1][i], chans[2][i], chans[3][i]]).collect(),
                 ),

@@ -17,7 +17,7 @@ use crate::source::SourceError;
 use crate::trap::{BitmapTrap, Frame, Shape, Stripe, Trap};
 
 /// Every layer kind, with the keys it takes beyond `kind`, `blend`, `opacity` and `mask`.
-pub const LAYER_KINDS: [(&str, &[&str]); 11] = [
+pub const LAYER_KINDS: [(&str, &[&str]); 12] = [
     ("smooth", &["palette", "density", "offset", "transfer", "interior"]),
     ("histogram", &["palette", "density", "offset", "interior"]),
     ("distance", &["style", "k", "density", "palette", "offset"]),
@@ -29,6 +29,7 @@ pub const LAYER_KINDS: [(&str, &[&str]); 11] = [
     ("trap", &["shape", "center", "angle", "radius", "palette", "density", "offset"]),
     ("bitmap", &["image", "center", "size", "angle", "threshold", "frames", "frame", "frame_width"]),
     ("interior", &["color", "shape", "center", "angle", "radius", "palette", "density", "offset"]),
+    ("ifs", &["fold_offset", "slice", "iterations", "strength", "decay", "scale", "palette", "density", "offset"]),
 ];
 
 /// The names of the layer kinds, quoted and comma-separated (for messages).
@@ -188,6 +189,33 @@ pub(super) fn layer(
             Coloring::TrapDistance {
                 trap: push(Trap::Geometric(s)),
                 palette: pal(l.palette.as_ref(), "fire")?,
+                density: density(1.0)?,
+                offset: offset()?,
+            }
+        }
+        "ifs" => {
+            let d = crate::gpu::ifs::IfsParams::default();
+            let fold = match &l.fold_offset {
+                Some(f) if f.get_ref().iter().all(|v| v.is_finite() && v.abs() <= 100.0) => {
+                    f.get_ref().map(|v| v as f32)
+                }
+                Some(f) => return cx.err(f.span(), "fold_offset must be three numbers in [-100, 100]"),
+                None => d.offset,
+            };
+            let params = crate::gpu::ifs::IfsParams {
+                offset: fold,
+                z: num(&l.slice, d.z as f64, -100.0, 100.0, "slice")? as f32,
+                iterations: match &l.iterations {
+                    Some(n) => cx.range_i(n, 1, 1000, "iterations")? as u32,
+                    None => d.iterations,
+                },
+                strength: num(&l.strength, d.strength as f64, 0.0, 1e6, "strength")? as f32,
+                decay: num(&l.decay, d.decay as f64, 1e-3, 1e6, "decay")? as f32,
+                scale: num(&l.scale, d.scale as f64, 1e-12, 1e12, "scale")? as f32,
+            };
+            Coloring::Ifs {
+                trap: push(Trap::Ifs(params)),
+                palette: l.palette.as_ref().map(|p| pal(Some(p), "")).transpose()?,
                 density: density(1.0)?,
                 offset: offset()?,
             }

@@ -235,7 +235,7 @@ impl Scene {
             FamilySpec::Julia { .. } => PERTURB_F64_MIN_LOG10_SPACING_JULIA,
         };
         let deltas_ok = spacing > min_spacing;
-        let bla = if self.traps.is_empty() { self.bla } else { None };
+        let bla = if self.traps.iter().all(|t| !t.observes_orbit()) { self.bla } else { None };
         let bla_note = match (self.bla, bla) {
             (Some(e), Some(_)) => format!("; BLA tolerance {e:e}"),
             (Some(_), None) => "; BLA off (traps must see every iteration)".into(),

@@ -230,6 +230,16 @@ pub struct LayerRaw {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_width: Option<Spanned<i64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold_offset: Option<Spanned<[f64; 3]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<Spanned<i64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<Spanned<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mask: Option<Spanned<MaskRaw>>,
 }
 
@@ -262,6 +272,11 @@ impl Default for LayerRaw {
             frames: None,
             frame: None,
             frame_width: None,
+            fold_offset: None,
+            slice: None,
+            iterations: None,
+            decay: None,
+            scale: None,
             mask: None,
         }
     }
@@ -336,6 +351,11 @@ impl LayerRaw {
             ("frames", at(&self.frames)),
             ("frame", at(&self.frame)),
             ("frame_width", at(&self.frame_width)),
+            ("fold_offset", at(&self.fold_offset)),
+            ("slice", at(&self.slice)),
+            ("iterations", at(&self.iterations)),
+            ("decay", at(&self.decay)),
+            ("scale", at(&self.scale)),
             ("mask", at(&self.mask)),
         ];
         all.into_iter().filter_map(|(k, s)| s.map(|s| (k, s))).collect()

@@ -23,6 +23,17 @@ pub enum Trap {
     Bitmap(BitmapTrap),
     /// Stripe average of the orbit's arguments (not a trap, but observed the same way).
     Stripe(Stripe),
+    /// The seeds' IFS density field at the sample's point: not an orbit statistic (it
+    /// observes nothing), kept in the trap list so that its plane travels with the others
+    /// (EXR channel, recolouring).
+    Ifs(crate::gpu::ifs::IfsParams),
+}
+
+impl Trap {
+    /// True when the trap observes the orbit (every kind but the IFS field).
+    pub fn observes_orbit(&self) -> bool {
+        !matches!(self, Trap::Ifs(_))
+    }
 }
 
 /// Per-orbit running state of one trap.
@@ -55,6 +66,7 @@ impl Trap {
             Trap::Geometric(_) => TrapState::Distance(f64::INFINITY),
             Trap::Bitmap(_) => TrapState::Color { rgba: [0.0; 4], hit: false },
             Trap::Stripe(_) => TrapState::Stripe { sum: 0.0, last: 0.0, count: 0 },
+            Trap::Ifs(_) => TrapState::Distance(f64::NAN),
         }
     }
 

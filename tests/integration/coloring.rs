@@ -48,6 +48,10 @@ fn recolour_reproduces_the_render_exactly() {
             "[output]\nbits = 16\n[[layer]]\nkind = \"stripe\"\npalette = \"gold\"\n[[layer]]\nkind = \"trap\"\nshape = \"line\"\nblend = \"multiply\"\n[[layer]]\nkind = \"interior\"\npalette = \"ocean\"\n[[layer]]\nkind = \"bitmap\"\nimage = \"BITMAP\"\nsize = 0.1\ncenter = [-0.74, 0.13]\n",
         ),
         ("angle", "[[layer]]\nkind = \"angle\"\npalette = \"iq-rainbow\"\ndensity = 2.0\n"),
+        (
+            "ifs",
+            "[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"ifs\"\nblend = \"screen\"\nfold_offset = [-0.5, -0.4, -1.3]\n",
+        ),
     ];
     let bitmap = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bitmaps/star.png");
     for (name, layers) in stacks {
@@ -281,6 +285,30 @@ fn stripe_average_at_depth_agrees_with_direct() {
     let close =
         a.iter().zip(&b).zip(na.iter().zip(&nb)).filter(|((x, y), (m, n))| m == n && (*x - *y).abs() < 1e-3).count();
     assert!(close * 100 >= same_n * 99, "{close} of {same_n} stripe values agree");
+}
+
+/// The IFS layer's plane is the CPU density function at each sample's point (the shader is
+/// checked against the same function in gpu.rs), and it does not hold up the vectorised
+/// kernel: N is what it is without the layer.
+#[test]
+fn ifs_plane_is_the_density_at_each_point() {
+    let with = scene(&format!("{VIEW}[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"ifs\"\nscale = 0.7\n"));
+    let without = scene(&format!("{VIEW}[[layer]]\nkind = \"smooth\"\n"));
+    let params = render::field_params(&with, ChannelSet::default());
+    let strip = field::compute_strip(&params, 0..54, &AtomicBool::new(false)).unwrap();
+    let TrapPlane::Density(d) = &strip.planes.traps[0] else { panic!("IFS plane") };
+    let deepfield::trap::Trap::Ifs(p) = &with.traps[0] else { panic!("IFS trap") };
+    for j in 0..54 {
+        for i in 0..72 {
+            let pt = params.grid.point(i, j);
+            assert_eq!(d[(j * 72 + i) as usize], deepfield::gpu::ifs::density(p, pt[0] as f32, pt[1] as f32));
+        }
+    }
+    assert!(d.iter().any(|&v| v > 0.05), "the field is not empty here");
+    let plain =
+        field::compute_strip(&render::field_params(&without, ChannelSet::default()), 0..54, &AtomicBool::new(false))
+            .unwrap();
+    assert_eq!(plain.planes.n, strip.planes.n);
 }
 
 /// Histogram positions are uniform over the exterior samples: the fraction below q is q.

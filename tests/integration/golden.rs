@@ -158,6 +158,7 @@ fn golden_colourings() {
             "interior-trap",
             "kind = \"interior\"\npalette = \"emerald\"\nshape = \"circle\"\nradius = 0.3\ndensity = 3.0\n",
         ),
+        ("ifs", "kind = \"ifs\"\npalette = \"electric\"\nscale = 0.8\nslice = 0.2\n"),
     ];
     for (name, layer) in cases {
         golden(&format!("coloring-{name}"), &format!("version = 1\n{VIEW}[iteration]\nmax = 300\n[[layer]]\n{layer}"));
