@@ -8,10 +8,10 @@ use super::args::ViewArgs;
 
 /// Runs `deepfield view`.
 pub fn run(args: ViewArgs) -> Result<(), Failure> {
-    if let Some(p) = &args.scene
-        && !p.exists()
-    {
-        return Err(Failure::Input(anyhow!("{}: no such scene file", p.display())));
+    // Bad input is reported (exit 2, file:line:column) before any window opens.
+    if let Some(p) = &args.scene {
+        let (origin, text, base) = super::scene::read_source(p)?;
+        super::scene::load_text(&origin, &text, &base, |_| {})?;
     }
     let options = ViewerOptions { scene: args.scene, screenshot: args.screenshot, inline: false };
     let size = args.size.map(|(w, h)| [w as f32, h as f32]);

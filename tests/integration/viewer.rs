@@ -245,3 +245,17 @@ fn real_window_under_xvfb() {
     let img = image::open(&shot).expect("a screenshot");
     assert!(img.width() >= 800 && img.height() >= 500, "{}x{}", img.width(), img.height());
 }
+
+/// A bad scene is refused before any window opens: exit 2, file:line:column.
+#[test]
+fn bad_scenes_are_refused_before_a_window_opens() {
+    let dir = scratch("viewer-bad");
+    let bad = scene_file(&dir, "version = 1\n[view]\nzoom = \"x\"\n");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_deepfield"))
+        .args(["view", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("scene.toml:3:8"), "{err}");
+}
