@@ -259,3 +259,34 @@ fn bad_scenes_are_refused_before_a_window_opens() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("scene.toml:3:8"), "{err}");
 }
+
+/// What a dropped file does: a palette file goes to the selected layer and only recolours; a
+/// scene (here a PNG written by deepfield) opens it, with the view it holds.
+#[test]
+fn dropped_palettes_recolour_and_dropped_scenes_open() {
+    let dir = scratch("viewer-drop");
+    let mut h = harness(&dir, SCENE);
+    let before = h.state().counters();
+    let ggr = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/palettes/sample.ggr");
+    h.state_mut().open_path(&ggr).expect("palette opens");
+    settle(&mut h);
+    let after = h.state().counters();
+    assert_eq!((after.renders, after.recolours), (before.renders, before.recolours + 1));
+    assert_eq!(h.state().layer_palette(0).as_deref(), Some("sample"));
+
+    let scene = scene_file(
+        &dir,
+        "version = 1\n[view]\ncenter = [\"-1.25\", \"0.02\"]\nzoom = \"40\"\nwidth = 64\nheight = 48\n",
+    );
+    let png = dir.join("dropped.png");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_deepfield"))
+        .args(["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "-q"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    h.state_mut().open_path(&png).expect("scene opens");
+    settle(&mut h);
+    assert_eq!(h.state().nav.center, ["-1.25".to_string(), "0.02".to_string()]);
+    assert!((h.state().nav.log10_zoom - 40f64.log10()).abs() < 1e-12);
+    assert!(h.state().counters().renders > after.renders);
+}
