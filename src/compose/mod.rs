@@ -13,7 +13,7 @@ use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
 use crate::coloring::{Coloring, Context, Histogram, Mask};
 use crate::field::{Needs, Planes};
-use crate::palette::color::{linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
+use crate::palette::color::{Srgb8Encoder, linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
 use crate::trap::Trap;
 
 /// How a layer combines with what is below it.
@@ -154,11 +154,12 @@ impl Stack {
         let bg = self.background;
         if let Some(layer) = self.single_opaque() {
             let mut out = vec![0u8; planes.len() * 3];
+            let enc = Srgb8Encoder::get();
             layer.coloring.paint_each(planes, 1, ctx, layer.mask.as_ref(), &mut |k, c| {
                 let t = 1.0 - c[3];
-                out[3 * k] = linear_to_srgb8(c[0] + bg[0] * t);
-                out[3 * k + 1] = linear_to_srgb8(c[1] + bg[1] * t);
-                out[3 * k + 2] = linear_to_srgb8(c[2] + bg[2] * t);
+                out[3 * k] = enc.encode(c[0] + bg[0] * t);
+                out[3 * k + 1] = enc.encode(c[1] + bg[1] * t);
+                out[3 * k + 2] = enc.encode(c[2] + bg[2] * t);
             });
             return out;
         }
@@ -185,11 +186,12 @@ impl Stack {
             .unwrap_or(tiny_skia::Color::BLACK);
         base.fill(bg8);
         let mut layer_pixmap = Pixmap::new(w, h)?;
+        let enc = Srgb8Encoder::get();
         for layer in &self.layers {
             let dst = layer_pixmap.pixels_mut();
             layer
                 .coloring
-                .paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| dst[k] = to_premultiplied_srgb8(c));
+                .paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| dst[k] = to_premultiplied_srgb8(c, enc));
             let paint = PixmapPaint {
                 opacity: layer.opacity,
                 blend_mode: layer.blend.skia(),
@@ -202,24 +204,21 @@ impl Stack {
 }
 
 /// Linear premultiplied RGBA to tiny-skia's premultiplied sRGB-encoded bytes.
-fn to_premultiplied_srgb8(c: [f32; 4]) -> PremultipliedColorU8 {
+#[inline(always)]
+fn to_premultiplied_srgb8(c: [f32; 4], enc: Srgb8Encoder) -> PremultipliedColorU8 {
     let a = c[3].clamp(0.0, 1.0);
     if a <= 0.0 {
         return PremultipliedColorU8::TRANSPARENT;
     }
     let a8 = (a * 255.0 + 0.5) as u8;
     if a8 == 255 {
-        return PremultipliedColorU8::from_rgba(
-            linear_to_srgb8(c[0]),
-            linear_to_srgb8(c[1]),
-            linear_to_srgb8(c[2]),
-            255,
-        )
-        .unwrap_or(PremultipliedColorU8::TRANSPARENT);
+        return PremultipliedColorU8::from_rgba(enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255)
+            .unwrap_or(PremultipliedColorU8::TRANSPARENT);
     }
     let scale = a8 as f32 / 255.0;
-    let enc = |v: f32| ((linear_to_srgb8(v / a) as f32 * scale + 0.5) as u8).min(a8);
-    PremultipliedColorU8::from_rgba(enc(c[0]), enc(c[1]), enc(c[2]), a8).unwrap_or(PremultipliedColorU8::TRANSPARENT)
+    let premul = |v: f32| ((enc.encode(v / a) as f32 * scale + 0.5) as u8).min(a8);
+    PremultipliedColorU8::from_rgba(premul(c[0]), premul(c[1]), premul(c[2]), a8)
+        .unwrap_or(PremultipliedColorU8::TRANSPARENT)
 }
 
 /// Averages `aa x aa` blocks of samples (`width` samples per row) in linear light.
@@ -261,8 +260,8 @@ mod tests {
 
     #[test]
     fn premultiplied_conversion_is_valid() {
-        let p = to_premultiplied_srgb8([0.1, 0.2, 0.3, 0.5]);
+        let p = to_premultiplied_srgb8([0.1, 0.2, 0.3, 0.5], Srgb8Encoder::get());
         assert!(p.red() <= p.alpha() && p.alpha() == 128);
-        assert_eq!(to_premultiplied_srgb8([0.0; 4]), PremultipliedColorU8::TRANSPARENT);
+        assert_eq!(to_premultiplied_srgb8([0.0; 4], Srgb8Encoder::get()), PremultipliedColorU8::TRANSPARENT);
     }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::IoError;
 use super::atomic::{AtomicFile, Tail};
-use crate::palette::color::{linear_to_srgb, linear_to_srgb8};
+use crate::palette::color::linear_to_srgb;
 
 /// iTXt keyword under which the scene TOML is stored.
 pub const SCENE_KEYWORD: &str = "deepfield-scene";
@@ -33,13 +33,14 @@ impl PngEncoder {
     /// Encodes pixels of linear RGB (whole rows) into PNG scanline bytes.
     pub fn encode(&self, rgb: &[[f32; 3]]) -> Vec<u8> {
         let mut out = Vec::with_capacity(rgb.len() * 3 * (self.bits as usize / 8));
+        let enc = crate::palette::color::Srgb8Encoder::get();
         for p in rgb {
             for &v in p {
                 if self.bits == 16 {
                     let q = (linear_to_srgb(v) * 65535.0 + 0.5) as u16;
                     out.extend_from_slice(&q.to_be_bytes());
                 } else {
-                    out.push(linear_to_srgb8(v));
+                    out.push(enc.encode(v));
                 }
             }
         }

@@ -33,12 +33,12 @@ struct Tables {
     /// Linear thresholds between consecutive codes (code k+1 starts at `encode[k]`).
     encode: [f32; 255],
     /// Code at the start of each of `BUCKETS` equal steps of [0, 1]. Neighbouring code
-    /// boundaries are at least 1/(255 * 12.92) ~ 3e-4 apart, wider than a bucket, so at most
+    /// boundaries are at least 1/(255 * 12.92) ~ 3.0e-4 apart, wider than a bucket (2.4e-4), so at most
     /// one boundary falls inside a bucket: one comparison finishes the search.
     start: Vec<u8>,
 }
 
-const BUCKETS: usize = 1 << 16;
+const BUCKETS: usize = 1 << 12;
 
 fn tables() -> &'static Tables {
     static T: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
@@ -59,17 +59,30 @@ pub fn srgb8_to_linear(code: u8) -> f32 {
 /// the code boundaries; no `powf`).
 #[inline]
 pub fn linear_to_srgb8(v: f32) -> u8 {
-    let t = tables();
-    if v.is_nan() || v <= 0.0 {
-        return 0;
+    Srgb8Encoder::get().encode(v)
+}
+
+/// [`linear_to_srgb8`] with the table lookup hoisted out, for per-pixel loops.
+#[derive(Clone, Copy)]
+pub struct Srgb8Encoder(&'static Tables);
+
+impl Srgb8Encoder {
+    /// The encoder (the tables are built on first use).
+    #[inline]
+    pub fn get() -> Self {
+        Self(tables())
     }
-    if v >= 1.0 {
-        return 255;
+
+    /// The 8-bit sRGB code nearest to linear `v`; NaN and negatives give 0, >= 1 gives 255.
+    #[inline(always)]
+    pub fn encode(self, v: f32) -> u8 {
+        // clamp keeps NaN, and NaN as usize is 0: no branch is needed for either end.
+        // v * 2^12 is exact, so the bucket is floor(v * BUCKETS) exactly.
+        let k = self.0.start[(v.clamp(0.0, 1.0) * BUCKETS as f32) as usize];
+        // `encode` has 255 entries; code 255 has no boundary above it.
+        let above = self.0.encode.get(k as usize).is_some_and(|&b| v >= b);
+        k + u8::from(above)
     }
-    let k = t.start[(v * BUCKETS as f32) as usize];
-    // `encode` has 255 entries; code 255 has no boundary above it.
-    let above = t.encode.get(k as usize).is_some_and(|&b| v >= b);
-    k + u8::from(above)
 }
 
 /// Linear sRGB to OKLab.
