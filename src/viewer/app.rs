@@ -322,8 +322,10 @@ impl ViewerApp {
                 tex.set(ColorImage::from_rgb([w, h], &rgb8), egui::TextureOptions::LINEAR);
             }
             self.recolours += 1;
-            let strips = strips.clone();
-            self.planes = Some((strips, scene.clone()));
+            // The planes stay; they now belong to the recoloured scene.
+            if let Some((_, s)) = &mut self.planes {
+                *s = scene.clone();
+            }
             self.scene = Some(scene);
             return;
         }
