@@ -293,6 +293,16 @@ impl Perturbation {
     /// Iterates many samples without traps, `LANES` at a time in the f64 phase (samples in
     /// their FloatExp phase run one at a time). Same results as [`Perturbation::orbit`].
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
+        if self.derivative {
+            self.orbits_with::<true>(offsets, out, counters);
+        } else {
+            self.orbits_with::<false>(offsets, out, counters);
+        }
+    }
+
+    /// [`Perturbation::orbits`] with the derivative carried or not (`DER`, compiled apart so
+    /// that the common case has no derivative branches in its loop).
+    fn orbits_with<const DER: bool>(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
         let add_fe = if self.mandelbrot { self.spacing } else { FloatExp::ZERO };
         let c64 = self.ctx(&self.bla_f64, true, add_fe);
         let mut lanes: [Option<Lane>; LANES] = [None; LANES];
@@ -328,10 +338,10 @@ impl Perturbation {
                 [Some(a), Some(b)] => {
                     let (mut a2, mut b2) = (*a, *b);
                     let r = loop {
-                        if let Some(e) = self.op::<f64>(&mut a2.s, &mut a2.der, c64, &[], &mut [], &mut local) {
+                        if let Some(e) = self.op::<f64, DER>(&mut a2.s, &mut a2.der, c64, &[], &mut [], &mut local) {
                             break (0, e);
                         }
-                        if let Some(e) = self.op::<f64>(&mut b2.s, &mut b2.der, c64, &[], &mut [], &mut local) {
+                        if let Some(e) = self.op::<f64, DER>(&mut b2.s, &mut b2.der, c64, &[], &mut [], &mut local) {
                             break (1, e);
                         }
                     };
@@ -342,7 +352,8 @@ impl Perturbation {
                     let l = lanes.iter().position(Option::is_some).unwrap_or(0);
                     let Some(lane) = &mut lanes[l] else { continue };
                     loop {
-                        if let Some(e) = self.op::<f64>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local) {
+                        if let Some(e) = self.op::<f64, DER>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local)
+                        {
                             break (l, e);
                         }
                     }
@@ -408,7 +419,12 @@ impl Perturbation {
         // Counted locally and added on exit: the loop's state stays in registers.
         let mut local = Counters::default();
         let exit = loop {
-            if let Some(exit) = self.op(&mut s, der, ctx, traps, states, &mut local) {
+            let step = if self.derivative {
+                self.op::<D, true>(&mut s, der, ctx, traps, states, &mut local)
+            } else {
+                self.op::<D, false>(&mut s, der, ctx, traps, states, &mut local)
+            };
+            if let Some(exit) = step {
                 break exit;
             }
         };
@@ -423,7 +439,7 @@ impl Perturbation {
     /// One pass of the loop: the end tests, then a rebase, a BLA step or a perturbation
     /// step. Returns the exit when the sample ends or must change number type.
     #[inline(always)]
-    fn op<D: Real>(
+    fn op<D: Real, const DER: bool>(
         &self,
         s: &mut Sample<D>,
         der: &mut Der,
@@ -448,7 +464,7 @@ impl Perturbation {
             }
         }
         if z[0] * z[0] + z[1] * z[1] > self.escape2 {
-            let dz = if self.derivative { der.to_f64() } else { [0.0; 2] };
+            let dz = if DER { der.to_f64() } else { [0.0; 2] };
             return Some(Exit::Done(Orbit { n: s.n, z, dz }));
         }
         if s.n >= self.max_iter {
@@ -471,14 +487,14 @@ impl Perturbation {
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            self.apply_bla(e, s, der, ctx.add_fe);
+            self.apply_bla::<D, DER>(e, s, der, ctx.add_fe);
             s.m += len;
             s.n += len;
             local.bla_steps += 1;
             local.bla_iterations += len as u64;
             return None;
         }
-        if self.derivative {
+        if DER {
             let [x, y] = z;
             let [a, b] = der.mant;
             der.mant = [2.0 * (x * a - y * b) + der.add, 2.0 * (x * b + y * a)];
@@ -498,9 +514,9 @@ impl Perturbation {
     /// δ -> A δ + B δc, and the derivative alike: in f64 when A and B are moderate (the
     /// common case), else in FloatExp (A may be huge at depth).
     #[inline]
-    fn apply_bla<D: Real>(&self, e: &Bla<D>, s: &mut Sample<D>, der: &mut Der, add_fe: FloatExp) {
+    fn apply_bla<D: Real, const DER: bool>(&self, e: &Bla<D>, s: &mut Sample<D>, der: &mut Der, add_fe: FloatExp) {
         s.dz = cadd(cmul(e.a, s.dz), cmul(e.b, s.dc));
-        if self.derivative {
+        if DER {
             let a = cto_f64(e.a);
             let b = cto_f64(e.b);
             let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
