@@ -351,12 +351,7 @@ impl Perturbation {
                 _ => {
                     let l = lanes.iter().position(Option::is_some).unwrap_or(0);
                     let Some(lane) = &mut lanes[l] else { continue };
-                    loop {
-                        if let Some(e) = self.op::<f64, DER>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local)
-                        {
-                            break (l, e);
-                        }
-                    }
+                    (l, self.steps::<f64, DER>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local))
                 }
             };
             if let Some(lane) = &mut lanes[l] {
@@ -418,15 +413,10 @@ impl Perturbation {
         let start_n = s.n;
         // Counted locally and added on exit: the loop's state stays in registers.
         let mut local = Counters::default();
-        let exit = loop {
-            let step = if self.derivative {
-                self.op::<D, true>(&mut s, der, ctx, traps, states, &mut local)
-            } else {
-                self.op::<D, false>(&mut s, der, ctx, traps, states, &mut local)
-            };
-            if let Some(exit) = step {
-                break exit;
-            }
+        let exit = if self.derivative {
+            self.steps::<D, true>(&mut s, der, ctx, traps, states, &mut local)
+        } else {
+            self.steps::<D, false>(&mut s, der, ctx, traps, states, &mut local)
         };
         if D::NAME == FloatExp::NAME {
             local.floatexp_steps = local.steps;
@@ -434,6 +424,24 @@ impl Perturbation {
         local.iterations = (s.n - start_n) as u64;
         counters.add(&local);
         exit
+    }
+
+    /// Passes of the loop until the sample ends or must change number type.
+    #[inline(always)]
+    fn steps<D: Real, const DER: bool>(
+        &self,
+        s: &mut Sample<D>,
+        der: &mut Der,
+        ctx: Ctx<'_, D>,
+        traps: &[Trap],
+        states: &mut [TrapState],
+        local: &mut Counters,
+    ) -> Exit<D> {
+        loop {
+            if let Some(exit) = self.op::<D, DER>(s, der, ctx, traps, states, local) {
+                return exit;
+            }
+        }
     }
 
     /// One pass of the loop: the end tests, then a rebase, a BLA step or a perturbation
