@@ -10,7 +10,7 @@
 //!   escaped (R^2 - R >= |c|, nearly always) |z|^2 is tested once, at the block's end;
 //!   otherwise each step ORs "|z|^2 > R^2" into a mask. The state is checkpointed every
 //!   `STRIDE` steps. After a block, a vector with escaped lanes finds every lane's escape at
-//!   once ([`find_escapes`]): blends pick each lane's last checkpoint inside the circle and
+//!   once (`find_escapes`): blends pick each lane's last checkpoint inside the circle and
 //!   at most `STRIDE` vector steps from there find the first value outside. This has no
 //!   per-lane loop and no unpredictable branch, which matters because on a typical view a
 //!   sample ends every ~15 iterations per vector (it replaced a scalar replay per lane and
