@@ -431,26 +431,28 @@ fn run_block<S: Simd, const DE: bool, const EACH: bool, const TRAP: bool>(
     let mut tm = st.tm;
     let zero = simd.splat_f64s(0.0);
     let mut esc = [simd.less_than_f64s(zero, zero); V];
-    for k in 0..K as usize {
-        if k % STRIDE as usize == 0 {
-            ck.x[k / STRIDE as usize] = x;
-            ck.y[k / STRIDE as usize] = y;
-            if DE {
-                ck.dx[k / STRIDE as usize] = dx;
-                ck.dy[k / STRIDE as usize] = dy;
-            }
-            if TRAP {
-                ck.tm[k / STRIDE as usize] = tm;
-            }
+    for c in 0..C {
+        ck.x[c] = x;
+        ck.y[c] = y;
+        if DE {
+            ck.dx[c] = dx;
+            ck.dy[c] = dy;
         }
-        for v in 0..V {
-            if EACH {
-                let rr = simd.mul_add_f64s(x[v], x[v], simd.mul_f64s(y[v], y[v]));
-                esc[v] = simd.or_m64s(esc[v], simd.greater_than_f64s(rr, r2v));
-            }
-            (x[v], y[v], dx[v], dy[v]) = step_v::<S, DE>(simd, x[v], y[v], dx[v], dy[v], cx[v], cy[v], addv);
-            if TRAP {
-                tm[v] = simd.min_f64s(tm[v], tv.metric(simd, x[v], y[v]));
+        if TRAP {
+            ck.tm[c] = tm;
+        }
+        // The stretch between checkpoints is unrolled: no loop control or register moves
+        // between steps.
+        for _ in 0..STRIDE {
+            for v in 0..V {
+                if EACH {
+                    let rr = simd.mul_add_f64s(x[v], x[v], simd.mul_f64s(y[v], y[v]));
+                    esc[v] = simd.or_m64s(esc[v], simd.greater_than_f64s(rr, r2v));
+                }
+                (x[v], y[v], dx[v], dy[v]) = step_v::<S, DE>(simd, x[v], y[v], dx[v], dy[v], cx[v], cy[v], addv);
+                if TRAP {
+                    tm[v] = simd.min_f64s(tm[v], tv.metric(simd, x[v], y[v]));
+                }
             }
         }
     }
