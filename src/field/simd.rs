@@ -218,7 +218,8 @@ fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Resu
     }
     .sqrt();
     let radius = params.escape_radius;
-    let check_each = !(radius >= 2.0 && radius * radius - radius >= max_c);
+    // (With a margin far above rounding, so that the orbit stays escaped in f64 too.)
+    let check_each = !(radius >= 2.0 && radius * radius - radius >= max_c + 1e-9 * radius * radius);
     let r2v = simd.splat_f64s(r2);
     let addv = simd.splat_f64s(dz_add);
     loop {
@@ -505,9 +506,9 @@ fn step_v<S: Simd, const DE: bool>(
 /// Where each lane of one vector escaped inside the last block, found for all lanes at once
 /// (valid for the lanes that escaped; the others carry garbage).
 struct Found<S: Simd> {
-    /// Byte k-1 holds the lanes whose checkpoints 1..=k were all inside the circle.
+    /// Byte k-1 holds the lanes whose checkpoint k is inside the circle.
     checkpoints: u64,
-    /// Byte s holds the lanes still inside after testing s+1 values from their checkpoint.
+    /// Byte s holds the lanes whose value s steps after their last inside checkpoint is inside.
     steps: u64,
     x: S::f64s,
     y: S::f64s,
@@ -535,6 +536,11 @@ impl<S: Simd> Found<S> {
 /// `STRIDE` steps from it find the first value outside, with the same operations as the
 /// block, so the results are bit-identical to the scalar replay's. One pass serves every lane
 /// of the vector: no per-lane loop, no unpredictable branch.
+///
+/// Because an escaped orbit stays escaped, "inside" holds for a prefix of the checkpoints and
+/// of the steps, so neither needs a running AND: the last inside checkpoint is the last one
+/// a forward chain of blends keeps, and the first value outside is the one a backward chain
+/// keeps.
 #[inline(always)]
 fn find_escapes<S: Simd, const DE: bool>(
     simd: S,
@@ -547,39 +553,37 @@ fn find_escapes<S: Simd, const DE: bool>(
 ) -> Found<S> {
     let inside =
         |x: S::f64s, y: S::f64s| simd.less_than_or_equal_f64s(simd.mul_add_f64s(x, x, simd.mul_f64s(y, y)), r2v);
-    let zero = simd.splat_f64s(0.0);
-    let all = simd.equal_f64s(zero, zero);
     let (mut x, mut y, mut dx, mut dy) = (ck.x[0][v], ck.y[0][v], ck.dx[0][v], ck.dy[0][v]);
-    let mut alive = all;
     let mut checkpoints = 0u64;
     for k in 1..C {
-        alive = simd.and_m64s(alive, inside(ck.x[k][v], ck.y[k][v]));
-        x = simd.select_f64s(alive, ck.x[k][v], x);
-        y = simd.select_f64s(alive, ck.y[k][v], y);
+        let ins = inside(ck.x[k][v], ck.y[k][v]);
+        x = simd.select_f64s(ins, ck.x[k][v], x);
+        y = simd.select_f64s(ins, ck.y[k][v], y);
         if DE {
-            dx = simd.select_f64s(alive, ck.dx[k][v], dx);
-            dy = simd.select_f64s(alive, ck.dy[k][v], dy);
+            dx = simd.select_f64s(ins, ck.dx[k][v], dx);
+            dy = simd.select_f64s(ins, ck.dy[k][v], dy);
         }
-        checkpoints |= (mask_bits::<S>(alive) as u64) << (8 * (k - 1));
+        checkpoints |= (mask_bits::<S>(ins) as u64) << (8 * (k - 1));
     }
-    let mut found = Found { checkpoints, steps: 0, x, y, dx, dy };
-    let mut alive = all;
-    for s in 0..=STRIDE as usize {
-        let ins = inside(x, y);
-        let newly = simd.and_m64s(alive, simd.not_m64s(ins));
-        found.x = simd.select_f64s(newly, x, found.x);
-        found.y = simd.select_f64s(newly, y, found.y);
+    let mut z = [(x, y, dx, dy); STRIDE as usize + 1];
+    let mut ins = [simd.equal_f64s(x, x); STRIDE as usize];
+    let mut steps = 0u64;
+    for s in 0..STRIDE as usize {
+        let (x, y, dx, dy) = z[s];
+        ins[s] = inside(x, y);
+        steps |= (mask_bits::<S>(ins[s]) as u64) << (8 * s);
+        z[s + 1] = step_v::<S, DE>(simd, x, y, dx, dy, cx, cy, addv);
+    }
+    let (mut x, mut y, mut dx, mut dy) = z[STRIDE as usize];
+    for s in (0..STRIDE as usize).rev() {
+        x = simd.select_f64s(ins[s], x, z[s].0);
+        y = simd.select_f64s(ins[s], y, z[s].1);
         if DE {
-            found.dx = simd.select_f64s(newly, dx, found.dx);
-            found.dy = simd.select_f64s(newly, dy, found.dy);
-        }
-        alive = simd.and_m64s(alive, ins);
-        if s < STRIDE as usize {
-            found.steps |= (mask_bits::<S>(alive) as u64) << (8 * s);
-            (x, y, dx, dy) = step_v::<S, DE>(simd, x, y, dx, dy, cx, cy, addv);
+            dx = simd.select_f64s(ins[s], dx, z[s].2);
+            dy = simd.select_f64s(ins[s], dy, z[s].3);
         }
     }
-    found
+    Found { checkpoints, steps, x, y, dx, dy }
 }
 
 /// Global block count at which a lane needs attention without an escape or a cycle: when
