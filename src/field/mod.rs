@@ -162,7 +162,10 @@ pub fn compute_strip(
             }
             its
         }
-        _ if orbit_free => simd::iterate(&params.orbit, &points, &mut orbits, cancel)?,
+        _ if orbit_free => {
+            let n = &params.needs;
+            simd::iterate(&params.orbit, &points, &mut orbits, n.nf || n.t || n.de, cancel)?
+        }
         // One geometric trap (the common case) runs vectorised; several traps or a bitmap
         // (a texture lookup per step) run in the scalar kernel.
         [Trap::Geometric(shape)] => {

@@ -51,14 +51,18 @@ const FIRST_SAVE: u64 = 16;
 const CANCEL_EVERY: u64 = 1 << 12;
 
 /// Iterates every point, writing one [`Orbit`] per point; returns the iterations performed.
+/// With `final_z` false only N is wanted: escaped orbits may then carry z = dz = 0, which
+/// spares the kernel selecting them (the derivative implies `final_z`).
 pub fn iterate(
     params: &OrbitParams,
     points: &[[f64; 2]],
     out: &mut [Orbit],
+    final_z: bool,
     cancel: &AtomicBool,
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
-    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], cancel })
+    let final_z = final_z || params.derivative;
+    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z, cancel })
 }
 
 /// As [`iterate`], also keeping each orbit's distance to one geometric trap `shape`
@@ -75,7 +79,7 @@ pub fn iterate_with_trap(
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
     assert_eq!(points.len(), trap_out.len());
-    pulp::Arch::new().dispatch(Job { params, points, out, shape: Some(shape), trap_out, cancel })
+    pulp::Arch::new().dispatch(Job { params, points, out, shape: Some(shape), trap_out, final_z: true, cancel })
 }
 
 struct Job<'a> {
@@ -84,6 +88,7 @@ struct Job<'a> {
     out: &'a mut [Orbit],
     shape: Option<Shape>,
     trap_out: &'a mut [f64],
+    final_z: bool,
     cancel: &'a AtomicBool,
 }
 
@@ -92,11 +97,12 @@ impl WithSimd for Job<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
-        match (self.params.derivative, self.shape.is_some()) {
-            (false, false) => run::<S, false, false>(simd, self),
-            (true, false) => run::<S, true, false>(simd, self),
-            (false, true) => run::<S, false, true>(simd, self),
-            (true, true) => run::<S, true, true>(simd, self),
+        match (self.params.derivative, self.shape.is_some(), self.final_z) {
+            (false, false, false) => run::<S, false, false, false>(simd, self),
+            (false, false, true) => run::<S, false, false, true>(simd, self),
+            (true, false, _) => run::<S, true, false, true>(simd, self),
+            (false, true, _) => run::<S, false, true, true>(simd, self),
+            (true, true, _) => run::<S, true, true, true>(simd, self),
         }
     }
 }
@@ -161,8 +167,8 @@ struct State<S: Simd> {
 }
 
 #[inline(always)]
-fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled> {
-    let Job { params, points, out, shape, trap_out, cancel } = job;
+fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled> {
+    let Job { params, points, out, shape, trap_out, cancel, .. } = job;
     let shape = shape.unwrap_or(Shape::Point { at: [0.0, 0.0] });
     let tv = TrapV::<S>::new(simd, &shape);
     let nl = S::F64_LANES;
@@ -254,7 +260,7 @@ fn run<S: Simd, const DE: bool, const TRAP: bool>(simd: S, job: Job<'_>) -> Resu
             }
             // Monotone escapes (no traps) are located for the whole vector at once.
             let found = (esc_bits != 0 && !check_each && !TRAP)
-                .then(|| find_escapes::<S, DE>(simd, &ck, v, st.cx[v], st.cy[v], r2v, addv));
+                .then(|| find_escapes::<S, DE, Z>(simd, &ck, v, st.cx[v], st.cy[v], r2v, addv));
             while todo != 0 {
                 let l = todo.trailing_zeros() as usize;
                 todo &= todo - 1;
@@ -542,7 +548,7 @@ impl<S: Simd> Found<S> {
 /// a forward chain of blends keeps, and the first value outside is the one a backward chain
 /// keeps.
 #[inline(always)]
-fn find_escapes<S: Simd, const DE: bool>(
+fn find_escapes<S: Simd, const DE: bool, const Z: bool>(
     simd: S,
     ck: &Checkpoints<S>,
     v: usize,
@@ -572,7 +578,14 @@ fn find_escapes<S: Simd, const DE: bool>(
         let (x, y, dx, dy) = z[s];
         ins[s] = inside(x, y);
         steps |= (mask_bits::<S>(ins[s]) as u64) << (8 * s);
-        z[s + 1] = step_v::<S, DE>(simd, x, y, dx, dy, cx, cy, addv);
+        // Without Z the value after the last test is never looked at.
+        if Z || s + 1 < STRIDE as usize {
+            z[s + 1] = step_v::<S, DE>(simd, x, y, dx, dy, cx, cy, addv);
+        }
+    }
+    if !Z {
+        let zero = simd.splat_f64s(0.0);
+        return Found { checkpoints, steps, x: zero, y: zero, dx: zero, dy: zero };
     }
     let (mut x, mut y, mut dx, mut dy) = z[STRIDE as usize];
     for s in (0..STRIDE as usize).rev() {
@@ -688,7 +701,7 @@ mod tests {
         let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
         let params = OrbitParams { family, max_iter, escape_radius, derivative };
         let mut out = vec![Orbit::interior(); points.len()];
-        let its = iterate(&params, &points, &mut out, &AtomicBool::new(false)).unwrap();
+        let its = iterate(&params, &points, &mut out, true, &AtomicBool::new(false)).unwrap();
         let mut total = 0;
         for (p, o) in points.iter().zip(&out) {
             let (want, n) = scalar::orbit(&params, *p, &[], &mut []);
@@ -698,6 +711,13 @@ mod tests {
         // Periodicity detection may stop interior orbits at different points; escapes agree.
         if out.iter().all(|o| o.n != crate::field::INTERIOR) {
             assert_eq!(its, total);
+        }
+        // Asking for N alone gives the same N (and the same work).
+        let mut n_only = vec![Orbit::interior(); points.len()];
+        let its_n = iterate(&params, &points, &mut n_only, false, &AtomicBool::new(false)).unwrap();
+        assert_eq!(its_n, its);
+        for (a, b) in n_only.iter().zip(&out) {
+            assert_eq!(a.n, b.n);
         }
     }
 
