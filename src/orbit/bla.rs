@@ -115,6 +115,14 @@ impl<T: Real> BlaTable<T> {
         best
     }
 
+    /// The largest squared radius of the shortest steps: no step of any length is valid for
+    /// a delta with |z|^2 at or above it (a longer step's radius is at most its first
+    /// half's).
+    pub fn max_r2(&self) -> Option<T> {
+        let first = self.levels.first()?;
+        first.iter().map(|e| e.r2).reduce(|a, b| if b > a { b } else { a })
+    }
+
     /// Bytes of memory the table uses.
     pub fn bytes(&self) -> usize {
         self.levels.iter().map(|l| l.capacity() * std::mem::size_of::<Bla<T>>()).sum()

@@ -142,6 +142,7 @@ pub fn prepare(
             }
         }
     }
+    let single_d2 = perturb::single_step_threshold(&bla_f64);
     Ok(Perturbation {
         refs,
         bla_fe,
@@ -153,6 +154,7 @@ pub fn prepare(
         derivative: spec.derivative,
         numbers: spec.numbers,
         skip,
+        single_d2,
     })
 }
 

@@ -22,6 +22,9 @@
 //! Traps observe z = Z_m + δ in f64 at every iteration, so BLA (which skips iterations) is
 //! off when traps are on.
 
+#[cfg(target_arch = "x86_64")]
+mod lanes;
+
 use super::bla::{Bla, BlaTable};
 use super::reference::Reference;
 use crate::field::Orbit;
@@ -110,6 +113,10 @@ pub struct Perturbation {
     pub numbers: Numbers,
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
     pub skip: Option<Skip>,
+    /// BLA is tried only while |δ|^2 is at most this (f64 phase); above it a sample takes
+    /// single steps, which run in vector lanes where the CPU has AVX-512 (see
+    /// [`single_step_threshold`]); 0 with BLA off.
+    pub single_d2: f64,
 }
 
 /// The run of BLA steps from the start of the primary reference that is valid for every
@@ -151,6 +158,19 @@ impl Skip {
     }
 }
 
+/// Fraction of the largest BLA radius above which a sample stops looking for BLA steps.
+/// At 1 nothing changes (no step is valid above the largest radius); below 1 the short
+/// steps that a delta just under the radii still finds are replaced by single steps,
+/// which are exact and, in vector lanes, cheaper than a scalar BLA lookup and step.
+pub const SINGLE_STEP_FRACTION: f64 = 1.0;
+
+/// `single_d2` for these f64 tables: the largest radius of their shortest steps, times
+/// [`SINGLE_STEP_FRACTION`], squared; 0 without tables.
+pub fn single_step_threshold(tables: &[Option<BlaTable<f64>>]) -> f64 {
+    let r2 = tables.iter().flatten().filter_map(BlaTable::max_r2).fold(0.0, f64::max);
+    r2 * SINGLE_STEP_FRACTION * SINGLE_STEP_FRACTION
+}
+
 /// A sample's state in number type D.
 #[derive(Debug, Clone, Copy)]
 struct Sample<D> {
@@ -159,11 +179,13 @@ struct Sample<D> {
     m: u32,
     which: usize,
     n: u32,
+    /// The delta went above `single_d2`: single steps only, until the next rebase.
+    single: bool,
 }
 
 impl<D: Real> Sample<D> {
     fn convert<E: Real>(&self) -> Sample<E> {
-        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m: self.m, which: self.which, n: self.n }
+        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m: self.m, which: self.which, n: self.n, single: self.single }
     }
 }
 
@@ -207,6 +229,17 @@ impl Der {
     }
 }
 
+/// A sample on its way through the vector lanes: its output index, state, derivative, the
+/// offset at full range, and whether the lanes stopped it for a derivative renormalisation.
+#[derive(Debug, Clone, Copy)]
+struct Held {
+    k: usize,
+    s: Sample<f64>,
+    der: Der,
+    dc_fe: [FloatExp; 2],
+    renorm: bool,
+}
+
 /// Where a sample is: in its FloatExp or its f64 phase.
 enum Phase {
     Fe(Sample<FloatExp>),
@@ -217,6 +250,15 @@ enum Phase {
 enum Exit<D> {
     Done(Orbit),
     Switch(Sample<D>),
+    /// The sample is at a single step above `single_d2` (f64 phase): the vector lanes take it.
+    Vector(Sample<D>),
+}
+
+/// How a sample's scalar run ended.
+enum Ended {
+    Done(Orbit),
+    /// Handed to the vector lanes, about to take a single step.
+    Vector(Sample<f64>),
 }
 
 /// The loop's fixed inputs in number type D.
@@ -225,6 +267,8 @@ struct Ctx<'a, D> {
     tables: [Option<&'a BlaTable<D>>; 2],
     add_fe: FloatExp,
     hybrid: bool,
+    /// Hand samples above `single_d2` to the vector lanes.
+    vector: bool,
 }
 
 /// A sample in flight in the interleaved f64 loop.
@@ -252,9 +296,9 @@ impl Perturbation {
         let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         let zero = FloatExp::ZERO;
         let (mut start, add_fe) = if self.mandelbrot {
-            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1 }, self.spacing)
+            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false }, self.spacing)
         } else {
-            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0 }, zero)
+            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false }, zero)
         };
         let mut der = [self.spacing, zero];
         if let (true, Some(k)) = (skip, &self.skip) {
@@ -277,7 +321,7 @@ impl Perturbation {
 
     fn ctx<'a, D: Real>(&'a self, tables: &'a [Option<BlaTable<D>>; 2], bla: bool, add_fe: FloatExp) -> Ctx<'a, D> {
         let tables = if bla { [tables[0].as_ref(), tables[1].as_ref()] } else { [None, None] };
-        Ctx { tables, add_fe, hybrid: self.numbers == Numbers::FloatExp }
+        Ctx { tables, add_fe, hybrid: self.numbers == Numbers::FloatExp, vector: false }
     }
 
     /// Iterates the sample at `offset` (in units of the spacing, from the reference point),
@@ -287,12 +331,22 @@ impl Perturbation {
         let (start, mut der, add_fe) = self.start(offset, traps.is_empty(), counters);
         let fe = self.starts_in_floatexp(&start);
         let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
-        self.drive(phase, start.dc, &mut der, add_fe, traps, states, counters)
+        match self.drive(phase, start.dc, &mut der, add_fe, traps, states, false, counters) {
+            Ended::Done(o) => o,
+            Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
+        }
     }
 
-    /// Iterates many samples without traps, `LANES` at a time in the f64 phase (samples in
-    /// their FloatExp phase run one at a time). Same results as [`Perturbation::orbit`].
+    /// Iterates many samples without traps. Same results as [`Perturbation::orbit`], bit for
+    /// bit: with AVX-512, single steps above `single_d2` run eight samples to a vector
+    /// ([`lanes`]); otherwise `LANES` samples at a time in the f64 phase (samples in their
+    /// FloatExp phase run one at a time).
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
+        #[cfg(target_arch = "x86_64")]
+        if lanes::available() {
+            lanes::orbits(self, offsets, out, counters);
+            return;
+        }
         if self.derivative {
             self.orbits_with::<true>(offsets, out, counters);
         } else {
@@ -321,7 +375,7 @@ impl Perturbation {
                                 out[k] = o;
                                 continue;
                             }
-                            Exit::Switch(s) => s.convert(),
+                            Exit::Switch(s) | Exit::Vector(s) => s.convert(),
                         }
                     } else {
                         start.convert()
@@ -360,8 +414,21 @@ impl Perturbation {
                     Exit::Done(o) => o,
                     Exit::Switch(s) => {
                         let fe = Sample { dc: lane.dc_fe, ..s.convert() };
-                        self.drive(Phase::Fe(fe), lane.dc_fe, &mut lane.der, add_fe, &[], &mut [], counters)
+                        match self.drive(
+                            Phase::Fe(fe),
+                            lane.dc_fe,
+                            &mut lane.der,
+                            add_fe,
+                            &[],
+                            &mut [],
+                            false,
+                            counters,
+                        ) {
+                            Ended::Done(o) => o,
+                            Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
+                        }
                     }
+                    Exit::Vector(_) => unreachable!("the two-lane loop never asks for the vector lanes"),
                 };
             }
             lanes[l] = None;
@@ -369,7 +436,67 @@ impl Perturbation {
         counters.add(&local);
     }
 
-    /// Runs a sample from `phase` to its end, switching number types as its delta asks.
+    /// What the derivative adds per step (the spacing for the Mandelbrot set).
+    fn add_fe(&self) -> FloatExp {
+        if self.mandelbrot { self.spacing } else { FloatExp::ZERO }
+    }
+
+    /// Runs sample `k` from its start until it ends (written to `out`) or reaches a single
+    /// step above `single_d2`, where it is returned for the vector lanes.
+    fn begin(&self, k: usize, offset: [f64; 2], out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
+        let (start, mut der, add_fe) = self.start(offset, true, counters);
+        let phase = if self.starts_in_floatexp(&start) { Phase::Fe(start) } else { Phase::F64(start.convert()) };
+        match self.drive(phase, start.dc, &mut der, add_fe, &[], &mut [], true, counters) {
+            Ended::Done(o) => {
+                out[k] = o;
+                None
+            }
+            Ended::Vector(s) => Some(Held { k, s, der, dc_fe: start.dc, renorm: false }),
+        }
+    }
+
+    /// Continues a sample the vector lanes handed back: after a renormalisation of its
+    /// derivative (`renorm`), or else at an event the lanes do not handle (escape, the
+    /// iteration limit, a rebase or glitch, the reference's end), which one full pass of the
+    /// scalar loop takes care of before the sample runs on as [`Perturbation::begin`]'s do.
+    fn resume(&self, mut h: Held, out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
+        let add_fe = self.add_fe();
+        let phase = if h.renorm {
+            h.der.renormalise(add_fe);
+            Phase::F64(h.s)
+        } else {
+            let c64 = self.ctx(&self.bla_f64, true, add_fe);
+            let n0 = h.s.n;
+            let mut local = Counters::default();
+            let exit = if self.derivative {
+                self.op::<f64, true>(&mut h.s, &mut h.der, c64, &[], &mut [], &mut local)
+            } else {
+                self.op::<f64, false>(&mut h.s, &mut h.der, c64, &[], &mut [], &mut local)
+            };
+            local.iterations = (h.s.n - n0) as u64;
+            counters.add(&local);
+            match exit {
+                None => Phase::F64(h.s),
+                Some(Exit::Done(o)) => {
+                    out[h.k] = o;
+                    return None;
+                }
+                Some(Exit::Switch(s)) => Phase::Fe(Sample { dc: h.dc_fe, ..s.convert() }),
+                Some(Exit::Vector(s)) => Phase::F64(s),
+            }
+        };
+        match self.drive(phase, h.dc_fe, &mut h.der, add_fe, &[], &mut [], true, counters) {
+            Ended::Done(o) => {
+                out[h.k] = o;
+                None
+            }
+            Ended::Vector(s) => Some(Held { s, renorm: false, ..h }),
+        }
+    }
+
+    /// Runs a sample from `phase` to its end, switching number types as its delta asks (with
+    /// `vector`, until it reaches a single step above `single_d2` in its f64 phase).
+    #[allow(clippy::too_many_arguments)]
     fn drive(
         &self,
         mut phase: Phase,
@@ -378,19 +505,21 @@ impl Perturbation {
         add_fe: FloatExp,
         traps: &[Trap],
         states: &mut [TrapState],
+        vector: bool,
         counters: &mut Counters,
-    ) -> Orbit {
+    ) -> Ended {
         let bla = traps.is_empty();
         let cfe = self.ctx(&self.bla_fe, bla, add_fe);
-        let c64 = self.ctx(&self.bla_f64, bla, add_fe);
+        let c64 = Ctx { vector, ..self.ctx(&self.bla_f64, bla, add_fe) };
         loop {
             phase = match phase {
                 Phase::Fe(s) => match self.run::<FloatExp>(s, der, cfe, traps, states, counters) {
-                    Exit::Done(o) => return o,
-                    Exit::Switch(s) => Phase::F64(s.convert()),
+                    Exit::Done(o) => return Ended::Done(o),
+                    Exit::Switch(s) | Exit::Vector(s) => Phase::F64(s.convert()),
                 },
                 Phase::F64(s) => match self.run::<f64>(s, der, c64, traps, states, counters) {
-                    Exit::Done(o) => return o,
+                    Exit::Done(o) => return Ended::Done(o),
+                    Exit::Vector(s) => return Ended::Vector(s),
                     // The offset goes back to FloatExp from the original, never from its
                     // f64 rounding: below 2^-1022 that keeps only a few bits.
                     Exit::Switch(s) => Phase::Fe(Sample { dc: dc_fe, ..s.convert() }),
@@ -488,9 +617,15 @@ impl Perturbation {
             s.dz = full;
             s.m = 0;
             s.which = self.refs.len() - 1;
+            s.single = false;
             zm = [D::ZERO; 2];
             if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
+            }
+        } else if !full_range && (s.single || d2.to_f64() > self.single_d2) {
+            s.single = true;
+            if ctx.vector {
+                return Some(Exit::Vector(*s));
             }
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
@@ -547,5 +682,97 @@ impl Perturbation {
         let b: [FloatExp; 2] = cconv(e.b);
         let d = cadd(cmul(a, der.to_fe()), [b[0] * add_fe, b[1] * add_fe]);
         *der = Der::from_fe(d, add_fe);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicBool;
+
+    use super::*;
+    use crate::num::Decimal;
+    use crate::orbit::{DeepSpec, Scale, prepare};
+
+    const MINIBROT: [&str; 2] = [
+        "-1.768610493014677074503175653270265220239677907588665494837677257575304640978808475274635707362464",
+        "0.001266613503868717702066412241102601576193940560471409817185010171762524792588903616691501346028",
+    ];
+    /// -2 + 1.6e-102 + 1.4e-211 i (the liiiines location), to 1e-330.
+    const LIIIINES: [&str; 2] = [
+        "-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925483202642018042879214193261311019861349448517336056952538528636093441258319101518468947695052924660781278387926133612368999268678559118848357284879481437613458535637431620616343911585652641236167774248507873",
+        "1.37178052090609414145729128541350514525330839736695026708710030908880680107546729978680204559181338295039364573873196577319068006687895587728672855990826461331344843897843243379157581698185171855284714599499709801317677506729468150382879822938996916336090559197836550022966441254042166415444219105895943405807252402353950295056242178258440758e-211",
+    ];
+    /// The 1e50 benchmark location, to 1e-70: thousands of single steps per sample, with
+    /// derivatives that leave their exponent window many times on the way.
+    const E50: [&str; 2] = [
+        "-0.04947002906310409375169222672735363011874571248822487931810494023264219477268690",
+        "-0.67478757584467536401139205313059765633477070682240348069799979479099419834548451",
+    ];
+    const JULIA_CENTER: [&str; 2] = [
+        "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
+        "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
+    ];
+
+    fn dec(v: [&str; 2]) -> [Decimal; 2] {
+        [Decimal::parse(v[0]).unwrap(), Decimal::parse(v[1]).unwrap()]
+    }
+
+    /// Every sample of a 32x24 view through `orbits` (the vector lanes where the CPU has
+    /// AVX-512, else the two-sample loop) and one at a time through `orbit`: bit for bit the
+    /// same escape, z_n and derivative, and the same iteration count.
+    fn same_both_ways(
+        center: [&str; 2],
+        julia: Option<[&str; 2]>,
+        radius: &str,
+        max_iter: u32,
+        numbers: Numbers,
+        bla: Option<f64>,
+    ) {
+        let (w, h) = (32i32, 24i32);
+        for derivative in [false, true] {
+            let spec = DeepSpec {
+                center: dec(center),
+                julia: julia.map(dec),
+                spacing: Scale::Radius(Decimal::parse(radius).unwrap()).spacing(h as u32),
+                max_offset: ((w * w + h * h) as f64).sqrt() / 2.0,
+                max_iter,
+                escape_radius: 2.0,
+                derivative,
+                bla,
+                numbers,
+            };
+            let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+            let offsets: Vec<[f64; 2]> = (0..h)
+                .flat_map(|j| (0..w).map(move |i| [i as f64 - w as f64 / 2.0 + 0.5, j as f64 - h as f64 / 2.0 + 0.5]))
+                .collect();
+            let mut many = vec![Orbit::interior(); offsets.len()];
+            let mut c_many = Counters::default();
+            p.orbits(&offsets, &mut many, &mut c_many);
+            let mut c_one = Counters::default();
+            let mut escaped = 0;
+            for (k, off) in offsets.iter().enumerate() {
+                let one = p.orbit(*off, &[], &mut [], &mut c_one);
+                let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
+                assert_eq!(bits(&many[k]), bits(&one), "{radius} derivative {derivative}: sample {k} differs");
+                escaped += (one.n != crate::field::INTERIOR) as u32;
+            }
+            assert_eq!(c_many.iterations, c_one.iterations, "{radius}: iteration counts");
+            assert_eq!(c_many.steps + c_many.bla_steps, c_one.steps + c_one.bla_steps, "{radius}: step counts");
+            assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
+        }
+    }
+
+    #[test]
+    fn lanes_match_one_sample_at_a_time() {
+        let eps = Some(crate::orbit::DEFAULT_BLA_TOLERANCE);
+        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, eps);
+        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, None);
+        same_both_ways(MINIBROT, None, "1e-12", 3000, Numbers::F64, eps);
+        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps);
+        same_both_ways(E50, None, "2e-50", 263010, Numbers::F64, eps);
+        // Without BLA, |z| lingers at 2 and the derivative leaves its window in the lanes.
+        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, None);
+        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, eps);
+        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, None);
     }
 }

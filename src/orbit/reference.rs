@@ -108,6 +108,12 @@ impl Reference {
         [FloatExp::from(f[0]), FloatExp::from(f[1])]
     }
 
+    /// The stored values as f64 words, re and im interleaved (Z_m at words 2m, 2m + 1).
+    #[inline]
+    pub fn words(&self) -> &[f64] {
+        bytemuck::cast_slice(&self.z)
+    }
+
     /// Bytes of memory the stored orbit uses.
     pub fn bytes(&self) -> usize {
         self.z.capacity() * 16 + self.tiny.capacity() * std::mem::size_of::<(u32, [FloatExp; 2])>()

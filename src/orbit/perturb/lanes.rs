@@ -1,0 +1,334 @@
+//! Single perturbation steps on AVX-512: eight samples to a vector, each at its own place in
+//! the reference orbit.
+//!
+//! A deep view spends most of its time where BLA no longer applies to a sample: once a
+//! delta is above every radius of the BLA table it takes nothing but single steps until it
+//! escapes or rebases (on the 1e50 benchmark ~5000 of them per sample, 80% of its single
+//! steps). The scalar loop is a chain of dependent multiplies (about 16 cycles of latency
+//! per step) that it can overlap for two samples at most; here sixteen samples advance
+//! together, two vectors of eight.
+//!
+//! The lanes do only that one thing: a sample enters when the scalar loop
+//! ([`Perturbation::begin`]) reaches a single step with |δ|^2 above `single_d2`, and from
+//! then on each step gathers every lane's own Z_m (there is no common m: samples rebase and
+//! took BLA steps of different lengths), tests for anything that is not a plain step, and
+//! steps. A lane that meets an escape, the iteration limit, a rebase or glitch, or the end
+//! of the reference hands its sample back to the scalar loop
+//! ([`Perturbation::resume`]), which handles the event with its own code and returns the
+//! sample (when it is again above the threshold) or the next one; a derivative that leaves
+//! its exponent window is renormalised the same way. Nothing else leaves a lane, so no
+//! lane idles while its neighbours run long.
+//!
+//! The arithmetic is [`Perturbation::op`]'s, operation for operation and in the same order
+//! (separate multiplies and adds, no fused multiply-add), so every sample ends bit for bit
+//! as in the scalar loop; a test holds it to that.
+//!
+//! `unsafe` is confined to this file for two reasons: the gathers read memory through raw
+//! pointers (each lane reads inside its own reference orbit: its offset is that orbit's
+//! start plus 16 m bytes with m at most the orbit's last index), and the kernel is compiled
+//! for AVX-512 and must be entered only after run-time detection ([`available`]).
+#![allow(unsafe_code)]
+
+use std::arch::x86_64::*;
+
+use super::{Counters, DER_HI, DER_LO, Held, Perturbation};
+use crate::field::Orbit;
+
+/// Samples per vector.
+const W: usize = 8;
+/// Vectors in flight (their dependency chains overlap).
+const G: usize = 2;
+
+/// True when this CPU runs the kernel (AVX-512 F).
+pub(super) fn available() -> bool {
+    is_x86_feature_detected!("avx512f")
+}
+
+/// Iterates every sample as [`Perturbation::orbits`] promises, single steps above
+/// `single_d2` in the lanes and everything else in the scalar loop.
+pub(super) fn orbits(p: &Perturbation, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
+    let mut next = 0;
+    let mut feed = |back: Option<Held>, counters: &mut Counters| -> Option<Held> {
+        if let Some(h) = back
+            && let Some(h) = p.resume(h, out, counters)
+        {
+            return Some(h);
+        }
+        while next < offsets.len() {
+            let k = next;
+            next += 1;
+            if let Some(h) = p.begin(k, offsets[k], out, counters) {
+                return Some(h);
+            }
+        }
+        None
+    };
+    // SAFETY: `orbits` is reached only when `available()` found AVX-512 F.
+    unsafe {
+        if p.derivative {
+            run::<true>(p, &mut feed, counters);
+        } else {
+            run::<false>(p, &mut feed, counters);
+        }
+    }
+}
+
+/// Where the reference orbits lie: each one's Z_0 as a byte offset from the first one's
+/// (the loads' base).
+struct Refs {
+    base: *const f64,
+    start: [i64; 2],
+}
+
+impl Refs {
+    fn new(p: &Perturbation) -> Refs {
+        let base = p.refs[0].words().as_ptr();
+        let mut start = [0; 2];
+        for (w, r) in p.refs.iter().enumerate() {
+            start[w] = r.words().as_ptr() as i64 - base as i64;
+        }
+        Refs { base, start }
+    }
+}
+
+/// Eight lanes' state: the delta and offset, the derivative's mantissa and what a step
+/// adds to it, and which lanes hold a sample. Positions are kept per lane in scalars, since
+/// every lane advances one step at a time: `t16` counts the bytes stepped (16 per step),
+/// lane i's Z_m lies `at0[i] + t16` bytes from the base and its iteration count is
+/// `n0[i] + t16 / 16`, and the lane must leave when `t16` reaches `stop[i]` (the iteration
+/// limit or the reference's end, whichever comes first).
+#[derive(Clone, Copy)]
+struct Lanes {
+    dzr: __m512d,
+    dzi: __m512d,
+    dcr: __m512d,
+    dci: __m512d,
+    der_r: __m512d,
+    der_i: __m512d,
+    add: __m512d,
+    act: __mmask8,
+    t16: i64,
+    at0: [i64; W],
+    n0: [i64; W],
+    stop: [i64; W],
+    /// The earliest stop of an active lane.
+    next_stop: i64,
+}
+
+impl Lanes {
+    #[target_feature(enable = "avx512f")]
+    fn empty() -> Lanes {
+        let z = _mm512_setzero_pd();
+        Lanes {
+            dzr: z,
+            dzi: z,
+            dcr: z,
+            dci: z,
+            der_r: z,
+            der_i: z,
+            add: z,
+            act: 0,
+            t16: 0,
+            at0: [0; W],
+            n0: [0; W],
+            stop: [i64::MAX; W],
+            next_stop: i64::MAX,
+        }
+    }
+
+    /// Puts `h` into lane `i`.
+    #[target_feature(enable = "avx512f")]
+    fn put(&mut self, i: usize, h: &Held, p: &Perturbation, refs: &Refs) {
+        let k = 1u8 << i;
+        let f = |v: __m512d, x: f64| _mm512_mask_mov_pd(v, k, _mm512_set1_pd(x));
+        self.dzr = f(self.dzr, h.s.dz[0]);
+        self.dzi = f(self.dzi, h.s.dz[1]);
+        self.dcr = f(self.dcr, h.s.dc[0]);
+        self.dci = f(self.dci, h.s.dc[1]);
+        self.der_r = f(self.der_r, h.der.mant[0]);
+        self.der_i = f(self.der_i, h.der.mant[1]);
+        self.add = f(self.add, h.der.add);
+        self.at0[i] = refs.start[h.s.which] + 16 * h.s.m as i64 - self.t16;
+        self.n0[i] = h.s.n as i64 - self.t16 / 16;
+        let left = (p.max_iter.saturating_sub(h.s.n)).min(p.refs[h.s.which].last().saturating_sub(h.s.m));
+        self.stop[i] = self.t16 + 16 * left as i64;
+        self.next_stop = self.next_stop.min(self.stop[i]);
+        self.act |= k;
+    }
+
+    /// Writes lane `i`'s state back into `h` and empties the lane; returns the steps the
+    /// sample took in it.
+    #[target_feature(enable = "avx512f")]
+    fn take(&mut self, i: usize, h: &mut Held, refs: &Refs) -> u32 {
+        let k = 1u8 << i;
+        let f = |v: __m512d| _mm512_cvtsd_f64(_mm512_maskz_compress_pd(k, v));
+        h.s.dz = [f(self.dzr), f(self.dzi)];
+        h.der.mant = [f(self.der_r), f(self.der_i)];
+        h.s.m = ((self.at0[i] + self.t16 - refs.start[h.s.which]) / 16) as u32;
+        let n = (self.n0[i] + self.t16 / 16) as u32;
+        let steps = n - h.s.n;
+        h.s.n = n;
+        self.act &= !k;
+        self.stop[i] = i64::MAX;
+        steps
+    }
+
+    /// Lanes whose stop has come.
+    fn stopped(&self) -> __mmask8 {
+        let mut m = 0;
+        for (i, &s) in self.stop.iter().enumerate() {
+            m |= ((s <= self.t16) as u8) << i;
+        }
+        m & self.act
+    }
+
+    /// Byte offsets of every lane's Z_m, as a vector (for the gathers).
+    #[target_feature(enable = "avx512f")]
+    fn at(&self) -> __m512i {
+        let a = self.at0.map(|x| x + self.t16);
+        _mm512_setr_epi64(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7])
+    }
+}
+
+/// Hands the samples of `lanes` in `mask` back to the scalar loop (`renorm`: for their
+/// derivative's renormalisation) and refills those lanes from `feed`.
+#[target_feature(enable = "avx512f")]
+#[inline(never)]
+fn hand_back(
+    lanes: &mut Lanes,
+    meta: &mut [Option<Held>; W],
+    mask: __mmask8,
+    renorm: bool,
+    p: &Perturbation,
+    refs: &Refs,
+    feed: &mut impl FnMut(Option<Held>, &mut Counters) -> Option<Held>,
+    counters: &mut Counters,
+) {
+    for (i, slot) in meta.iter_mut().enumerate() {
+        if mask & (1 << i) == 0 {
+            continue;
+        }
+        let Some(mut h) = slot.take() else { continue };
+        let steps = lanes.take(i, &mut h, refs) as u64;
+        counters.steps += steps;
+        counters.iterations += steps;
+        h.renorm = renorm;
+        if let Some(h) = feed(Some(h), counters) {
+            lanes.put(i, &h, p, refs);
+            *slot = Some(h);
+        }
+    }
+    lanes.next_stop = lanes.stop.iter().copied().min().unwrap_or(i64::MAX);
+}
+
+/// Z_m of all eight lanes, as (re, im) vectors: one 16-byte load per lane at
+/// `base + at0[i] + t16` bytes, paired into two vectors and split by two permutes (cheaper
+/// than two gathers).
+///
+/// # Safety
+/// Every `base + at0[i] + t16` must address a Z_m inside a reference orbit.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn load_full(base: *const f64, at0: &[i64; W], t16: i64, even: __m512i, odd: __m512i) -> (__m512d, __m512d) {
+    // SAFETY: the caller's promise.
+    let q = |i: usize| unsafe { _mm_loadu_pd(base.wrapping_byte_offset((at0[i] + t16) as isize)) };
+
+    let lo =
+        _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(_mm256_set_m128d(q(1), q(0))), _mm256_set_m128d(q(3), q(2)));
+    let hi =
+        _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(_mm256_set_m128d(q(5), q(4))), _mm256_set_m128d(q(7), q(6)));
+    (_mm512_permutex2var_pd(lo, even, hi), _mm512_permutex2var_pd(lo, odd, hi))
+}
+
+/// The lanes' loop: fills every lane, steps them, hands samples back at events, until
+/// `feed` has no more samples and every lane is empty.
+///
+/// # Safety
+/// The CPU must have AVX-512 F.
+#[target_feature(enable = "avx512f")]
+unsafe fn run<const DER: bool>(
+    p: &Perturbation,
+    feed: &mut impl FnMut(Option<Held>, &mut Counters) -> Option<Held>,
+    counters: &mut Counters,
+) {
+    let refs = Refs::new(p);
+    let mut meta: [[Option<Held>; W]; G] = [[None; W]; G];
+    let mut lanes = [Lanes::empty(); G];
+    for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
+        for (i, slot) in m.iter_mut().enumerate() {
+            if let Some(h) = feed(None, counters) {
+                l.put(i, &h, p, &refs);
+                *slot = Some(h);
+            }
+        }
+    }
+    let esc2 = _mm512_set1_pd(p.escape2);
+    let two = _mm512_set1_pd(2.0);
+    let (lo, hi, zero) = (_mm512_set1_pd(DER_LO), _mm512_set1_pd(DER_HI), _mm512_setzero_pd());
+    let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
+    let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
+    let base_im = refs.base.wrapping_add(1);
+    while lanes.iter().any(|l| l.act != 0) {
+        for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
+            if l.act == 0 {
+                continue;
+            }
+            let (zr, zi) = if l.act == 0xff {
+                // SAFETY: every lane is active, and at0[i] + t16 is its Z_m's offset.
+                unsafe { load_full(refs.base, &l.at0, l.t16, even, odd) }
+            } else {
+                let at = l.at();
+                // SAFETY: active lanes' offsets point at Z_m inside their own reference
+                // (see the module docs); inactive lanes are masked off and read nothing.
+                unsafe {
+                    (
+                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, refs.base),
+                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, base_im),
+                    )
+                }
+            };
+            // The end tests of `op`: escape; rebase (|Z_m + δ| < |δ|); and, by the scalar
+            // clock, the iteration limit and the reference's end. Pauldelbrot's glitch test
+            // needs no test of its own: |Z_m + δ| < 10^-3 |Z_m| implies
+            // |δ| > 0.999 |Z_m| > |Z_m + δ|, a rebase (by a margin no rounding can undo).
+            let fr = _mm512_add_pd(zr, l.dzr);
+            let fi = _mm512_add_pd(zi, l.dzi);
+            let f2 = _mm512_add_pd(_mm512_mul_pd(fr, fr), _mm512_mul_pd(fi, fi));
+            let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
+            let mut ev = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, esc2);
+            ev |= _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
+            if l.t16 >= l.next_stop {
+                ev |= l.stopped();
+            }
+            if ev != 0 {
+                hand_back(l, m, ev, false, p, &refs, feed, counters);
+                continue;
+            }
+            if DER {
+                let (a, b) = (l.der_r, l.der_i);
+                let re = _mm512_sub_pd(_mm512_mul_pd(fr, a), _mm512_mul_pd(fi, b));
+                let im = _mm512_add_pd(_mm512_mul_pd(fr, b), _mm512_mul_pd(fi, a));
+                l.der_r = _mm512_add_pd(_mm512_mul_pd(two, re), l.add);
+                l.der_i = _mm512_mul_pd(two, im);
+            }
+            // δ <- (2 Z_m + δ) δ + δc.
+            let ar = _mm512_add_pd(_mm512_mul_pd(zr, two), l.dzr);
+            let ai = _mm512_add_pd(_mm512_mul_pd(zi, two), l.dzi);
+            let nr = _mm512_sub_pd(_mm512_mul_pd(ar, l.dzr), _mm512_mul_pd(ai, l.dzi));
+            let ni = _mm512_add_pd(_mm512_mul_pd(ar, l.dzi), _mm512_mul_pd(ai, l.dzr));
+            l.dzr = _mm512_add_pd(nr, l.dcr);
+            l.dzi = _mm512_add_pd(ni, l.dci);
+            l.t16 += 16;
+            if DER {
+                // `Der::renormalise`'s test: the larger part outside [DER_LO, DER_HI], not 0.
+                let big = _mm512_max_pd(_mm512_abs_pd(l.der_r), _mm512_abs_pd(l.der_i));
+                let inside = _mm512_mask_cmp_pd_mask::<_CMP_GE_OQ>(l.act, big, lo)
+                    & _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(l.act, big, hi);
+                let renorm = _mm512_mask_cmp_pd_mask::<_CMP_NEQ_UQ>(l.act, big, zero) & !inside;
+                if renorm != 0 {
+                    hand_back(l, m, renorm, true, p, &refs, feed, counters);
+                }
+            }
+        }
+    }
+}
