@@ -36,6 +36,36 @@ pub struct BlaTable<T> {
     origin: u32,
     /// levels[k] holds steps of 2^(k+1) iterations.
     levels: Vec<Vec<Bla<T>>>,
+    /// The squared radii again, by start index: for index i (from the origin) the radii of
+    /// its steps of every level, shortest first, side by side (see [`column`]). A lookup then
+    /// reads one cache line instead of one per level.
+    radii: Vec<T>,
+}
+
+/// Where index i's radii start in `radii` and how many there are, for `top` levels. Index
+/// i starts steps of levels k < tz(i) (index 0 of all `top`), and sum_{j=1}^{n} tz(j) =
+/// n - popcount(n) (Legendre), so the columns before i's take top + (i - 1) - popcount(i - 1).
+#[inline]
+fn column(i: u32, top: usize) -> (usize, usize) {
+    if i == 0 {
+        (0, top)
+    } else {
+        let before = top + (i - 1) as usize - (i - 1).count_ones() as usize;
+        (before, (i.trailing_zeros() as usize).min(top))
+    }
+}
+
+/// The column layout of `levels`' radii; `never` marks a step past a level's end.
+fn columns<T: Real>(levels: &[Vec<Bla<T>>], never: T) -> Vec<T> {
+    let top = levels.len();
+    let count = levels.first().map_or(0, |l| 2 * l.len() as u32);
+    let mut radii = Vec::with_capacity(count as usize + top);
+    for i in 0..count {
+        let (start, n) = column(i, top);
+        debug_assert_eq!(start, radii.len());
+        radii.extend((0..n).map(|k| levels[k].get((i >> (k + 1)) as usize).map_or(never, |e| e.r2)));
+    }
+    radii
 }
 
 /// An entry under construction: radius kept unsquared for merging.
@@ -76,7 +106,8 @@ impl BlaTable<FloatExp> {
             level = level.chunks_exact(2).map(|p| merge(&p[0], &p[1], dc_max)).collect();
             levels.push(level.iter().map(|n| Bla { a: n.a, b: n.b, r2: n.r * n.r }).collect());
         }
-        BlaTable { origin, levels }
+        let radii = columns(&levels, FloatExp::ZERO);
+        BlaTable { origin, levels, radii }
     }
 
     /// The same table for the f64 loop; entries f64 cannot hold are never valid.
@@ -87,7 +118,9 @@ impl BlaTable<FloatExp> {
             let ok = a.iter().chain(&b).all(|v| v.is_finite());
             Bla { a, b, r2: if ok { e.r2.to_f64() } else { -1.0 } }
         };
-        BlaTable { origin: self.origin, levels: self.levels.iter().map(|l| l.iter().map(conv).collect()).collect() }
+        let levels: Vec<Vec<Bla<f64>>> = self.levels.iter().map(|l| l.iter().map(conv).collect()).collect();
+        let radii = columns(&levels, -1.0);
+        BlaTable { origin: self.origin, levels, radii }
     }
 }
 
@@ -100,19 +133,14 @@ impl<T: Real> BlaTable<T> {
     #[inline]
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(&Bla<T>, u32)> {
         let i = m.checked_sub(self.origin)?;
-        let aligned = if i == 0 { self.levels.len() } else { (i.trailing_zeros() as usize).min(self.levels.len()) };
-        let mut best = None;
-        for k in 0..aligned {
-            let len = 2u32 << k;
-            if len > budget {
-                break;
-            }
-            match self.levels[k].get((i >> (k + 1)) as usize) {
-                Some(e) if z2 < e.r2 => best = Some((e, len)),
-                _ => break,
-            }
+        let (start, n) = column(i, self.levels.len());
+        let radii = self.radii.get(start..start + n)?;
+        let mut k = 0;
+        while k < n && z2 < radii[k] && (2u32 << k) <= budget {
+            k += 1;
         }
-        best
+        // Steps past a level's end have radius "never", so levels[k - 1] holds this one.
+        (k > 0).then(|| (&self.levels[k - 1][(i >> k) as usize], 1u32 << k))
     }
 
     /// The largest squared radius of the shortest steps: no step of any length is valid for
@@ -125,7 +153,8 @@ impl<T: Real> BlaTable<T> {
 
     /// Bytes of memory the table uses.
     pub fn bytes(&self) -> usize {
-        self.levels.iter().map(|l| l.capacity() * std::mem::size_of::<Bla<T>>()).sum()
+        self.levels.iter().map(|l| l.capacity() * std::mem::size_of::<Bla<T>>()).sum::<usize>()
+            + self.radii.capacity() * std::mem::size_of::<T>()
     }
 }
 
