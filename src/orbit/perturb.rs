@@ -760,6 +760,7 @@ mod tests {
             }
             assert_eq!(c_many.iterations, c_one.iterations, "{radius}: iteration counts");
             assert_eq!(c_many.steps + c_many.bla_steps, c_one.steps + c_one.bla_steps, "{radius}: step counts");
+            assert_eq!(c_many.rebases, c_one.rebases, "{radius}: rebases");
             assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
         }
     }

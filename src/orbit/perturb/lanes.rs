@@ -31,7 +31,7 @@
 
 use std::arch::x86_64::*;
 
-use super::{Counters, DER_HI, DER_LO, Held, Perturbation};
+use super::{Counters, DER_HI, DER_LO, DOWN, Held, Numbers, Perturbation};
 use crate::field::Orbit;
 
 /// Samples per vector.
@@ -107,6 +107,8 @@ struct Lanes {
     der_i: __m512d,
     add: __m512d,
     act: __mmask8,
+    /// Lanes that rebased in the lane and have not yet taken their first step from Z_0.
+    fresh: __mmask8,
     t16: i64,
     at0: [i64; W],
     n0: [i64; W],
@@ -128,6 +130,7 @@ impl Lanes {
             der_i: z,
             add: z,
             act: 0,
+            fresh: 0,
             t16: 0,
             at0: [0; W],
             n0: [0; W],
@@ -148,11 +151,7 @@ impl Lanes {
         self.der_r = f(self.der_r, h.der.mant[0]);
         self.der_i = f(self.der_i, h.der.mant[1]);
         self.add = f(self.add, h.der.add);
-        self.at0[i] = refs.start[h.s.which] + 16 * h.s.m as i64 - self.t16;
-        self.n0[i] = h.s.n as i64 - self.t16 / 16;
-        let left = (p.max_iter.saturating_sub(h.s.n)).min(p.refs[h.s.which].last().saturating_sub(h.s.m));
-        self.stop[i] = self.t16 + 16 * left as i64;
-        self.next_stop = self.next_stop.min(self.stop[i]);
+        self.place(i, h.s.which, h.s.m, h.s.n, p, refs);
         self.act |= k;
     }
 
@@ -169,8 +168,19 @@ impl Lanes {
         let steps = n - h.s.n;
         h.s.n = n;
         self.act &= !k;
+        self.fresh &= !k;
         self.stop[i] = i64::MAX;
         steps
+    }
+
+    /// Sets lane i's position to Z_m of reference `which` with `n` iterations done, and its
+    /// stop.
+    fn place(&mut self, i: usize, which: usize, m: u32, n: u32, p: &Perturbation, refs: &Refs) {
+        self.at0[i] = refs.start[which] + 16 * m as i64 - self.t16;
+        self.n0[i] = n as i64 - self.t16 / 16;
+        let left = (p.max_iter.saturating_sub(n)).min(p.refs[which].last().saturating_sub(m));
+        self.stop[i] = self.t16 + 16 * left as i64;
+        self.next_stop = self.next_stop.min(self.stop[i]);
     }
 
     /// Lanes whose stop has come.
@@ -221,6 +231,38 @@ fn hand_back(
     lanes.next_stop = lanes.stop.iter().copied().min().unwrap_or(i64::MAX);
 }
 
+/// Rebases the lanes of `mask` where they are, as `op` does: δ becomes the full value
+/// (`fr`, `fi`) and the sample continues from Z_0 of the orbit of 0, leaving single-step
+/// mode; the lane's next step is the one `op` takes after its rebase, and after it the
+/// sample stays in the lane only if `op` would again choose a single step (see `fresh`).
+#[target_feature(enable = "avx512f")]
+#[inline(never)]
+fn rebase(
+    lanes: &mut Lanes,
+    meta: &mut [Option<Held>; W],
+    mask: __mmask8,
+    full: (__m512d, __m512d),
+    p: &Perturbation,
+    refs: &Refs,
+    counters: &mut Counters,
+) {
+    lanes.dzr = _mm512_mask_mov_pd(lanes.dzr, mask, full.0);
+    lanes.dzi = _mm512_mask_mov_pd(lanes.dzi, mask, full.1);
+    let which = p.refs.len() - 1;
+    for (i, slot) in meta.iter_mut().enumerate() {
+        if mask & (1 << i) == 0 {
+            continue;
+        }
+        let Some(h) = slot else { continue };
+        h.s.which = which;
+        h.s.single = false;
+        let n = (lanes.n0[i] + lanes.t16 / 16) as u32;
+        lanes.place(i, which, 0, n, p, refs);
+        counters.rebases += 1;
+    }
+    lanes.fresh |= mask;
+}
+
 /// Z_m of all eight lanes, as (re, im) vectors: one 16-byte load per lane at
 /// `base + at0[i] + t16` bytes, paired into two vectors and split by two permutes (cheaper
 /// than two gathers).
@@ -264,6 +306,8 @@ unsafe fn run<const DER: bool>(
     }
     let esc2 = _mm512_set1_pd(p.escape2);
     let two = _mm512_set1_pd(2.0);
+    let single_d2 = _mm512_set1_pd(p.single_d2);
+    let down = _mm512_set1_pd(DOWN);
     let (lo, hi, zero) = (_mm512_set1_pd(DER_LO), _mm512_set1_pd(DER_HI), _mm512_setzero_pd());
     let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
     let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
@@ -295,13 +339,24 @@ unsafe fn run<const DER: bool>(
             let fi = _mm512_add_pd(zi, l.dzi);
             let f2 = _mm512_add_pd(_mm512_mul_pd(fr, fr), _mm512_mul_pd(fi, fi));
             let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
-            let mut ev = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, esc2);
-            ev |= _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
-            if l.t16 >= l.next_stop {
-                ev |= l.stopped();
-            }
-            if ev != 0 {
-                hand_back(l, m, ev, false, p, &refs, feed, counters);
+            let esc = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, esc2);
+            let reb = _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
+            let stopped = if l.t16 >= l.next_stop { l.stopped() } else { 0 };
+            if esc | reb | stopped != 0 {
+                // A plain rebase stays in the lane, unless it brings an f64 delta below
+                // the range where FloatExp takes over (`op`'s switch).
+                let mut here = reb & !esc & !stopped;
+                if p.numbers == Numbers::FloatExp {
+                    let big = _mm512_max_pd(_mm512_abs_pd(fr), _mm512_abs_pd(fi));
+                    here &= !_mm512_cmp_pd_mask::<_CMP_LT_OQ>(big, down);
+                }
+                let away = (esc | reb | stopped) & !here;
+                if away != 0 {
+                    hand_back(l, m, away, false, p, &refs, feed, counters);
+                }
+                if here != 0 {
+                    rebase(l, m, here, (fr, fi), p, &refs, counters);
+                }
                 continue;
             }
             if DER {
@@ -319,15 +374,33 @@ unsafe fn run<const DER: bool>(
             l.dzr = _mm512_add_pd(nr, l.dcr);
             l.dzi = _mm512_add_pd(ni, l.dci);
             l.t16 += 16;
+            let mut renorm = 0;
             if DER {
                 // `Der::renormalise`'s test: the larger part outside [DER_LO, DER_HI], not 0.
                 let big = _mm512_max_pd(_mm512_abs_pd(l.der_r), _mm512_abs_pd(l.der_i));
                 let inside = _mm512_mask_cmp_pd_mask::<_CMP_GE_OQ>(l.act, big, lo)
                     & _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(l.act, big, hi);
-                let renorm = _mm512_mask_cmp_pd_mask::<_CMP_NEQ_UQ>(l.act, big, zero) & !inside;
-                if renorm != 0 {
-                    hand_back(l, m, renorm, true, p, &refs, feed, counters);
+                renorm = _mm512_mask_cmp_pd_mask::<_CMP_NEQ_UQ>(l.act, big, zero) & !inside;
+            }
+            if l.fresh != 0 {
+                // After a rebase `op` takes a single step only if |δ|^2 > single_d2 (else it
+                // looks for a BLA step): lanes below go back to the scalar loop.
+                let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
+                let leave = _mm512_mask_cmp_pd_mask::<_CMP_NGT_UQ>(l.fresh, d2, single_d2);
+                for (i, slot) in m.iter_mut().enumerate() {
+                    if let Some(h) = slot
+                        && (l.fresh & !leave) & (1 << i) != 0
+                    {
+                        h.s.single = true;
+                    }
                 }
+                l.fresh = 0;
+                if leave & !renorm != 0 {
+                    hand_back(l, m, leave & !renorm, false, p, &refs, feed, counters);
+                }
+            }
+            if renorm != 0 {
+                hand_back(l, m, renorm, true, p, &refs, feed, counters);
             }
         }
     }
