@@ -229,8 +229,12 @@ fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, pla
     }
 }
 
-/// Computes sample rows `rows` with the perturbation engine (one sample at a time; traps
-/// observe z = Z + δ). The derivative it returns is already scaled by the spacing.
+/// Samples per call of the deep engine's many-sample loop (whole rows, at least this many).
+const DEEP_CHUNK: usize = 8192;
+
+/// Computes sample rows `rows` with the perturbation engine (many samples at once, or one
+/// at a time when traps observe z = Z + δ). The derivative it returns is already scaled by
+/// the spacing.
 fn deep_strip(
     deep: &Perturbation,
     params: &FieldParams,
@@ -244,23 +248,34 @@ fn deep_strip(
     let mut counters = Counters::default();
     let width = grid.width as usize;
     let mut orbits = vec![Orbit::interior(); width * rows.len()];
-    for (row, j) in orbits.chunks_mut(width).zip(rows.clone()) {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Cancelled);
-        }
-        let row_start = (j - rows.start) as usize * width;
-        if traps.iter().all(|t| !t.observes_orbit()) {
-            let offsets: Vec<[f64; 2]> = (0..grid.width).map(|i| grid.offset(i, j)).collect();
-            deep.orbits(&offsets, row, &mut counters);
-            continue;
-        }
-        for (i, orbit) in row.iter_mut().enumerate() {
-            for (state, trap) in states.iter_mut().zip(traps) {
-                *state = trap.initial();
+    if traps.iter().all(|t| !t.observes_orbit()) {
+        // Several rows at a time (at least DEEP_CHUNK samples): the vector lanes run partly
+        // empty only while a call drains, and Ctrl-C is looked at between calls.
+        let chunk_rows = DEEP_CHUNK.div_ceil(width.max(1)).max(1);
+        let row_list: Vec<u32> = rows.clone().collect();
+        for (out, chunk) in orbits.chunks_mut(width * chunk_rows).zip(row_list.chunks(chunk_rows)) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
             }
-            *orbit = deep.orbit(grid.offset(i as u32, j), traps, &mut states, &mut counters);
-            for (plane, state) in planes.traps.iter_mut().zip(&states) {
-                plane.store(row_start + i, state);
+            let offsets: Vec<[f64; 2]> =
+                chunk.iter().flat_map(|&j| (0..grid.width).map(move |i| grid.offset(i, j))).collect();
+            deep.orbits(&offsets, out, &mut counters);
+        }
+    } else {
+        // Traps see every iteration: one sample at a time, row by row.
+        for (row, j) in orbits.chunks_mut(width).zip(rows.clone()) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let row_start = (j - rows.start) as usize * width;
+            for (i, orbit) in row.iter_mut().enumerate() {
+                for (state, trap) in states.iter_mut().zip(traps) {
+                    *state = trap.initial();
+                }
+                *orbit = deep.orbit(grid.offset(i as u32, j), traps, &mut states, &mut counters);
+                for (plane, state) in planes.traps.iter_mut().zip(&states) {
+                    plane.store(row_start + i, state);
+                }
             }
         }
     }
