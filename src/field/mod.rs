@@ -141,17 +141,24 @@ pub fn compute_strip(
         let counters = deep_strip(deep, params, rows, &mut planes, cancel)?;
         return Ok(Strip { planes, iterations: counters.iterations, counters });
     }
-    let mut points = Vec::with_capacity(count);
-    for j in rows {
-        for i in 0..grid.width {
-            points.push(grid.point(i, j));
+    let mut points = vec![[0.0; 2]; count];
+    for (row, j) in points.chunks_mut(width.max(1)).zip(rows) {
+        for (i, p) in (0..grid.width).zip(row.iter_mut()) {
+            *p = grid.point(i, j);
         }
+    }
+    // The IFS field observes no orbit: alone it leaves the vectorised kernel in charge.
+    let orbit_free = params.needs.traps.iter().all(|t| !t.observes_orbit());
+    let n = &params.needs;
+    if orbit_free && !params.single && !(n.nf || n.t || n.de || params.orbit.derivative) {
+        // N alone: straight into its plane.
+        let iterations = simd::iterate_n(&params.orbit, &points, &mut planes.n, cancel)?;
+        fill_ifs(&params.needs.traps, &points, &mut planes);
+        return Ok(Strip { planes, iterations, counters: Counters::default() });
     }
     let ln_r = params.orbit.escape_radius.ln();
     let spacing = grid.spacing();
     let mut orbits = vec![Orbit::interior(); count];
-    // The IFS field observes no orbit: alone it leaves the vectorised kernel in charge.
-    let orbit_free = params.needs.traps.iter().all(|t| !t.observes_orbit());
     let iterations = match params.needs.traps.as_slice() {
         _ if params.single => {
             let mut its = 0;

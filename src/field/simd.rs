@@ -65,6 +65,42 @@ pub fn iterate(
     pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z, cancel })
 }
 
+/// As [`iterate`] when only N is wanted (no derivative), writing each point's N straight
+/// into `n`: no [`Orbit`] records to fill and read back.
+pub fn iterate_n(
+    params: &OrbitParams,
+    points: &[[f64; 2]],
+    n: &mut [u32],
+    cancel: &AtomicBool,
+) -> Result<u64, Cancelled> {
+    assert_eq!(points.len(), n.len());
+    assert!(!params.derivative, "iterate_n is for N alone");
+    let out = &mut NOnly(n);
+    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z: false, cancel })
+}
+
+/// Where the kernel writes each sample's result.
+trait Sink {
+    fn put(&mut self, k: usize, orbit: Orbit);
+}
+
+impl Sink for [Orbit] {
+    #[inline(always)]
+    fn put(&mut self, k: usize, orbit: Orbit) {
+        self[k] = orbit;
+    }
+}
+
+/// N alone, into a plane.
+struct NOnly<'a>(&'a mut [u32]);
+
+impl Sink for NOnly<'_> {
+    #[inline(always)]
+    fn put(&mut self, k: usize, orbit: Orbit) {
+        self.0[k] = orbit.n;
+    }
+}
+
 /// As [`iterate`], also keeping each orbit's distance to one geometric trap `shape`
 /// (observing z_k for k >= 1 up to the escaping value, exactly as [`super::scalar`] does);
 /// `trap_out[k]` receives the distance for point k. The cardioid/bulb skip is off, since
@@ -82,27 +118,27 @@ pub fn iterate_with_trap(
     pulp::Arch::new().dispatch(Job { params, points, out, shape: Some(shape), trap_out, final_z: true, cancel })
 }
 
-struct Job<'a> {
+struct Job<'a, O: Sink + ?Sized> {
     params: &'a OrbitParams,
     points: &'a [[f64; 2]],
-    out: &'a mut [Orbit],
+    out: &'a mut O,
     shape: Option<Shape>,
     trap_out: &'a mut [f64],
     final_z: bool,
     cancel: &'a AtomicBool,
 }
 
-impl WithSimd for Job<'_> {
+impl<O: Sink + ?Sized> WithSimd for Job<'_, O> {
     type Output = Result<u64, Cancelled>;
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
         match (self.params.derivative, self.shape.is_some(), self.final_z) {
-            (false, false, false) => run::<S, false, false, false>(simd, self),
-            (false, false, true) => run::<S, false, false, true>(simd, self),
-            (true, false, _) => run::<S, true, false, true>(simd, self),
-            (false, true, _) => run::<S, false, true, true>(simd, self),
-            (true, true, _) => run::<S, true, true, true>(simd, self),
+            (false, false, false) => run::<S, false, false, false, O>(simd, self),
+            (false, false, true) => run::<S, false, false, true, O>(simd, self),
+            (true, false, _) => run::<S, true, false, true, O>(simd, self),
+            (false, true, _) => run::<S, false, true, true, O>(simd, self),
+            (true, true, _) => run::<S, true, true, true, O>(simd, self),
         }
     }
 }
@@ -167,7 +203,10 @@ struct State<S: Simd> {
 }
 
 #[inline(always)]
-fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool>(simd: S, job: Job<'_>) -> Result<u64, Cancelled> {
+fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool, O: Sink + ?Sized>(
+    simd: S,
+    job: Job<'_, O>,
+) -> Result<u64, Cancelled> {
     let Job { params, points, out, shape, trap_out, cancel, .. } = job;
     let shape = shape.unwrap_or(Shape::Point { at: [0.0, 0.0] });
     let tv = TrapV::<S>::new(simd, &shape);
@@ -205,7 +244,7 @@ fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool>(simd: S, job: J
     let ctx = RefillCtx { points, family, max_iter, masks, idle, shape };
     for v in 0..V {
         for l in 0..nl {
-            refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
+            refill::<S, DE, TRAP, O>(simd, &ctx, &mut st, &mut info[v * MAX_LANES + l], v, l, block, &mut cursor, out);
         }
     }
     let mut ck = Checkpoints::<S> {
@@ -275,8 +314,8 @@ fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool>(simd: S, job: J
                 if let (true, false, Some(f)) = (esc_bits & (1 << l) != 0, overshoot, &found) {
                     let (n, orbit) = f.lane(l, i0);
                     iterations += n - li.start as u64;
-                    out[li.pixel] = orbit;
-                    refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    out.put(li.pixel, orbit);
+                    refill::<S, DE, TRAP, O>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if esc_bits & (1 << l) != 0 || overshoot {
                     let c = [lanes::<S>(&st.cx[v])[l], lanes::<S>(&st.cy[v])[l]];
@@ -307,19 +346,19 @@ fn run<S: Simd, const DE: bool, const TRAP: bool, const Z: bool>(simd: S, job: J
                         }
                     }
                     iterations += orbit.iterations_from(li.start, max_iter);
-                    out[li.pixel] = orbit;
+                    out.put(li.pixel, orbit);
                     if TRAP {
                         trap_out[li.pixel] = shape.distance_from_metric(tm);
                     }
-                    refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    refill::<S, DE, TRAP, O>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if per_bits & (1 << l) != 0 {
                     iterations += i0 + K as u64 - li.start as u64;
-                    out[li.pixel] = Orbit::interior();
+                    out.put(li.pixel, Orbit::interior());
                     if TRAP {
                         trap_out[li.pixel] = shape.distance_from_metric(lanes::<S>(&st.tm[v])[l]);
                     }
-                    refill::<S, DE, TRAP>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
+                    refill::<S, DE, TRAP, O>(simd, &ctx, &mut st, &mut info[g], v, l, block, &mut cursor, out);
                     deadline = deadline.min(info[g].deadline);
                 } else if block >= li.deadline {
                     // Refresh the periodicity reference (Brent: at ages 1, 2, 4, 8, ...).
@@ -364,7 +403,7 @@ struct RefillCtx<'a, S: Simd> {
 /// without ever entering a lane. (A function, not a closure: closures do not inherit the
 /// SIMD target features of the function they are written in.)
 #[inline(always)]
-fn refill<S: Simd, const DE: bool, const TRAP: bool>(
+fn refill<S: Simd, const DE: bool, const TRAP: bool, O: Sink + ?Sized>(
     simd: S,
     ctx: &RefillCtx<'_, S>,
     st: &mut State<S>,
@@ -373,7 +412,7 @@ fn refill<S: Simd, const DE: bool, const TRAP: bool>(
     l: usize,
     block: u64,
     cursor: &mut usize,
-    out: &mut [Orbit],
+    out: &mut O,
 ) {
     let masks = &ctx.masks;
     loop {
@@ -390,7 +429,7 @@ fn refill<S: Simd, const DE: bool, const TRAP: bool>(
         *cursor += 1;
         let point = ctx.points[p];
         if !TRAP && matches!(ctx.family, Family::Mandelbrot) && formula::in_main_components(point) {
-            out[p] = Orbit::interior();
+            out.put(p, Orbit::interior());
             continue;
         }
         let s = ctx.family.start(point);
@@ -718,6 +757,13 @@ mod tests {
         assert_eq!(its_n, its);
         for (a, b) in n_only.iter().zip(&out) {
             assert_eq!(a.n, b.n);
+        }
+        // And written straight into a plane.
+        if !derivative {
+            let mut plane = vec![0u32; points.len()];
+            let its_plane = iterate_n(&params, &points, &mut plane, &AtomicBool::new(false)).unwrap();
+            assert_eq!(its_plane, its);
+            assert!(plane.iter().zip(&out).all(|(n, o)| *n == o.n));
         }
     }
 
