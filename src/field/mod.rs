@@ -141,11 +141,10 @@ pub fn compute_strip(
         let counters = deep_strip(deep, params, rows, &mut planes, cancel)?;
         return Ok(Strip { planes, iterations: counters.iterations, counters });
     }
-    let mut points = vec![[0.0; 2]; count];
-    for (row, j) in points.chunks_mut(width.max(1)).zip(rows) {
-        for (i, p) in (0..grid.width).zip(row.iter_mut()) {
-            *p = grid.point(i, j);
-        }
+    let mut points = Vec::with_capacity(count);
+    for j in rows {
+        // (An exact-size iterator: no capacity test per point.)
+        points.extend((0..grid.width).map(|i| grid.point(i, j)));
     }
     // The IFS field observes no orbit: alone it leaves the vectorised kernel in charge.
     let orbit_free = params.needs.traps.iter().all(|t| !t.observes_orbit());
