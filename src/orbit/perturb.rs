@@ -341,7 +341,7 @@ impl Perturbation {
 
     /// Iterates many samples without traps. Same results as [`Perturbation::orbit`], bit for
     /// bit: with AVX-512, single steps above `single_d2` run eight samples to a vector
-    /// ([`lanes`]); otherwise `LANES` samples at a time in the f64 phase (samples in their
+    /// (`perturb/lanes.rs`); otherwise `LANES` samples at a time in the f64 phase (samples in their
     /// FloatExp phase run one at a time).
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
         #[cfg(target_arch = "x86_64")]

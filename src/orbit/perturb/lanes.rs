@@ -1,32 +1,35 @@
 //! Single perturbation steps on AVX-512: eight samples to a vector, each at its own place in
 //! the reference orbit.
 //!
-//! A deep view spends most of its time where BLA no longer applies to a sample: once a
-//! delta is above every radius of the BLA table it takes nothing but single steps until it
-//! escapes or rebases (on the 1e50 benchmark ~5000 of them per sample, 80% of its single
-//! steps). The scalar loop is a chain of dependent multiplies (about 16 cycles of latency
-//! per step) that it can overlap for two samples at most; here sixteen samples advance
-//! together, two vectors of eight.
+//! A deep view spends most of its time where BLA no longer helps a sample: once its delta
+//! is above a tenth of the largest BLA radius it takes nothing but single steps until it
+//! escapes or rebases (on the 1e50 benchmark ~11600 of them per sample). The scalar loop is
+//! a chain of dependent multiplies (about 16 cycles of latency per step) that it can overlap
+//! for two samples at most; here sixteen samples advance together, two vectors of eight.
 //!
-//! The lanes do only that one thing: a sample enters when the scalar loop
-//! ([`Perturbation::begin`]) reaches a single step with |δ|^2 above `single_d2`, and from
-//! then on each step gathers every lane's own Z_m (there is no common m: samples rebase and
-//! took BLA steps of different lengths), tests for anything that is not a plain step, and
-//! steps. A lane that meets an escape, the iteration limit, a rebase or glitch, or the end
-//! of the reference hands its sample back to the scalar loop
+//! The lanes do only that one thing. A sample enters when the scalar loop
+//! ([`Perturbation::begin`]) reaches a single step in single-step mode, and from then on
+//! each step reads every lane's own Z_m (there is no common m: samples rebase and took BLA
+//! steps of different lengths) with one 16-byte load per lane (a pair of gathers costs more
+//! on Zen 4), tests for anything that is not a plain step, and steps. A rebase that keeps
+//! the sample in single steps happens in the lane. A lane that meets an escape, the
+//! iteration limit, the reference's end, a rebase into FloatExp range or back to BLA steps,
+//! or a derivative that leaves its exponent window hands its sample back to the scalar loop
 //! ([`Perturbation::resume`]), which handles the event with its own code and returns the
-//! sample (when it is again above the threshold) or the next one; a derivative that leaves
-//! its exponent window is renormalised the same way. Nothing else leaves a lane, so no
-//! lane idles while its neighbours run long.
+//! sample (when it is again in single steps) or the next one. Nothing else leaves a lane,
+//! so no lane idles while its neighbours run long. Positions are addresses kept per lane
+//! in scalars (`at0[i] + t16`), and the iteration limit and the reference's end are a
+//! per-lane stop on the same clock, tested once per step for the whole vector.
 //!
 //! The arithmetic is [`Perturbation::op`]'s, operation for operation and in the same order
 //! (separate multiplies and adds, no fused multiply-add), so every sample ends bit for bit
 //! as in the scalar loop; a test holds it to that.
 //!
-//! `unsafe` is confined to this file for two reasons: the gathers read memory through raw
-//! pointers (each lane reads inside its own reference orbit: its offset is that orbit's
-//! start plus 16 m bytes with m at most the orbit's last index), and the kernel is compiled
-//! for AVX-512 and must be entered only after run-time detection ([`available`]).
+//! `unsafe` is confined to this file for two reasons: the loads and gathers read memory
+//! through addresses (each lane reads inside its own reference orbit: its address is that
+//! orbit's Z_0 plus 16 m bytes with m at most the orbit's last index, exposed by
+//! [`Refs::new`]), and the kernel is compiled for AVX-512 and must be entered only after
+//! run-time detection ([`available`]).
 #![allow(unsafe_code)]
 
 use std::arch::x86_64::*;
@@ -73,28 +76,28 @@ pub(super) fn orbits(p: &Perturbation, offsets: &[[f64; 2]], out: &mut [Orbit], 
     }
 }
 
-/// Where the reference orbits lie: each one's Z_0 as a byte offset from the first one's
-/// (the loads' base).
+/// Where the reference orbits lie: each one's Z_0 as an address. Lane positions are
+/// addresses, so one lane can read the Mandelbrot reference while its neighbour reads a
+/// Julia set's orbit of 0 (another allocation); the addresses are exposed here and turned
+/// back into pointers with `with_exposed_provenance` where they are read.
 struct Refs {
-    base: *const f64,
     start: [i64; 2],
 }
 
 impl Refs {
     fn new(p: &Perturbation) -> Refs {
-        let base = p.refs[0].words().as_ptr();
         let mut start = [0; 2];
         for (w, r) in p.refs.iter().enumerate() {
-            start[w] = r.words().as_ptr() as i64 - base as i64;
+            start[w] = r.words().as_ptr().expose_provenance() as i64;
         }
-        Refs { base, start }
+        Refs { start }
     }
 }
 
 /// Eight lanes' state: the delta and offset, the derivative's mantissa and what a step
 /// adds to it, and which lanes hold a sample. Positions are kept per lane in scalars, since
 /// every lane advances one step at a time: `t16` counts the bytes stepped (16 per step),
-/// lane i's Z_m lies `at0[i] + t16` bytes from the base and its iteration count is
+/// lane i's Z_m lies at address `at0[i] + t16` and its iteration count is
 /// `n0[i] + t16 / 16`, and the lane must leave when `t16` reaches `stop[i]` (the iteration
 /// limit or the reference's end, whichever comes first).
 #[derive(Clone, Copy)]
@@ -263,18 +266,17 @@ fn rebase(
     lanes.fresh |= mask;
 }
 
-/// Z_m of all eight lanes, as (re, im) vectors: one 16-byte load per lane at
-/// `base + at0[i] + t16` bytes, paired into two vectors and split by two permutes (cheaper
-/// than two gathers).
+/// Z_m of all eight lanes, as (re, im) vectors: one 16-byte load per lane at address
+/// `at0[i] + t16`, paired into two vectors and split by two permutes (cheaper than two
+/// gathers).
 ///
 /// # Safety
-/// Every `base + at0[i] + t16` must address a Z_m inside a reference orbit.
+/// Every `at0[i] + t16` must be the address of a Z_m inside a reference orbit.
 #[target_feature(enable = "avx512f")]
 #[inline]
-unsafe fn load_full(base: *const f64, at0: &[i64; W], t16: i64, even: __m512i, odd: __m512i) -> (__m512d, __m512d) {
-    // SAFETY: the caller's promise.
-    let q = |i: usize| unsafe { _mm_loadu_pd(base.wrapping_byte_offset((at0[i] + t16) as isize)) };
-
+unsafe fn load_full(at0: &[i64; W], t16: i64, even: __m512i, odd: __m512i) -> (__m512d, __m512d) {
+    // SAFETY: the caller's promise; the address was exposed by `Refs::new`.
+    let q = |i: usize| unsafe { _mm_loadu_pd(std::ptr::with_exposed_provenance::<f64>((at0[i] + t16) as usize)) };
     let lo =
         _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(_mm256_set_m128d(q(1), q(0))), _mm256_set_m128d(q(3), q(2)));
     let hi =
@@ -311,23 +313,24 @@ unsafe fn run<const DER: bool>(
     let (lo, hi, zero) = (_mm512_set1_pd(DER_LO), _mm512_set1_pd(DER_HI), _mm512_setzero_pd());
     let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
     let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
-    let base_im = refs.base.wrapping_add(1);
+    let eight = _mm512_set1_epi64(8);
     while lanes.iter().any(|l| l.act != 0) {
         for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
             if l.act == 0 {
                 continue;
             }
             let (zr, zi) = if l.act == 0xff {
-                // SAFETY: every lane is active, and at0[i] + t16 is its Z_m's offset.
-                unsafe { load_full(refs.base, &l.at0, l.t16, even, odd) }
+                // SAFETY: every lane is active, and at0[i] + t16 is its Z_m's address.
+                unsafe { load_full(&l.at0, l.t16, even, odd) }
             } else {
                 let at = l.at();
-                // SAFETY: active lanes' offsets point at Z_m inside their own reference
-                // (see the module docs); inactive lanes are masked off and read nothing.
+                // SAFETY: active lanes' addresses point at Z_m inside their own reference
+                // (see the module docs; the base is 0, so the gathers read those addresses);
+                // inactive lanes are masked off and read nothing.
                 unsafe {
                     (
-                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, refs.base),
-                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, base_im),
+                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, std::ptr::null()),
+                        _mm512_mask_i64gather_pd::<1>(zero, l.act, _mm512_add_epi64(at, eight), std::ptr::null()),
                     )
                 }
             };
