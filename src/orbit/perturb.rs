@@ -359,7 +359,7 @@ impl Perturbation {
     /// [`Perturbation::orbits`] with the derivative carried or not (`DER`, compiled apart so
     /// that the common case has no derivative branches in its loop).
     fn orbits_with<const DER: bool>(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
-        let add_fe = if self.mandelbrot { self.spacing } else { FloatExp::ZERO };
+        let add_fe = self.add_fe();
         let c64 = self.ctx(&self.bla_f64, true, add_fe);
         let mut lanes: [Option<Lane>; LANES] = [None; LANES];
         let mut next = 0;
