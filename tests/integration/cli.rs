@@ -230,7 +230,7 @@ fn other_bad_values_are_located() {
 fn same_bytes_whatever_the_thread_count() {
     let layers = "[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"boundary\"\nblend = \"multiply\"\n";
     same_bytes("cli-determinism", &format!("{SMALL}[render]\naa = 2\n{layers}"));
-    // The perturbation engine too (reference, BLA, samples interleaved four at a time).
+    // The perturbation engine too (reference, BLA, samples in the vector lanes or the scalar loop).
     let deep = "version = 1\n[view]\ncenter = [\"-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925\", \"1.3717805209060941414572912854135e-211\"]\nzoom = \"1e120\"\nwidth = 61\nheight = 37\n[iteration]\nmax = 5000\n";
     same_bytes("cli-determinism-deep", &format!("{deep}{layers}"));
 }
