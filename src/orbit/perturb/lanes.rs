@@ -306,11 +306,15 @@ unsafe fn run<const DER: bool>(
             }
         }
     }
-    let esc2 = _mm512_set1_pd(p.escape2);
-    let two = _mm512_set1_pd(2.0);
-    let single_d2 = _mm512_set1_pd(p.single_d2);
-    let down = _mm512_set1_pd(DOWN);
-    let (lo, hi, zero) = (_mm512_set1_pd(DER_LO), _mm512_set1_pd(DER_HI), _mm512_setzero_pd());
+    let k = Consts {
+        esc2: _mm512_set1_pd(p.escape2),
+        two: _mm512_set1_pd(2.0),
+        single_d2: _mm512_set1_pd(p.single_d2),
+        down: _mm512_set1_pd(DOWN),
+        lo: _mm512_set1_pd(DER_LO),
+        hi: _mm512_set1_pd(DER_HI),
+        zero: _mm512_setzero_pd(),
+    };
     let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
     let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
     let eight = _mm512_set1_epi64(8);
@@ -319,7 +323,19 @@ unsafe fn run<const DER: bool>(
             if l.act == 0 {
                 continue;
             }
-            let (zr, zi) = if l.act == 0xff {
+            if l.act == 0xff && l.t16 + 32 <= l.next_stop {
+                // Two steps from one 32-byte load per lane: every lane has at least two
+                // steps before its stop, so Z_m+1 exists. The second step is skipped when
+                // the first changed any lane (an event, a rebase, a hand-back).
+                // SAFETY: every lane is active, at0[i] + t16 is its Z_m's address, and
+                // Z_m+1 follows it in the same reference (m + 1 <= last, see above).
+                let (z0, z1) = unsafe { load_pair(&l.at0, l.t16) };
+                if step::<DER, _>(l, m, z0, &k, p, &refs, feed, counters) {
+                    step::<DER, _>(l, m, z1, &k, p, &refs, feed, counters);
+                }
+                continue;
+            }
+            let z = if l.act == 0xff {
                 // SAFETY: every lane is active, and at0[i] + t16 is its Z_m's address.
                 unsafe { load_full(&l.at0, l.t16, even, odd) }
             } else {
@@ -329,82 +345,145 @@ unsafe fn run<const DER: bool>(
                 // inactive lanes are masked off and read nothing.
                 unsafe {
                     (
-                        _mm512_mask_i64gather_pd::<1>(zero, l.act, at, std::ptr::null()),
-                        _mm512_mask_i64gather_pd::<1>(zero, l.act, _mm512_add_epi64(at, eight), std::ptr::null()),
+                        _mm512_mask_i64gather_pd::<1>(k.zero, l.act, at, std::ptr::null()),
+                        _mm512_mask_i64gather_pd::<1>(k.zero, l.act, _mm512_add_epi64(at, eight), std::ptr::null()),
                     )
                 }
             };
-            // The end tests of `op`: escape; rebase (|Z_m + δ| < |δ|); and, by the scalar
-            // clock, the iteration limit and the reference's end. Pauldelbrot's glitch test
-            // needs no test of its own: |Z_m + δ| < 10^-3 |Z_m| implies
-            // |δ| > 0.999 |Z_m| > |Z_m + δ|, a rebase (by a margin no rounding can undo).
-            let fr = _mm512_add_pd(zr, l.dzr);
-            let fi = _mm512_add_pd(zi, l.dzi);
-            let f2 = _mm512_add_pd(_mm512_mul_pd(fr, fr), _mm512_mul_pd(fi, fi));
+            step::<DER, _>(l, m, z, &k, p, &refs, feed, counters);
+        }
+    }
+}
+
+/// The constants a step uses.
+struct Consts {
+    esc2: __m512d,
+    two: __m512d,
+    single_d2: __m512d,
+    down: __m512d,
+    lo: __m512d,
+    hi: __m512d,
+    zero: __m512d,
+}
+
+/// Z_m and Z_m+1 of all eight lanes, as ((re, im), (re, im)) vectors: one 32-byte load per
+/// lane, paired, then split by four two-source permutes and four 128-bit shuffles.
+///
+/// # Safety
+/// Every `at0[i] + t16` must be the address of a Z_m, and Z_m+1 must exist in the same
+/// reference orbit.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn load_pair(at0: &[i64; W], t16: i64) -> ((__m512d, __m512d), (__m512d, __m512d)) {
+    // SAFETY: the caller's promise; the address was exposed by `Refs::new`.
+    let q = |i: usize| unsafe { _mm256_loadu_pd(std::ptr::with_exposed_provenance::<f64>((at0[i] + t16) as usize)) };
+    // Lanes i, i + 1: [re_m, im_m, re_m+1, im_m+1] of each.
+    let pair = |i: usize| _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(q(i)), q(i + 1));
+    let (p01, p23, p45, p67) = (pair(0), pair(2), pair(4), pair(6));
+    // a = [re_m of lanes 0..3 | im_m of lanes 0..3], b the same for m + 1; c, d lanes 4..7.
+    let now = _mm512_setr_epi64(0, 4, 8, 12, 1, 5, 9, 13);
+    let next = _mm512_setr_epi64(2, 6, 10, 14, 3, 7, 11, 15);
+    let a = _mm512_permutex2var_pd(p01, now, p23);
+    let b = _mm512_permutex2var_pd(p01, next, p23);
+    let c = _mm512_permutex2var_pd(p45, now, p67);
+    let d = _mm512_permutex2var_pd(p45, next, p67);
+    let lo = |x, y| _mm512_shuffle_f64x2::<0x44>(x, y);
+    let hi = |x, y| _mm512_shuffle_f64x2::<0xee>(x, y);
+    ((lo(a, c), hi(a, c)), (lo(b, d), hi(b, d)))
+}
+
+/// One step of the eight lanes of `l` from Z_m = `z`: the end tests, then the step. Returns
+/// false when it changed any lane's sample or position other than by the step (an event,
+/// a rebase, a hand-back): values loaded ahead are then stale.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn step<const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
+    l: &mut Lanes,
+    m: &mut [Option<Held>; W],
+    z: (__m512d, __m512d),
+    k: &Consts,
+    p: &Perturbation,
+    refs: &Refs,
+    feed: &mut F,
+    counters: &mut Counters,
+) -> bool {
+    let (zr, zi) = z;
+    // The end tests of `op`: escape; rebase (|Z_m + δ| < |δ|); and, by the scalar clock, the
+    // iteration limit and the reference's end. Pauldelbrot's glitch test needs no test of
+    // its own: |Z_m + δ| < 10^-3 |Z_m| implies |δ| > 0.999 |Z_m| > |Z_m + δ|, a rebase (by a
+    // margin no rounding can undo).
+    // SAFETY: `step` is inlined into `run`, its only caller, which has AVX-512 F enabled.
+    unsafe {
+        let fr = _mm512_add_pd(zr, l.dzr);
+        let fi = _mm512_add_pd(zi, l.dzi);
+        let f2 = _mm512_add_pd(_mm512_mul_pd(fr, fr), _mm512_mul_pd(fi, fi));
+        let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
+        let esc = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, k.esc2);
+        let reb = _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
+        let stopped = if l.t16 >= l.next_stop { l.stopped() } else { 0 };
+        if esc | reb | stopped != 0 {
+            // A plain rebase stays in the lane, unless it brings an f64 delta below the
+            // range where FloatExp takes over (`op`'s switch).
+            let mut here = reb & !esc & !stopped;
+            if p.numbers == Numbers::FloatExp {
+                let big = _mm512_max_pd(_mm512_abs_pd(fr), _mm512_abs_pd(fi));
+                here &= !_mm512_cmp_pd_mask::<_CMP_LT_OQ>(big, k.down);
+            }
+            let away = (esc | reb | stopped) & !here;
+            if away != 0 {
+                hand_back(l, m, away, false, p, refs, feed, counters);
+            }
+            if here != 0 {
+                rebase(l, m, here, (fr, fi), p, refs, counters);
+            }
+            return false;
+        }
+        if DER {
+            let (a, b) = (l.der_r, l.der_i);
+            let re = _mm512_sub_pd(_mm512_mul_pd(fr, a), _mm512_mul_pd(fi, b));
+            let im = _mm512_add_pd(_mm512_mul_pd(fr, b), _mm512_mul_pd(fi, a));
+            l.der_r = _mm512_add_pd(_mm512_mul_pd(k.two, re), l.add);
+            l.der_i = _mm512_mul_pd(k.two, im);
+        }
+        // δ <- (2 Z_m + δ) δ + δc.
+        let ar = _mm512_add_pd(_mm512_mul_pd(zr, k.two), l.dzr);
+        let ai = _mm512_add_pd(_mm512_mul_pd(zi, k.two), l.dzi);
+        let nr = _mm512_sub_pd(_mm512_mul_pd(ar, l.dzr), _mm512_mul_pd(ai, l.dzi));
+        let ni = _mm512_add_pd(_mm512_mul_pd(ar, l.dzi), _mm512_mul_pd(ai, l.dzr));
+        l.dzr = _mm512_add_pd(nr, l.dcr);
+        l.dzi = _mm512_add_pd(ni, l.dci);
+        l.t16 += 16;
+        let mut renorm = 0;
+        if DER {
+            // `Der::renormalise`'s test: the larger part outside [DER_LO, DER_HI], not 0.
+            let big = _mm512_max_pd(_mm512_abs_pd(l.der_r), _mm512_abs_pd(l.der_i));
+            let inside = _mm512_mask_cmp_pd_mask::<_CMP_GE_OQ>(l.act, big, k.lo)
+                & _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(l.act, big, k.hi);
+            renorm = _mm512_mask_cmp_pd_mask::<_CMP_NEQ_UQ>(l.act, big, k.zero) & !inside;
+        }
+        let mut calm = true;
+        if l.fresh != 0 {
+            // After a rebase `op` takes a single step only if |δ|^2 > single_d2 (else it looks
+            // for a BLA step): lanes below go back to the scalar loop.
             let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
-            let esc = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, esc2);
-            let reb = _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
-            let stopped = if l.t16 >= l.next_stop { l.stopped() } else { 0 };
-            if esc | reb | stopped != 0 {
-                // A plain rebase stays in the lane, unless it brings an f64 delta below
-                // the range where FloatExp takes over (`op`'s switch).
-                let mut here = reb & !esc & !stopped;
-                if p.numbers == Numbers::FloatExp {
-                    let big = _mm512_max_pd(_mm512_abs_pd(fr), _mm512_abs_pd(fi));
-                    here &= !_mm512_cmp_pd_mask::<_CMP_LT_OQ>(big, down);
-                }
-                let away = (esc | reb | stopped) & !here;
-                if away != 0 {
-                    hand_back(l, m, away, false, p, &refs, feed, counters);
-                }
-                if here != 0 {
-                    rebase(l, m, here, (fr, fi), p, &refs, counters);
-                }
-                continue;
-            }
-            if DER {
-                let (a, b) = (l.der_r, l.der_i);
-                let re = _mm512_sub_pd(_mm512_mul_pd(fr, a), _mm512_mul_pd(fi, b));
-                let im = _mm512_add_pd(_mm512_mul_pd(fr, b), _mm512_mul_pd(fi, a));
-                l.der_r = _mm512_add_pd(_mm512_mul_pd(two, re), l.add);
-                l.der_i = _mm512_mul_pd(two, im);
-            }
-            // δ <- (2 Z_m + δ) δ + δc.
-            let ar = _mm512_add_pd(_mm512_mul_pd(zr, two), l.dzr);
-            let ai = _mm512_add_pd(_mm512_mul_pd(zi, two), l.dzi);
-            let nr = _mm512_sub_pd(_mm512_mul_pd(ar, l.dzr), _mm512_mul_pd(ai, l.dzi));
-            let ni = _mm512_add_pd(_mm512_mul_pd(ar, l.dzi), _mm512_mul_pd(ai, l.dzr));
-            l.dzr = _mm512_add_pd(nr, l.dcr);
-            l.dzi = _mm512_add_pd(ni, l.dci);
-            l.t16 += 16;
-            let mut renorm = 0;
-            if DER {
-                // `Der::renormalise`'s test: the larger part outside [DER_LO, DER_HI], not 0.
-                let big = _mm512_max_pd(_mm512_abs_pd(l.der_r), _mm512_abs_pd(l.der_i));
-                let inside = _mm512_mask_cmp_pd_mask::<_CMP_GE_OQ>(l.act, big, lo)
-                    & _mm512_mask_cmp_pd_mask::<_CMP_LE_OQ>(l.act, big, hi);
-                renorm = _mm512_mask_cmp_pd_mask::<_CMP_NEQ_UQ>(l.act, big, zero) & !inside;
-            }
-            if l.fresh != 0 {
-                // After a rebase `op` takes a single step only if |δ|^2 > single_d2 (else it
-                // looks for a BLA step): lanes below go back to the scalar loop.
-                let d2 = _mm512_add_pd(_mm512_mul_pd(l.dzr, l.dzr), _mm512_mul_pd(l.dzi, l.dzi));
-                let leave = _mm512_mask_cmp_pd_mask::<_CMP_NGT_UQ>(l.fresh, d2, single_d2);
-                for (i, slot) in m.iter_mut().enumerate() {
-                    if let Some(h) = slot
-                        && (l.fresh & !leave) & (1 << i) != 0
-                    {
-                        h.s.single = true;
-                    }
-                }
-                l.fresh = 0;
-                if leave & !renorm != 0 {
-                    hand_back(l, m, leave & !renorm, false, p, &refs, feed, counters);
+            let leave = _mm512_mask_cmp_pd_mask::<_CMP_NGT_UQ>(l.fresh, d2, k.single_d2);
+            for (i, slot) in m.iter_mut().enumerate() {
+                if let Some(h) = slot
+                    && (l.fresh & !leave) & (1 << i) != 0
+                {
+                    h.s.single = true;
                 }
             }
-            if renorm != 0 {
-                hand_back(l, m, renorm, true, p, &refs, feed, counters);
+            l.fresh = 0;
+            if leave & !renorm != 0 {
+                hand_back(l, m, leave & !renorm, false, p, refs, feed, counters);
+                calm = false;
             }
         }
+        if renorm != 0 {
+            hand_back(l, m, renorm, true, p, refs, feed, counters);
+            calm = false;
+        }
+        calm
     }
 }
