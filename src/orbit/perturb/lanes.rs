@@ -11,7 +11,8 @@
 //! ([`Perturbation::begin`]) reaches a single step in single-step mode, and from then on
 //! each step reads every lane's own Z_m (there is no common m: samples rebase and took BLA
 //! steps of different lengths) with one 16-byte load per lane (a pair of gathers costs more
-//! on Zen 4), tests for anything that is not a plain step, and steps. A rebase that keeps
+//! on Zen 4; while no lane is within two steps of its stop, one 32-byte load per lane serves
+//! two steps), tests for anything that is not a plain step, and steps. A rebase that keeps
 //! the sample in single steps happens in the lane. A lane that meets an escape, the
 //! iteration limit, the reference's end, a rebase into FloatExp range or back to BLA steps,
 //! or a derivative that leaves its exponent window hands its sample back to the scalar loop
