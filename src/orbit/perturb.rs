@@ -333,10 +333,7 @@ impl Perturbation {
         let (start, mut der, add_fe) = self.start(offset, traps.is_empty(), counters);
         let fe = self.starts_in_floatexp(&start);
         let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
-        match self.drive(phase, start.dc, &mut der, add_fe, traps, states, false, counters) {
-            Ended::Done(o) => o,
-            Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
-        }
+        self.finish(phase, start.dc, &mut der, add_fe, traps, states, counters)
     }
 
     /// Iterates many samples without traps. Same results as [`Perturbation::orbit`], bit for
@@ -416,19 +413,7 @@ impl Perturbation {
                     Exit::Done(o) => o,
                     Exit::Switch(s) => {
                         let fe = Sample { dc: lane.dc_fe, ..s.convert() };
-                        match self.drive(
-                            Phase::Fe(fe),
-                            lane.dc_fe,
-                            &mut lane.der,
-                            add_fe,
-                            &[],
-                            &mut [],
-                            false,
-                            counters,
-                        ) {
-                            Ended::Done(o) => o,
-                            Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
-                        }
+                        self.finish(Phase::Fe(fe), lane.dc_fe, &mut lane.der, add_fe, &[], &mut [], counters)
                     }
                     Exit::Vector(_) => unreachable!("the two-lane loop never asks for the vector lanes"),
                 };
@@ -444,16 +429,48 @@ impl Perturbation {
     }
 
     /// Runs sample `k` from its start until it ends (written to `out`) or reaches a single
-    /// step above `single_d2`, where it is returned for the vector lanes.
+    /// step in single-step mode, where it is returned for the vector lanes.
     fn begin(&self, k: usize, offset: [f64; 2], out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
-        let (start, mut der, add_fe) = self.start(offset, true, counters);
+        let (start, der, _) = self.start(offset, true, counters);
         let phase = if self.starts_in_floatexp(&start) { Phase::Fe(start) } else { Phase::F64(start.convert()) };
-        match self.drive(phase, start.dc, &mut der, add_fe, &[], &mut [], true, counters) {
+        self.hand_over(phase, k, start.dc, der, out, counters)
+    }
+
+    /// Runs a sample (output index `k`) from `phase` with the lanes in use: writes its orbit
+    /// to `out` when it ends, or returns it for the lanes.
+    fn hand_over(
+        &self,
+        phase: Phase,
+        k: usize,
+        dc_fe: [FloatExp; 2],
+        mut der: Der,
+        out: &mut [Orbit],
+        counters: &mut Counters,
+    ) -> Option<Held> {
+        match self.drive(phase, dc_fe, &mut der, self.add_fe(), &[], &mut [], true, counters) {
             Ended::Done(o) => {
                 out[k] = o;
                 None
             }
-            Ended::Vector(s) => Some(Held { k, s, der, dc_fe: start.dc, renorm: false }),
+            Ended::Vector(s) => Some(Held { k, s, der, dc_fe, renorm: false }),
+        }
+    }
+
+    /// Runs a sample from `phase` to its end without the lanes.
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &self,
+        phase: Phase,
+        dc_fe: [FloatExp; 2],
+        der: &mut Der,
+        add_fe: FloatExp,
+        traps: &[Trap],
+        states: &mut [TrapState],
+        counters: &mut Counters,
+    ) -> Orbit {
+        match self.drive(phase, dc_fe, der, add_fe, traps, states, false, counters) {
+            Ended::Done(o) => o,
+            Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
         }
     }
 
@@ -487,17 +504,11 @@ impl Perturbation {
                 Some(Exit::Vector(s)) => Phase::F64(s),
             }
         };
-        match self.drive(phase, h.dc_fe, &mut h.der, add_fe, &[], &mut [], true, counters) {
-            Ended::Done(o) => {
-                out[h.k] = o;
-                None
-            }
-            Ended::Vector(s) => Some(Held { s, renorm: false, ..h }),
-        }
+        self.hand_over(phase, h.k, h.dc_fe, h.der, out, counters)
     }
 
     /// Runs a sample from `phase` to its end, switching number types as its delta asks (with
-    /// `vector`, until it reaches a single step above `single_d2` in its f64 phase).
+    /// `vector`, until it reaches a single step in single-step mode in its f64 phase).
     #[allow(clippy::too_many_arguments)]
     fn drive(
         &self,
