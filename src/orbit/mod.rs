@@ -129,12 +129,12 @@ pub fn prepare(
         for (k, r) in refs.iter().enumerate() {
             // Orbits of 0 step nonlinearly from Z_0 = 0: their tables start at index 1.
             let origin = if mandelbrot || k == 1 { 1 } else { 0 };
-            let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max);
+            let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max, spec.escape_radius);
             if k == 0 {
                 // The steps every sample takes first: from Z_1 (Mandelbrot, |δ_1| = |δc|) or
                 // Z_0 (Julia, |δ_0| = |offset|), bounded by the largest offset.
                 let bound = spec.spacing.mul_f64(spec.max_offset);
-                skip = Skip::find(&t, origin, bound, dc_max, spec.max_iter);
+                skip = Skip::find(&t, origin, bound, spec.max_iter);
             }
             bla_f64[k] = Some(t.to_f64());
             if spec.numbers == Numbers::FloatExp {

@@ -25,7 +25,7 @@
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 
-use super::bla::{Bla, BlaTable};
+use super::bla::{BlaTable, Step};
 use super::reference::Reference;
 use crate::field::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
@@ -121,56 +121,70 @@ pub struct Perturbation {
 
 /// The run of BLA steps from the start of the primary reference that is valid for every
 /// sample of the view at once (their deltas are bounded by the largest offset), composed
-/// into one linear map δ_m = K δ_start. Every sample would take these same steps (or
-/// longer ones covering them, equal within the tolerance); taking them once per view
-/// skips each sample's first BLA lookups, and at depth its whole FloatExp phase.
+/// into one quadratic map of the sample's offset u: δ_m = K1 u + K2 u^2. Every sample would
+/// take these same steps (or longer ones covering them, equal within the tolerance); taking
+/// them once per view skips each sample's first BLA lookups, and at depth its whole FloatExp
+/// phase.
 #[derive(Debug, Clone, Copy)]
 pub struct Skip {
     /// Reference index (and iteration) the samples continue from.
     pub m: u32,
-    /// δ_m = K δ_start, and the scaled derivative is K times the spacing.
-    pub k: [FloatExp; 2],
+    /// δ_m = K1 u + K2 u^2 (u = δc for the Mandelbrot set, δ_0 for Julia sets), and the
+    /// scaled derivative is (K1 + 2 K2 u) times the spacing.
+    pub k: [[FloatExp; 2]; 2],
     /// BLA steps composed.
     pub steps: u32,
 }
 
 impl Skip {
-    /// Composes the valid steps of `table` from `start` for deltas up to `bound` (and
-    /// offsets up to `dc_max`), within `max_iter`.
-    pub fn find(
-        table: &BlaTable<FloatExp>,
-        start: u32,
-        bound: FloatExp,
-        dc_max: FloatExp,
-        max_iter: u32,
-    ) -> Option<Skip> {
-        let (mut a, mut b) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
-        let (mut m, mut bound, mut steps) = (start, bound, 0);
+    /// Composes the valid steps of `table` from `start` for offsets up to `u_max`, within
+    /// `max_iter`.
+    pub fn find(table: &BlaTable<FloatExp>, start: u32, u_max: FloatExp, max_iter: u32) -> Option<Skip> {
+        let (mut k1, mut k2) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
+        let (mut m, mut bound, mut steps) = (start, u_max, 0);
         while let Some((e, len)) = table.lookup(m, bound * bound, max_iter - m) {
-            a = cmul(e.a, a);
-            b = cadd(cmul(e.a, b), e.b);
-            bound = norm2(e.a).sqrt() * bound + norm2(e.b).sqrt() * dc_max;
+            // δ = K1 u + K2 u^2 and c = u (Julia: B = AB = B2 = 0, so c drops out):
+            // A δ + B u + A2 δ^2 + AB δ u + B2 u^2 to second order in u.
+            let (f, q) = (e.first, e.second);
+            k2 = cadd(cadd(cmul(f.a, k2), cmul(q.a2, cmul(k1, k1))), cadd(cmul(q.ab, k1), q.b2));
+            k1 = cadd(cmul(f.a, k1), f.b);
+            bound = norm2(k1).sqrt() * u_max + norm2(k2).sqrt() * u_max * u_max;
             m += len;
             steps += 1;
         }
-        // δ_start = δc for the Mandelbrot set (and B = 0 for Julia sets): K = A + B.
-        (steps > 0).then_some(Skip { m, k: cadd(a, b), steps })
+        (steps > 0).then_some(Skip { m, k: [k1, k2], steps })
     }
 }
 
-/// Fraction of the largest BLA radius above which a sample stops looking for BLA steps
-/// (until its next rebase). At 1 no valid step is lost (none is valid above the largest
-/// radius); below 1 the short steps that a delta just under the radii still finds are
-/// replaced by single steps, which are exact and, in the vector lanes, far cheaper than a
-/// scalar BLA lookup and step. bench-e50 at 800x600 (`deepfield render --stats`, two
-/// threads): 1 → 3.8-4.2 s, 0.3 → 3.7-3.9, 0.1 → 3.5-3.6, 0.05 → 3.9, 0.01 → 4.4.
-pub const SINGLE_STEP_FRACTION: f64 = 0.1;
+/// The steps whose radii set where a sample stops looking for BLA steps: level 3, steps of
+/// 16 iterations (see [`single_step_threshold`]).
+pub const SINGLE_STEP_LEVEL: usize = 3;
 
-/// `single_d2` for these f64 tables: the largest radius of their shortest steps, times
-/// [`SINGLE_STEP_FRACTION`], squared; 0 without tables.
+/// The fraction of the median radius of [`SINGLE_STEP_LEVEL`]'s steps above which a sample
+/// stops looking for BLA steps (until its next rebase).
+pub const SINGLE_STEP_FRACTION: f64 = 0.3;
+
+/// `single_d2` for these f64 tables: the median radius of their steps of 16 iterations,
+/// times [`SINGLE_STEP_FRACTION`], squared; 0 without tables (or without valid steps).
+///
+/// Above it, BLA offers a sample only short steps at most indices: 16 single steps in the
+/// vector lanes (about 1 ns each) cost less than one scalar lookup and second-order step
+/// (about 20 ns), so the sample goes to the lanes. The median, not the largest radius:
+/// second-order radii vary by orders of magnitude along an orbit (up to sqrt(ε |Z|)), and a
+/// threshold at the largest kept samples in scalar single steps wherever BLA had nothing.
+/// Measured at 800x600 (`deepfield render --stats`, two threads, alternating settings; this
+/// VM's timings vary by ±20%): against 0.1 times the largest radius of 2-iteration steps,
+/// bench-e14 0.29-0.35 s → 0.19-0.25 s, bench-e50 and liiiines within the noise (median
+/// of 8-step radii at fraction 1 and of 16-step radii at fraction 1 were similar).
 pub fn single_step_threshold(tables: &[Option<BlaTable<f64>>]) -> f64 {
-    let r2 = tables.iter().flatten().filter_map(BlaTable::max_r2).fold(0.0, f64::max);
-    r2 * SINGLE_STEP_FRACTION * SINGLE_STEP_FRACTION
+    let mut r2: Vec<f64> =
+        tables.iter().flatten().flat_map(|t| t.radii2(SINGLE_STEP_LEVEL)).filter(|&r| r > 0.0).collect();
+    if r2.is_empty() {
+        return 0.0;
+    }
+    let mid = r2.len() / 2;
+    let (_, median, _) = r2.select_nth_unstable_by(mid, f64::total_cmp);
+    *median * SINGLE_STEP_FRACTION * SINGLE_STEP_FRACTION
 }
 
 /// A sample's state in number type D.
@@ -307,10 +321,12 @@ impl Perturbation {
             counters.iterations += (k.m - start.m) as u64;
             counters.bla_iterations += (k.m - start.m) as u64;
             counters.bla_steps += k.steps as u64;
-            start.dz = cmul(k.k, d);
+            let [k1, k2] = k.k;
+            start.dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
             start.m = k.m;
             start.n = k.m;
-            der = cmul(k.k, der);
+            let k2d = cmul(k2, d);
+            der = cmul(cadd(k1, [k2d[0].ldexp(1), k2d[1].ldexp(1)]), der);
         }
         (start, Der::from_fe(der, add_fe), add_fe)
     }
@@ -643,7 +659,7 @@ impl Perturbation {
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            self.apply_bla::<D, DER>(e, s, der, ctx.add_fe);
+            self.apply_bla::<D, DER>(e, s, d2, der, ctx.add_fe);
             s.m += len;
             s.n += len;
             local.bla_steps += 1;
@@ -667,33 +683,40 @@ impl Perturbation {
         None
     }
 
-    /// δ -> A δ + B δc, and the derivative alike: in f64 when A and B are moderate (the
-    /// common case), else in FloatExp (A may be huge at depth).
+    /// δ -> A δ + B δc + A2 δ^2 + AB δ δc + B2 δc^2 (first order only where that is valid
+    /// for |δ|^2 = `d2`), and the derivative by the step's Jacobian: in f64 when its entries
+    /// are moderate (the common case), else in FloatExp (they may be huge at depth).
     #[inline]
-    fn apply_bla<D: Real, const DER: bool>(&self, e: &Bla<D>, s: &mut Sample<D>, der: &mut Der, add_fe: FloatExp) {
-        s.dz = cadd(cmul(e.a, s.dz), cmul(e.b, s.dc));
+    fn apply_bla<D: Real, const DER: bool>(
+        &self,
+        e: Step<'_, D>,
+        s: &mut Sample<D>,
+        d2: D,
+        der: &mut Der,
+        add_fe: FloatExp,
+    ) {
+        let linear = e.linear(d2);
         if DER {
-            let a = cto_f64(e.a);
-            let b = cto_f64(e.b);
+            let (m, n) = if linear { (e.first.a, e.first.b) } else { e.jacobian(s.dz, s.dc) };
+            let (a, b) = (cto_f64(m), cto_f64(n));
             let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
             if big < DER_SAFE {
-                // |A mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
-                // underflows, where it is negligible beside A mant).
-                let m = der.mant;
-                let am = [a[0] * m[0] - a[1] * m[1], a[0] * m[1] + a[1] * m[0]];
-                der.mant = [am[0] + b[0] * der.add, am[1] + b[1] * der.add];
+                // |M mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
+                // underflows, where it is negligible beside M mant).
+                let d = der.mant;
+                let md = [a[0] * d[0] - a[1] * d[1], a[0] * d[1] + a[1] * d[0]];
+                der.mant = [md[0] + b[0] * der.add, md[1] + b[1] * der.add];
                 der.renormalise(add_fe);
             } else {
-                Self::bla_derivative_fe(e, der, add_fe);
+                Self::bla_derivative_fe(cconv(m), cconv(n), der, add_fe);
             }
         }
+        s.dz = if linear { cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)) } else { e.apply(s.dz, s.dc) };
     }
 
     #[inline(never)]
-    fn bla_derivative_fe<D: Real>(e: &Bla<D>, der: &mut Der, add_fe: FloatExp) {
-        let a: [FloatExp; 2] = cconv(e.a);
-        let b: [FloatExp; 2] = cconv(e.b);
-        let d = cadd(cmul(a, der.to_fe()), [b[0] * add_fe, b[1] * add_fe]);
+    fn bla_derivative_fe(m: [FloatExp; 2], n: [FloatExp; 2], der: &mut Der, add_fe: FloatExp) {
+        let d = cadd(cmul(m, der.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
         *der = Der::from_fe(d, add_fe);
     }
 }
