@@ -190,18 +190,16 @@ fn merge(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
     // |Q| <= a2x ρ^2 + abx g ρ + b2x g^2, |L| <= ax ρ + bx g.
     let (qp, qq, qs) = (a2x, abx * g, b2x * g * g);
     let quarter = FloatExp::from(eps / 4.0);
-    let mut bounds = vec![
+    let bounds = [
         // x's image within y's radius.
         largest_root(qp, ax + qq, bx * g + qs - y.r),
         // |Q| <= |L|.
         largest_root(qp, qq - ax, qs - bx * g),
         // |AB_y| g |Q| <= ε/4 |A_y| |L|.
         largest_root(aby * g * qp, aby * g * qq - quarter * ay * ax, aby * g * qs - quarter * ay * bx * g),
+        // |Q| <= ε |A_y| / (4 |A2_y|) (no bound where y has no quadratic term).
+        if a2y.is_zero() { None } else { largest_root(qp, qq, qs - quarter * ay / a2y) },
     ];
-    if !a2y.is_zero() {
-        // |Q| <= ε |A_y| / (4 |A2_y|).
-        bounds.push(largest_root(qp, qq, qs - quarter * ay / a2y));
-    }
     let r = bounds.into_iter().flatten().fold(x.r, FloatExp::min);
     // First order: z valid for x and A_x z + B_x c valid for y.
     let through = (y.lin - bx * g).max(FloatExp::ZERO);
