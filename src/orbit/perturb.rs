@@ -696,22 +696,28 @@ impl Perturbation {
         add_fe: FloatExp,
     ) {
         let linear = e.linear(d2);
-        if DER {
-            let (m, n) = if linear { (e.first.a, e.first.b) } else { e.jacobian(s.dz, s.dc) };
-            let (a, b) = (cto_f64(m), cto_f64(n));
-            let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
-            if big < DER_SAFE {
-                // |M mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
-                // underflows, where it is negligible beside M mant).
-                let d = der.mant;
-                let md = [a[0] * d[0] - a[1] * d[1], a[0] * d[1] + a[1] * d[0]];
-                der.mant = [md[0] + b[0] * der.add, md[1] + b[1] * der.add];
-                der.renormalise(add_fe);
-            } else {
-                Self::bla_derivative_fe(cconv(m), cconv(n), der, add_fe);
-            }
+        if !DER {
+            s.dz = if linear { cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)) } else { e.apply(s.dz, s.dc) };
+            return;
         }
-        s.dz = if linear { cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)) } else { e.apply(s.dz, s.dc) };
+        let (dz, m, n) = if linear {
+            (cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)), e.first.a, e.first.b)
+        } else {
+            e.apply_with_jacobian(s.dz, s.dc)
+        };
+        let (a, b) = (cto_f64(m), cto_f64(n));
+        let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+        if big < DER_SAFE {
+            // |M mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
+            // underflows, where it is negligible beside M mant).
+            let d = der.mant;
+            let md = [a[0] * d[0] - a[1] * d[1], a[0] * d[1] + a[1] * d[0]];
+            der.mant = [md[0] + b[0] * der.add, md[1] + b[1] * der.add];
+            der.renormalise(add_fe);
+        } else {
+            Self::bla_derivative_fe(cconv(m), cconv(n), der, add_fe);
+        }
+        s.dz = dz;
     }
 
     #[inline(never)]
