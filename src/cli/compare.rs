@@ -47,12 +47,12 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 b.set_position(n);
             }
         };
-        let truths = compare::truths(&scene, &pixels, &cancel, &progress).map_err(|_| Failure::Cancelled)?;
+        let mut truths = compare::truths(&scene, &pixels, &cancel, &progress).map_err(|_| Failure::Cancelled)?;
         if let Some(b) = &bar {
             b.set_length(variants.len() as u64);
             b.set_position(0);
         }
-        let mut rows = Vec::new();
+        let mut measured = Vec::new();
         for (k, v) in variants.iter().enumerate() {
             if let Some(b) = &bar {
                 b.set_message(v.name.clone());
@@ -61,11 +61,22 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 compare::RunError::Cancelled => Failure::Cancelled,
                 compare::RunError::Gpu(e) => Failure::Runtime(anyhow!(e)),
             })?;
-            rows.push(compare::score(&v.name, &m, &truths, scene.escape_radius));
+            measured.push(m);
             if let Some(b) = &bar {
                 b.set_position(k as u64 + 1);
             }
         }
+        let suspects = compare::suspects(&measured, &truths);
+        if let Some(b) = &bar {
+            b.set_message(format!("conditioning of {} disagreeing pixels", suspects.len()));
+        }
+        compare::mark_ill_conditioned(&scene, &pixels, &mut truths, &suspects, &cancel)
+            .map_err(|_| Failure::Cancelled)?;
+        let rows = variants
+            .iter()
+            .zip(&measured)
+            .map(|(v, m)| compare::score(&v.name, m, &truths, scene.escape_radius))
+            .collect();
         Ok(rows)
     });
     if let Some(b) = &bar {
@@ -82,7 +93,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
     std::io::stdout().lock().write_all(text.as_bytes()).map_err(|e| Failure::Runtime(anyhow!(e)))
 }
 
-const KEYS: [&str; 8] = [
+const KEYS: [&str; 10] = [
     "engine",
     "seconds",
     "iterations_per_second",
@@ -91,9 +102,11 @@ const KEYS: [&str; 8] = [
     "nf_error_p99",
     "de_error_p50",
     "de_error_p99",
+    "compared",
+    "ill_conditioned",
 ];
 
-fn fields(r: &Row) -> [String; 8] {
+fn fields(r: &Row) -> [String; 10] {
     [
         r.engine.clone(),
         format!("{:.4}", r.seconds),
@@ -103,6 +116,8 @@ fn fields(r: &Row) -> [String; 8] {
         format!("{:.3e}", r.nf_error_p99),
         format!("{:.3e}", r.de_error_p50),
         format!("{:.3e}", r.de_error_p99),
+        r.compared.to_string(),
+        r.ill_conditioned.to_string(),
     ]
 }
 
@@ -115,13 +130,14 @@ fn csv(rows: &[Row]) -> String {
 }
 
 fn table(rows: &[Row], origin: &str, samples: usize) -> String {
-    let heads = ["engine", "seconds", "iter/s", "N mismatch", "NF p50", "NF p99", "DE p50", "DE p99"];
-    let cells: Vec<[String; 8]> = rows.iter().map(fields).collect();
+    let heads =
+        ["engine", "seconds", "iter/s", "N mismatch", "NF p50", "NF p99", "DE p50", "DE p99", "pixels", "ill-cond."];
+    let cells: Vec<[String; 10]> = rows.iter().map(fields).collect();
     let width: Vec<usize> =
-        (0..8).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
+        (0..heads.len()).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
     let line = |c: &[&str]| -> String {
         let mut s = format!("{:<w$}", c[0], w = width[0]);
-        for k in 1..8 {
+        for k in 1..heads.len() {
             s += &format!("  {:>w$}", c[k], w = width[k]);
         }
         s + "\n"
@@ -131,5 +147,6 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
     for c in &cells {
         out += &line(&c.iter().map(String::as_str).collect::<Vec<_>>());
     }
-    out
+    out + "pixels: compared for N (orbits passing within 1e-9 of the escape circle left out); \
+           ill-cond.: wrong N where the true N changes within 1e-9 pixel (left out)\n"
 }

@@ -22,6 +22,9 @@ pub struct Truth {
     pub dz: [f64; 2],
     /// Some |z_k| came within 1e-9 relative of the escape radius: N is ill-conditioned.
     pub near_circle: bool,
+    /// N changes when the point moves 1e-9 sample spacings (set by
+    /// [`super::mark_ill_conditioned`], only on pixels some engine got wrong).
+    pub ill_conditioned: bool,
 }
 
 /// Iterates the orbit of `point` (Mandelbrot: c = point, z_0 = 0; Julia: z_0 = point).
@@ -53,7 +56,8 @@ pub fn orbit(
                 let v: FloatExp = bigfloat::to_floatexp(d) * bigfloat::to_floatexp(spacing);
                 v.to_f64()
             };
-            return Truth { n: Some(n), z: [f(&x), f(&y)], dz: [scaled(&dx), scaled(&dy)], near_circle: near };
+            let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
+            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false };
         }
         if n == max_iter {
             break;
@@ -70,5 +74,5 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near }
+    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false }
 }
