@@ -228,7 +228,7 @@ pub struct SceneArgs {
     /// Turn off bilinear approximation in the perturbation engines.
     #[arg(long)]
     pub no_bla: bool,
-    /// BLA tolerance ε (relative size of the dropped term per step; default 1e-12).
+    /// BLA tolerance ε (relative size of the dropped term per step; default 1e-14).
     #[arg(long, value_name = "EPS", value_parser = parse_tolerance)]
     pub bla_tolerance: Option<f64>,
     /// Palette for every layer that uses one: a built-in name or a palette file.
@@ -257,6 +257,10 @@ pub struct CompareArgs {
     /// Render only these sampled pixels with each engine instead of the whole image.
     #[arg(long)]
     pub sample_only: bool,
+    /// Run only the engines whose row name contains one of these comma-separated strings
+    /// (e.g. `bla` leaves out the slow engines without BLA at depth)
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub only: Vec<String>,
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,

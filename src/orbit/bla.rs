@@ -18,9 +18,9 @@
 //! within ε of the escape circle).
 //!
 //! First order, the same tables would be Zhuoran's BLA, valid while |z| < ε |Z_m|: at the
-//! default ε = 1e-12 a sample drifting away from the reference at depth leaves them at
-//! |z| ~ 1e-12 and takes single steps for the thousands of iterations its delta needs to grow
-//! to |Z|. The second-order terms are valid to |z| ~ sqrt(ε |Z|) ~ 1e-6 for short runs, which
+//! default ε = 1e-14 a sample drifting away from the reference at depth leaves them at
+//! |z| ~ 1e-14 and takes single steps for the thousands of iterations its delta needs to grow
+//! to |Z|. The second-order terms are valid to |z| ~ sqrt(ε |Z|) ~ 1e-7 for short runs, which
 //! covers most of that drift (bench-e50: see the README's Performance section).
 //!
 //! Merging pairs level by level gives a binary tree: level k holds steps of 2^k iterations

@@ -137,7 +137,7 @@ pub struct RenderRaw {
     /// Bilinear approximation in the perturbation engines (default true).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bla: Option<Spanned<bool>>,
-    /// BLA tolerance ε (default 1e-12).
+    /// BLA tolerance ε (default 1e-14).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bla_tolerance: Option<Spanned<f64>>,
     /// Palette cycling: added to the offset of every palette, in cycles (default 0).

@@ -183,10 +183,18 @@ fn compare_measures_engines_against_the_truth() {
     let f64_row = rows.iter().find(|r| r["engine"] == "f64").unwrap();
     assert_eq!(f64_row["n_mismatch_fraction"], 0.0, "{f64_row}");
     assert!(f64_row["nf_error_p99"].as_f64().unwrap() < 1e-6, "{f64_row}");
-    let o = deepfield(&["compare", "scene.toml", "--samples", "10", "--csv", "--sample-only"], &dir);
+    let o = deepfield(
+        &["compare", "scene.toml", "--samples", "10", "--csv", "--sample-only", "--only", "f32,bla 1e-6"],
+        &dir,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("engine,seconds,iterations_per_second,n_mismatch_fraction,"), "{text}");
+    let names: Vec<&str> = text.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+    assert_eq!(names, ["f32", "perturb-f64 bla 1e-6", "perturb-floatexp bla 1e-6"], "{text}");
+    let o = deepfield(&["compare", "scene.toml", "--samples", "10", "--only", "nothing-like-this"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--only nothing-like-this"), "{}", stderr(&o));
 }
 
 /// Past the f64 range `compare` lists only the FloatExp engines, and the default BLA
@@ -200,7 +208,7 @@ fn compare_at_depth_lists_the_engines_that_can_address_it() {
     assert!(o.status.success(), "{}", stderr(&o));
     let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let names: Vec<&str> = rows.as_array().unwrap().iter().map(|r| r["engine"].as_str().unwrap()).collect();
-    assert_eq!(names, ["perturb-floatexp", "perturb-floatexp bla 1e-12", "perturb-floatexp bla 1e-6"]);
+    assert_eq!(names, ["perturb-floatexp", "perturb-floatexp bla 1e-14", "perturb-floatexp bla 1e-6"]);
     let o = deepfield(&[&args[..7], &["--max-iter", "4000000000"]].concat(), &dir);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("no engine can address this view"), "{}", stderr(&o));
