@@ -47,6 +47,16 @@ const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
 const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
 /// BLA multipliers below this update the derivative in f64 (|A| |mant| < 2^900).
 const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
+/// A step that multiplies the derivative by less than 2^-100 (a single step from |z| below
+/// this, a BLA step whose |A| is below 2^-100) updates it in FloatExp. The orbit then passes
+/// near 0, where the derivative of the Mandelbrot set collapses to its added term (the
+/// spacing, dz -> 2 z dz + 1): in the f64 mantissa that term is spacing / 2^exp, which has
+/// underflowed to 0 by then at depth, and 2 z mant may underflow too. bench-e1086 lost its
+/// derivative this way on every pixel (distance estimates at the 1e30 cap).
+const DER_TINY_Z: f64 = f64::from_bits((1023 - 101) << 52);
+/// DER_TINY_Z squared: the test is |z|^2 < DER_TINY_Z2, which the escape test's |z|^2
+/// already computed (in the vector lanes too).
+const DER_TINY_Z2: f64 = f64::from_bits((1023 - 202) << 52);
 
 /// Which number types the deltas use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -242,6 +252,83 @@ impl Der {
     fn to_f64(self) -> [f64; 2] {
         let v = self.to_fe();
         [v[0].to_f64(), v[1].to_f64()]
+    }
+
+    /// True when the larger part of the mantissa is outside [DER_LO, DER_HI] (or 0).
+    #[inline(always)]
+    fn out_of_range(&self) -> bool {
+        !(DER_LO..=DER_HI).contains(&self.mant[0].abs().max(self.mant[1].abs()))
+    }
+
+    /// One perturbation step, der <- 2 z der + what a step adds; `z` is the full value
+    /// rounded to f64, `full` the same unrounded. In f64, the one test the hot loop pays
+    /// being the renormalisation's: a result can be wrong only if a term underflowed, and
+    /// then it is out of range (the other term too small to hold it in).
+    #[inline(always)]
+    fn step<D: Real>(&mut self, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
+        let prev = *self;
+        let [x, y] = z;
+        let [a, b] = self.mant;
+        self.mant = [2.0 * (x * a - y * b) + self.add, 2.0 * (x * b + y * a)];
+        if self.out_of_range() {
+            self.step_slow(prev, z, full, add_fe);
+        }
+    }
+
+    /// [`Der::step`] once the f64 result is out of range: from a tiny z the step is redone in
+    /// FloatExp from `prev`, else the result is renormalised.
+    #[cold]
+    #[inline(never)]
+    fn step_slow<D: Real>(&mut self, prev: Der, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
+        if z[0] * z[0] + z[1] * z[1] < DER_TINY_Z2 {
+            let f: [FloatExp; 2] = cconv(full);
+            let d = cmul([f[0].ldexp(1), f[1].ldexp(1)], prev.to_fe());
+            *self = Der::from_fe([d[0] + add_fe, d[1]], add_fe);
+        } else {
+            self.renormalise(add_fe);
+        }
+    }
+
+    /// A BLA step's update, der <- m der + n (what a step adds): in f64 when the multipliers
+    /// are moderate (the common case), else in FloatExp (they may be huge at depth, or m
+    /// tiny where the step passes near 0; as in [`Der::step`], the latter shows as a result
+    /// out of range).
+    #[inline(always)]
+    fn jacobian(
+        &mut self,
+        m: [f64; 2],
+        n: [f64; 2],
+        fe: impl FnOnce() -> ([FloatExp; 2], [FloatExp; 2]),
+        add_fe: FloatExp,
+    ) {
+        let big = m[0].abs().max(m[1].abs()).max(n[0].abs()).max(n[1].abs());
+        if big < DER_SAFE {
+            // |m mant| < 2^900: no overflow; the added term is spacing / 2^exp (0 when that
+            // underflows, where it is negligible unless m is tiny).
+            let prev = *self;
+            let d = self.mant;
+            let md = [m[0] * d[0] - m[1] * d[1], m[0] * d[1] + m[1] * d[0]];
+            self.mant = [md[0] + n[0] * self.add, md[1] + n[1] * self.add];
+            if self.out_of_range() {
+                if m[0].abs().max(m[1].abs()) < 2.0 * DER_TINY_Z {
+                    let (m, n) = fe();
+                    *self = prev;
+                    self.jacobian_fe(m, n, add_fe);
+                } else {
+                    self.renormalise(add_fe);
+                }
+            }
+        } else {
+            let (m, n) = fe();
+            self.jacobian_fe(m, n, add_fe);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn jacobian_fe(&mut self, m: [FloatExp; 2], n: [FloatExp; 2], add_fe: FloatExp) {
+        let d = cadd(cmul(m, self.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
+        *self = Der::from_fe(d, add_fe);
     }
 }
 
@@ -667,10 +754,7 @@ impl Perturbation {
             return None;
         }
         if DER {
-            let [x, y] = z;
-            let [a, b] = der.mant;
-            der.mant = [2.0 * (x * a - y * b) + der.add, 2.0 * (x * b + y * a)];
-            der.renormalise(ctx.add_fe);
+            der.step(z, full, ctx.add_fe);
         }
         let two = D::from_f64(2.0);
         s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
@@ -705,25 +789,8 @@ impl Perturbation {
         } else {
             e.apply_with_jacobian(s.dz, s.dc)
         };
-        let (a, b) = (cto_f64(m), cto_f64(n));
-        let big = a[0].abs().max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
-        if big < DER_SAFE {
-            // |M mant| < 2^900: no overflow; der.add is spacing / 2^exp (0 when that
-            // underflows, where it is negligible beside M mant).
-            let d = der.mant;
-            let md = [a[0] * d[0] - a[1] * d[1], a[0] * d[1] + a[1] * d[0]];
-            der.mant = [md[0] + b[0] * der.add, md[1] + b[1] * der.add];
-            der.renormalise(add_fe);
-        } else {
-            Self::bla_derivative_fe(cconv(m), cconv(n), der, add_fe);
-        }
+        der.jacobian(cto_f64(m), cto_f64(n), || (cconv(m), cconv(n)), add_fe);
         s.dz = dz;
-    }
-
-    #[inline(never)]
-    fn bla_derivative_fe(m: [FloatExp; 2], n: [FloatExp; 2], der: &mut Der, add_fe: FloatExp) {
-        let d = cadd(cmul(m, der.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
-        *der = Der::from_fe(d, add_fe);
     }
 }
 
@@ -754,6 +821,39 @@ mod tests {
         "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
         "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
     ];
+
+    /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
+    /// (dz -> 2 z dz + 1): a single step from a tiny z, or a BLA step with a tiny multiplier,
+    /// must keep that term although it is far below the derivative's f64 mantissa (at depth
+    /// it underflows there; bench-e1086 lost its distance estimates this way).
+    #[test]
+    fn derivative_keeps_its_added_term_where_the_orbit_passes_near_zero() {
+        let spacing = FloatExp::new(1.0, -3600);
+        let close = |v: [FloatExp; 2], want: [f64; 2]| {
+            let got = [v[0].ldexp(3600).to_f64(), v[1].ldexp(3600).to_f64()];
+            assert!((got[0] - want[0]).abs() < 1e-12 && (got[1] - want[1]).abs() < 1e-12, "{got:?} != {want:?}");
+        };
+        // dz/dc ~ 2^3000, so the scaled derivative is ~2^-600 and the spacing is 2^-3000 of it.
+        let start = Der::from_fe([FloatExp::new(1.5, -600), FloatExp::new(-0.5, -600)], spacing);
+        let tiny = [FloatExp::new(1.0, -3200), FloatExp::new(1.0, -3201)];
+        let mut der = start;
+        der.step(cto_f64(tiny), tiny, spacing);
+        close(der.to_fe(), [1.0, 0.0]);
+        // A BLA step whose multiplier is below f64's range and whose added part is 3 + 2i.
+        let (m, n) = (tiny, [FloatExp::from(3.0), FloatExp::from(2.0)]);
+        let mut der = start;
+        der.jacobian(cto_f64(m), cto_f64(n), || (m, n), spacing);
+        close(der.to_fe(), [3.0, 2.0]);
+        // Away from 0 the f64 path gives 2 z dz (+ a negligible spacing).
+        let z = [FloatExp::from(0.5), FloatExp::from(0.25)];
+        let mut der = start;
+        der.step(cto_f64(z), z, spacing);
+        let want = cmul([FloatExp::from(1.0), FloatExp::from(0.5)], start.to_fe());
+        let got = der.to_fe();
+        for k in 0..2 {
+            assert!((got[k].ldexp(600).to_f64() - want[k].ldexp(600).to_f64()).abs() < 1e-15, "{got:?} {want:?}");
+        }
+    }
 
     fn dec(v: [&str; 2]) -> [Decimal; 2] {
         [Decimal::parse(v[0]).unwrap(), Decimal::parse(v[1]).unwrap()]

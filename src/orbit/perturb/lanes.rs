@@ -35,7 +35,7 @@
 
 use std::arch::x86_64::*;
 
-use super::{Counters, DER_HI, DER_LO, DOWN, Held, Numbers, Perturbation};
+use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
 use crate::field::Orbit;
 
 /// Samples per vector.
@@ -315,6 +315,7 @@ unsafe fn run<const DER: bool>(
         lo: _mm512_set1_pd(DER_LO),
         hi: _mm512_set1_pd(DER_HI),
         zero: _mm512_setzero_pd(),
+        tiny: _mm512_set1_pd(DER_TINY_Z2),
     };
     let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
     let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
@@ -365,6 +366,7 @@ struct Consts {
     lo: __m512d,
     hi: __m512d,
     zero: __m512d,
+    tiny: __m512d,
 }
 
 /// Z_m and Z_m+1 of all eight lanes, as ((re, im), (re, im)) vectors: one 32-byte load per
@@ -422,15 +424,18 @@ fn step<const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
         let esc = _mm512_mask_cmp_pd_mask::<_CMP_GT_OQ>(l.act, f2, k.esc2);
         let reb = _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, d2);
         let stopped = if l.t16 >= l.next_stop { l.stopped() } else { 0 };
-        if esc | reb | stopped != 0 {
+        // With the derivative, a step from |z|^2 below DER_TINY_Z2 is the scalar loop's (it
+        // updates the derivative in FloatExp).
+        let tiny = if DER { _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(l.act, f2, k.tiny) } else { 0 };
+        if esc | reb | stopped | tiny != 0 {
             // A plain rebase stays in the lane, unless it brings an f64 delta below the
             // range where FloatExp takes over (`op`'s switch).
-            let mut here = reb & !esc & !stopped;
+            let mut here = reb & !esc & !stopped & !tiny;
             if p.numbers == Numbers::FloatExp {
                 let big = _mm512_max_pd(_mm512_abs_pd(fr), _mm512_abs_pd(fi));
                 here &= !_mm512_cmp_pd_mask::<_CMP_LT_OQ>(big, k.down);
             }
-            let away = (esc | reb | stopped) & !here;
+            let away = (esc | reb | stopped | tiny) & !here;
             if away != 0 {
                 hand_back(l, m, away, false, p, refs, feed, counters);
             }
