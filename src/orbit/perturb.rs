@@ -47,15 +47,15 @@ const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
 const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
 /// BLA multipliers below this update the derivative in f64 (|A| |mant| < 2^900).
 const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
-/// A step that multiplies the derivative by less than 2^-100 (a single step from |z| below
-/// this, a BLA step whose |A| is below 2^-100) updates it in FloatExp. The orbit then passes
-/// near 0, where the derivative of the Mandelbrot set collapses to its added term (the
-/// spacing, dz -> 2 z dz + 1): in the f64 mantissa that term is spacing / 2^exp, which has
-/// underflowed to 0 by then at depth, and 2 z mant may underflow too. bench-e1086 lost its
-/// derivative this way on every pixel (distance estimates at the 1e30 cap).
+/// Where an orbit passes near 0 (|z| below this, or a BLA step whose |A| is below twice
+/// this), the f64 update of the derivative can be wrong: 2 z mant may underflow (z itself
+/// is 0 in f64 below 2^-1074), and so may the added term, spacing / 2^exp, which is then
+/// all that is left of dz -> 2 z dz + 1. bench-e1086 lost its derivative this way on every
+/// pixel (distance estimates at the 1e30 cap). Such a wrong result is always outside the
+/// renormalisation range, so only there is the step redone in FloatExp.
 const DER_TINY_Z: f64 = f64::from_bits((1023 - 101) << 52);
-/// DER_TINY_Z squared: the test is |z|^2 < DER_TINY_Z2, which the escape test's |z|^2
-/// already computed (in the vector lanes too).
+/// DER_TINY_Z squared: the vector lanes test |z|^2 (which their escape test computed) and
+/// hand such steps to the scalar loop.
 const DER_TINY_Z2: f64 = f64::from_bits((1023 - 202) << 52);
 
 /// Which number types the deltas use.
@@ -261,9 +261,9 @@ impl Der {
     }
 
     /// One perturbation step, der <- 2 z der + what a step adds; `z` is the full value
-    /// rounded to f64, `full` the same unrounded. In f64, the one test the hot loop pays
-    /// being the renormalisation's: a result can be wrong only if a term underflowed, and
-    /// then it is out of range (the other term too small to hold it in).
+    /// rounded to f64, `full` the same unrounded. Done in f64, with the renormalisation's
+    /// range test as the only test: a result can be wrong only where a term underflowed,
+    /// and it is then out of range (the other term is too small to hold it in).
     #[inline(always)]
     fn step<D: Real>(&mut self, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
         let prev = *self;
