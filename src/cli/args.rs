@@ -261,6 +261,10 @@ pub struct CompareArgs {
     /// (e.g. `bla` leaves out the slow engines without BLA at depth)
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub only: Vec<String>,
+    /// Also write one CSV line per sampled pixel to FILE: position, the truth's N and NF
+    /// (and whether N is ill-conditioned), and every engine's N and NF
+    #[arg(long, value_name = "FILE")]
+    pub pixels: Option<std::path::PathBuf>,
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,

@@ -38,6 +38,11 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             deepfield::scene::MAX_PERTURB_ITER
         )));
     }
+    // Opened before any work: an unwritable path fails at once.
+    let pixel_file = match &args.pixels {
+        Some(path) => Some(deepfield::io::AtomicFile::create(path).map_err(Failure::input)?),
+        None => None,
+    };
     let pixels = compare::sample_pixels(&scene, args.samples);
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(pixels.len() as u64);
@@ -47,7 +52,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         b.set_message("ground-truth pixels (big floats)");
         b
     });
-    let rows = pool.install(|| -> Result<Vec<Row>, Failure> {
+    let done = pool.install(|| -> Result<(Vec<Row>, Option<String>), Failure> {
         let progress = |n: u64| {
             if let Some(b) = &bar {
                 b.set_position(n);
@@ -83,12 +88,21 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             .zip(&measured)
             .map(|(v, m)| compare::score(&v.name, m, &truths, scene.escape_radius))
             .collect();
-        Ok(rows)
+        let names: Vec<&str> = variants.iter().map(|v| v.name.as_str()).collect();
+        let csv =
+            pixel_file.is_some().then(|| compare::pixel_csv(&pixels, &truths, &names, &measured, scene.escape_radius));
+        Ok((rows, csv))
     });
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let rows = rows?;
+    let (rows, pixel_text) = done?;
+    if let (Some((file, mut w)), Some(text)) = (pixel_file, pixel_text) {
+        w.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
+        let inner = w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{}", e.error())))?;
+        drop(inner);
+        file.commit_written().map_err(|e| Failure::Runtime(e.into()))?;
+    }
     let text = if args.json {
         serde_json::to_string_pretty(&rows).map_err(|e| Failure::Runtime(e.into()))? + "\n"
     } else if args.csv {

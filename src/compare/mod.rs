@@ -378,6 +378,44 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
+/// The truth's NF (0 for interior pixels); `ln_r` is ln(escape radius).
+fn true_nf(t: &Truth, ln_r: f64) -> f64 {
+    if t.n.is_none() {
+        return 0.0;
+    }
+    let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
+    (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0)
+}
+
+/// One CSV line per sampled pixel: its position, the truth (N, empty for interior; NF;
+/// whether the orbit passes near the escape circle; whether N is ill-conditioned, which is
+/// checked only where some variant's N differs) and each variant's N and NF. `names` and
+/// `measured` are in the same order.
+pub fn pixel_csv(
+    pixels: &[(u32, u32)],
+    truths: &[Truth],
+    names: &[&str],
+    measured: &[Measured],
+    escape_radius: f64,
+) -> String {
+    let ln_r = escape_radius.ln();
+    let mut out = String::from("x,y,n_true,nf_true,near_circle,ill_conditioned");
+    for name in names {
+        out += &format!(",{name} n,{name} nf");
+    }
+    out.push('\n');
+    let n_text = |n: Option<u32>| n.map(|n| n.to_string()).unwrap_or_default();
+    for (k, (&(x, y), t)) in pixels.iter().zip(truths).enumerate() {
+        out += &format!("{x},{y},{},{:.9},{},{}", n_text(t.n), true_nf(t, ln_r), t.near_circle, t.ill_conditioned);
+        for m in measured {
+            let (n, f, _, _) = m.values[k];
+            out += &format!(",{},{f:.9}", n_text((n != INTERIOR).then_some(n)));
+        }
+        out.push('\n');
+    }
+    out
+}
+
 /// Scores a variant's values against the truth.
 pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64) -> Row {
     let ln_r = escape_radius.ln();
@@ -400,9 +438,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         if t.n.is_none() {
             continue;
         }
-        let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
-        let nf_true = (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0);
-        nf.push((f as f64 - nf_true).abs());
+        nf.push((f as f64 - true_nf(t, ln_r)).abs());
         let abs_z = t.z[0].hypot(t.z[1]);
         let d_true = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
         let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);

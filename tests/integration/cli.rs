@@ -184,10 +184,31 @@ fn compare_measures_engines_against_the_truth() {
     assert_eq!(f64_row["n_mismatch_fraction"], 0.0, "{f64_row}");
     assert!(f64_row["nf_error_p99"].as_f64().unwrap() < 1e-6, "{f64_row}");
     let o = deepfield(
-        &["compare", "scene.toml", "--samples", "10", "--csv", "--sample-only", "--only", "f32,bla 1e-6"],
+        &[
+            "compare",
+            "scene.toml",
+            "--samples",
+            "10",
+            "--csv",
+            "--sample-only",
+            "--only",
+            "f32,bla 1e-6",
+            "--pixels",
+            "px.csv",
+        ],
         &dir,
     );
     assert!(o.status.success(), "{}", stderr(&o));
+    // One line per sampled pixel, with the truth and each engine's N and NF; at this zoom
+    // the perturbation engines' N is the truth's.
+    let px = std::fs::read_to_string(dir.join("px.csv")).unwrap();
+    let lines: Vec<Vec<&str>> = px.lines().map(|l| l.split(',').collect()).collect();
+    assert_eq!(lines.len(), 11, "{px}");
+    assert_eq!(lines[0][..7], ["x", "y", "n_true", "nf_true", "near_circle", "ill_conditioned", "f32 n"], "{px}");
+    for l in &lines[1..] {
+        assert_eq!(l.len(), 12, "{px}");
+        assert!(l[8] == l[2] && l[10] == l[2], "{px}");
+    }
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("engine,seconds,iterations_per_second,n_mismatch_fraction,"), "{text}");
     let names: Vec<&str> = text.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
