@@ -97,11 +97,8 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         b.finish_and_clear();
     }
     let (rows, pixel_text) = done?;
-    if let (Some((file, mut w)), Some(text)) = (pixel_file, pixel_text) {
-        w.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
-        let inner = w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{}", e.error())))?;
-        drop(inner);
-        file.commit_written().map_err(|e| Failure::Runtime(e.into()))?;
+    if let (Some(opened), Some(text)) = (pixel_file, pixel_text) {
+        super::commit_text(opened, &text)?;
     }
     let text = if args.json {
         serde_json::to_string_pretty(&rows).map_err(|e| Failure::Runtime(e.into()))? + "\n"

@@ -36,6 +36,19 @@ impl Failure {
     }
 }
 
+/// Writes `text` into an atomic file opened earlier (so that an unwritable path failed
+/// before any work) and puts the file in place.
+fn commit_text(
+    (file, mut w): (deepfield::io::AtomicFile, std::io::BufWriter<std::fs::File>),
+    text: &str,
+) -> Result<(), Failure> {
+    use std::io::Write as _;
+    w.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
+    let path = file.dest().display().to_string();
+    drop(w.into_inner().map_err(|e| Failure::Runtime(anyhow::anyhow!("{path}: {}", e.error())))?);
+    file.commit_written().map_err(|e| Failure::Runtime(e.into()))
+}
+
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = match args::Cli::try_parse() {

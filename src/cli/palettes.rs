@@ -76,10 +76,8 @@ fn load_any(name: &str) -> Result<Palette, Failure> {
 }
 
 fn write_toml(path: &Path, p: &Palette) -> Result<(), Failure> {
-    let (file, mut w) = io::AtomicFile::create(path).map_err(Failure::input)?;
-    w.write_all(palette::to_toml(p).as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
-    drop(w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{}: {}", path.display(), e.error())))?);
-    file.commit_written().map_err(|e| Failure::Runtime(e.into()))
+    let opened = io::AtomicFile::create(path).map_err(Failure::input)?;
+    super::commit_text(opened, &palette::to_toml(p))
 }
 
 fn save(path: &Path, pix: &Pixmap) -> Result<(), Failure> {

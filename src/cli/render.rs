@@ -189,12 +189,9 @@ fn report(
         }
         out.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }
-    if let (Some(path), Some((file, mut w))) = (&args.stats_json, stats_file) {
+    if let Some(opened) = stats_file {
         let json = serde_json::to_string_pretty(stats).map_err(|e| Failure::Runtime(e.into()))?;
-        w.write_all(json.as_bytes()).and_then(|_| w.write_all(b"\n")).map_err(|e| Failure::Runtime(e.into()))?;
-        let inner = w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{}: {}", path.display(), e.error())))?;
-        drop(inner);
-        file.commit_written().map_err(|e| Failure::Runtime(e.into()))?;
+        super::commit_text(opened, &(json + "\n"))?;
     }
     Ok(())
 }
