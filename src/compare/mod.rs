@@ -168,7 +168,7 @@ pub fn sample_pixels(scene: &Scene, count: u32) -> Vec<(u32, u32)> {
 }
 
 /// The sample grid in big floats, at the truth's precision.
-struct Plane<'a> {
+struct TruthGrid<'a> {
     scene: &'a Scene,
     bits: u64,
     spacing: Float,
@@ -176,7 +176,7 @@ struct Plane<'a> {
     julia: Option<[Float; 2]>,
 }
 
-impl<'a> Plane<'a> {
+impl<'a> TruthGrid<'a> {
     fn new(scene: &'a Scene) -> Self {
         let bits = bigfloat::precision_for(scene.log10_spacing()) + 64;
         let spacing = scene.scale.spacing_big(scene.height * scene.aa, bits);
@@ -185,7 +185,7 @@ impl<'a> Plane<'a> {
             FamilySpec::Mandelbrot => None,
             FamilySpec::Julia { c } => Some([bigfloat::from_decimal(&c[0], bits), bigfloat::from_decimal(&c[1], bits)]),
         };
-        Plane { scene, bits, spacing, center, julia }
+        TruthGrid { scene, bits, spacing, center, julia }
     }
 
     /// The truth at sample (i, j), moved by `shift` sample spacings.
@@ -213,7 +213,7 @@ pub fn truths(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Truth>, Cancelled> {
-    let plane = Plane::new(scene);
+    let grid = TruthGrid::new(scene);
     let done = AtomicU64::new(0);
     pixels
         .par_iter()
@@ -221,7 +221,7 @@ pub fn truths(
             if cancel.load(Ordering::Relaxed) {
                 return Err(Cancelled);
             }
-            let t = plane.truth(p, [0.0; 2]);
+            let t = grid.truth(p, [0.0; 2]);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(t)
         })
@@ -258,7 +258,7 @@ pub fn mark_ill_conditioned(
     suspects: &[usize],
     cancel: &AtomicBool,
 ) -> Result<(), Cancelled> {
-    let plane = Plane::new(scene);
+    let grid = TruthGrid::new(scene);
     let flags: Vec<(usize, bool)> = suspects
         .par_iter()
         .map(|&k| {
@@ -266,7 +266,7 @@ pub fn mark_ill_conditioned(
                 return Err(Cancelled);
             }
             let moved = [[CONDITION_SHIFT, 0.0], [0.0, CONDITION_SHIFT]];
-            Ok((k, moved.iter().any(|&s| plane.truth(pixels[k], s).n != truths[k].n)))
+            Ok((k, moved.iter().any(|&s| grid.truth(pixels[k], s).n != truths[k].n)))
         })
         .collect::<Result<_, _>>()?;
     for (k, ill) in flags {

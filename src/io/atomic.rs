@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 
 use super::IoError;
 
-/// A file that appears at its destination only when [`AtomicFile::commit`] is called; if
+/// A file that appears at its destination only when [`AtomicFile::commit_written`] is called; if
 /// dropped before that, its temporary file is removed.
 #[derive(Debug)]
 pub struct AtomicFile {

@@ -1,6 +1,6 @@
 //! Scenes: what to render, from a TOML file, a PNG's metadata, or command-line flags.
 //!
-//! [`raw`] mirrors the file; [`validate`] turns it into a typed [`Scene`] and reports every
+//! [`raw`] mirrors the file; `validate` turns it into a typed [`Scene`] and reports every
 //! problem with the file, line and column of the offending value and what was expected.
 //! The scene also decides which engine can address the view ([`Scene::engine`]).
 
