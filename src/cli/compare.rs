@@ -18,25 +18,29 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         .build()
         .map_err(|e| Failure::Runtime(e.into()))?;
     let mut variants = compare::variants(&scene);
-    if !args.only.is_empty() {
-        variants.retain(|v| args.only.iter().any(|o| v.name.contains(o.as_str())));
-    }
-    if variants.iter().any(|v| v.kind.is_gpu())
-        && let Err(e) = deepfield::gpu::GpuContext::shared()
-    {
-        // No GPU is no failure: the comparison goes on without the GPU rows.
-        eprintln!("note: leaving out the gpu and gpu-df rows: {e}");
-        variants.retain(|v| !v.kind.is_gpu());
-    }
-    if variants.is_empty() && !args.only.is_empty() {
-        return Err(Failure::Input(anyhow!("--only {}: no engine's name matches", args.only.join(","))));
-    }
     if variants.is_empty() {
         return Err(Failure::Input(anyhow!(
             "no engine can address this view: it is too deep for direct iteration, and iteration.max = {} is above the perturbation engines' limit of {}",
             scene.max_iter,
             deepfield::scene::MAX_PERTURB_ITER
         )));
+    }
+    if !args.only.is_empty() {
+        variants.retain(|v| args.only.iter().any(|o| v.name.contains(o.as_str())));
+        if variants.is_empty() {
+            return Err(Failure::Input(anyhow!("--only {}: no engine's name matches", args.only.join(","))));
+        }
+    }
+    if variants.iter().any(|v| v.kind.is_gpu())
+        && let Err(e) = deepfield::gpu::GpuContext::shared()
+    {
+        // No GPU is no failure: the comparison goes on without the GPU rows, unless they
+        // were all that --only kept.
+        variants.retain(|v| !v.kind.is_gpu());
+        if variants.is_empty() {
+            return Err(Failure::Runtime(anyhow!("--only kept only GPU engines, and there is no GPU: {e}")));
+        }
+        eprintln!("note: leaving out the gpu and gpu-df rows: {e}");
     }
     // Opened before any work: an unwritable path fails at once.
     let pixel_file = match &args.pixels {

@@ -228,6 +228,11 @@ pub fn truths(
         .collect()
 }
 
+/// An engine's N as the truth states it: None for interior samples.
+fn escape_index(n: u32) -> Option<u32> {
+    (n != INTERIOR).then_some(n)
+}
+
 /// How far [`mark_ill_conditioned`] moves a pixel, in sample spacings.
 pub const CONDITION_SHIFT: f64 = 1e-9;
 
@@ -235,13 +240,7 @@ pub const CONDITION_SHIFT: f64 = 1e-9;
 /// the only ones whose conditioning matters.
 pub fn suspects(measured: &[Measured], truths: &[Truth]) -> Vec<usize> {
     (0..truths.len())
-        .filter(|&k| {
-            !truths[k].near_circle
-                && measured.iter().any(|m| {
-                    let n = m.values[k].0;
-                    (n != INTERIOR).then_some(n) != truths[k].n
-                })
-        })
+        .filter(|&k| !truths[k].near_circle && measured.iter().any(|m| escape_index(m.values[k].0) != truths[k].n))
         .collect()
 }
 
@@ -409,7 +408,7 @@ pub fn pixel_csv(
         out += &format!("{x},{y},{},{:.9},{},{}", n_text(t.n), true_nf(t, ln_r), t.near_circle, t.ill_conditioned);
         for m in measured {
             let (n, f, _, _) = m.values[k];
-            out += &format!(",{},{f:.9}", n_text((n != INTERIOR).then_some(n)));
+            out += &format!(",{},{f:.9}", n_text(escape_index(n)));
         }
         out.push('\n');
     }
@@ -425,7 +424,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         if t.near_circle {
             continue;
         }
-        let engine_n = (n != INTERIOR).then_some(n);
+        let engine_n = escape_index(n);
         if engine_n != t.n && t.ill_conditioned {
             excused += 1;
             continue;
