@@ -135,7 +135,7 @@ pub fn prepare(
                 // The steps every sample takes first: from Z_1 (Mandelbrot, |δ_1| = |δc|) or
                 // Z_0 (Julia, |δ_0| = |offset|), bounded by the largest offset.
                 let bound = spec.spacing.mul_f64(spec.max_offset);
-                skip = Skip::find(&t, origin, bound, spec.max_iter);
+                skip = Skip::find(&t, origin, bound, spec.max_iter, eps);
             }
             bla_f64[k] = Some(t.to_f64());
             if spec.numbers == Numbers::FloatExp {
