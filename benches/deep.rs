@@ -8,7 +8,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{self, ChannelSet};
+use deepfield::field;
 use deepfield::render;
 use deepfield::scene::Scene;
 use divan::counter::ItemsCount;
@@ -29,7 +29,8 @@ fn scene(name: &str) -> Scene {
 fn run(scene: &Scene) -> u64 {
     let cancel = AtomicBool::new(false);
     let plan = scene.engine().expect("engine");
-    let (params, _) = render::prepare_field(scene, &plan, ChannelSet::default(), &cancel, &|_| {}).expect("prepared");
+    let (params, _) =
+        render::prepare_field(scene, &plan, render::Options::default(), &cancel, &|_| {}).expect("prepared");
     let rows = params.grid.height;
     let strip = |k: u32| field::compute_strip(&params, k * 16..((k + 1) * 16).min(rows), &cancel).unwrap().iterations;
     (0..rows.div_ceil(16)).into_par_iter().map(strip).sum()

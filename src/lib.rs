@@ -18,6 +18,7 @@ pub mod orbit;
 pub mod palette;
 pub mod render;
 pub mod scene;
+pub mod simd_level;
 pub mod source;
 pub mod trap;
 pub mod viewer;

@@ -111,6 +111,10 @@ pub struct SheetArgs {
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
+    /// Vector instruction set of the CPU kernels: auto (the widest this CPU has), scalar,
+    /// avx2, avx512 or neon; refused where the CPU lacks it. Output does not depend on it.
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -171,6 +175,10 @@ pub struct RenderArgs {
     /// Worker threads (default: one per core). Output does not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
+    /// Vector instruction set of the CPU kernels: auto (the widest this CPU has), scalar,
+    /// avx2, avx512 or neon; refused where the CPU lacks it. Output does not depend on it.
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
     /// Print engine, precision, pixels, iterations, time and speed when done.
     #[arg(long)]
     pub stats: bool,
@@ -268,6 +276,10 @@ pub struct CompareArgs {
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
+    /// Vector instruction set of the CPU kernels: auto (the widest this CPU has), scalar,
+    /// avx2, avx512 or neon; refused where the CPU lacks it. Output does not depend on it.
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
     /// Print the rows as JSON.
     #[arg(long, conflicts_with = "csv")]
     pub json: bool,

@@ -13,6 +13,7 @@ use super::args::CompareArgs;
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
     let cancel = super::render::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
+    let simd = super::simd_level(args.simd.as_deref())?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
@@ -72,7 +73,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             if let Some(b) = &bar {
                 b.set_message(v.name.clone());
             }
-            let m = compare::run(&scene, v, &pixels, args.sample_only, &cancel).map_err(|e| match e {
+            let m = compare::run(&scene, v, &pixels, args.sample_only, simd, &cancel).map_err(|e| match e {
                 compare::RunError::Cancelled => Failure::Cancelled,
                 compare::RunError::Gpu(e) => Failure::Runtime(anyhow!(e)),
             })?;

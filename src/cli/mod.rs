@@ -49,6 +49,15 @@ fn commit_text(
     file.commit_written().map_err(|e| Failure::Runtime(e.into()))
 }
 
+/// The instruction set `--simd` asks for (none: the widest this CPU has); a level the CPU
+/// lacks is bad input.
+fn simd_level(flag: Option<&str>) -> Result<deepfield::simd_level::SimdLevel, Failure> {
+    use deepfield::simd_level::SimdChoice;
+    // clap accepted only the spellings `parse` knows.
+    let choice = flag.and_then(SimdChoice::parse).unwrap_or_default();
+    choice.resolve().map_err(Failure::input)
+}
+
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = match args::Cli::try_parse() {

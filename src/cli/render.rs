@@ -21,6 +21,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let cancel = install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let simd = super::simd_level(args.simd.as_deref())?;
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.path.as_deref()));
     check_distinct(&args, &png_path)?;
     let exr_channels = if args.exr.is_some() { scene.channels } else { ChannelSet::default() };
@@ -37,7 +38,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         Some(path) => {
             let layout = ExrLayout::new(exr_channels, &scene.traps);
             let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
-            let engine = format!("{}: {}", plan.name, plan.reason);
+            let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
             Some(ExrWriter::create(path, w, h, layout, &toml, &engine).map_err(Failure::input)?)
         }
         None => None,
@@ -62,7 +63,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let result = {
         let png = &mut png;
         let exr_writer = &mut exr_writer;
-        let options = Options { threads: args.threads.unwrap_or(0) as usize, exr_channels };
+        let options = Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, (bytes, chunks)| {
             png.as_mut().expect("open until finished").write_encoded(&bytes).map_err(|e| e.to_string())?;
             if let (Some(w), Some(c)) = (exr_writer.as_mut(), chunks) {
@@ -173,11 +174,13 @@ fn report(
         );
         if let Some(d) = &stats.deep {
             text.push_str(&format!(
-                "reference   {} iterations{} at {} bits, {:.3} s (with BLA tables), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                "reference   {} iterations{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
                 d.reference_iterations,
                 if d.reference_escaped { " (escaped)" } else { "" },
                 d.reference_bits,
                 d.reference_seconds,
+                d.orbit_seconds,
+                d.tables_seconds,
                 d.reference_bytes as f64 / 1e6,
                 d.bla_bytes as f64 / 1e6,
                 d.steps,

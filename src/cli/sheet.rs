@@ -84,7 +84,11 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     let progress = |p: render::Progress| super::render::show(&bar, p);
     let result = render::render(
         &scene,
-        Options { threads: args.threads.unwrap_or(0) as usize, exr_channels: ChannelSet::default() },
+        Options {
+            threads: args.threads.unwrap_or(0) as usize,
+            exr_channels: ChannelSet::default(),
+            simd: super::simd_level(args.simd.as_deref())?,
+        },
         &cancel,
         &progress,
         &|_| Ok(()),

@@ -29,8 +29,9 @@ pub use truth::Truth;
 use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes};
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::orbit::{self, Numbers, bigfloat};
-use crate::render::{self, Progress};
+use crate::render::{self, Options, Progress};
 use crate::scene::{EngineChoice, EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::simd_level::SimdLevel;
 
 /// One engine configuration to compare.
 #[derive(Debug, Clone, PartialEq)]
@@ -285,12 +286,14 @@ pub struct Measured {
     pub seconds: f64,
 }
 
-/// Runs a variant over the whole sample grid (or only the rows holding `pixels`).
+/// Runs a variant over the whole sample grid (or only the rows holding `pixels`), its CPU
+/// kernels with instruction set `simd`.
 pub fn run(
     scene: &Scene,
     variant: &Variant,
     pixels: &[(u32, u32)],
     sample_only: bool,
+    simd: SimdLevel,
     cancel: &AtomicBool,
 ) -> Result<Measured, RunError> {
     let start = Instant::now();
@@ -300,7 +303,13 @@ pub fn run(
         VariantKind::Gpu(p) => return run_gpu(scene, p, pixels, sample_only, cancel),
     };
     let plan = EnginePlan { name: "compare", kind, reason: String::new() };
-    let (mut params, _) = render::prepare_field(scene, &plan, ChannelSet::default_exr(), cancel, &|_: Progress| {})?;
+    let (mut params, _) = render::prepare_field(
+        scene,
+        &plan,
+        Options { simd, ..Options::with_channels(ChannelSet::default_exr()) },
+        cancel,
+        &|_: Progress| {},
+    )?;
     params.single = variant.kind == VariantKind::F32;
     // Bands of up to 16 consecutive rows, computed in parallel.
     let bands = bands(params.grid.height, pixels, sample_only);

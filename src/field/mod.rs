@@ -22,6 +22,7 @@ pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
 
 use crate::formula::Family;
 use crate::orbit::{Counters, Perturbation};
+use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 
 /// N of a sample that never escaped within the iteration limit.
@@ -67,6 +68,8 @@ pub struct OrbitParams {
     pub escape_radius: f64,
     /// Track dz for distance estimates.
     pub derivative: bool,
+    /// The instruction set the kernels run with (the same bits on every one).
+    pub simd: SimdLevel,
 }
 
 /// What the field must compute.
@@ -110,7 +113,7 @@ pub struct FieldParams {
 impl FieldParams {
     /// Builds the parameters; the derivative is tracked exactly when distance is needed.
     pub fn new(family: Family, max_iter: u32, escape_radius: f64, needs: Needs, grid: SampleGrid) -> Self {
-        let orbit = OrbitParams { family, max_iter, escape_radius, derivative: needs.de };
+        let orbit = OrbitParams { family, max_iter, escape_radius, derivative: needs.de, simd: SimdLevel::detect() };
         Self { orbit, needs, grid, deep: None, single: false }
     }
 }
@@ -265,7 +268,7 @@ fn deep_strip(
             }
             let offsets: Vec<[f64; 2]> =
                 chunk.iter().flat_map(|&j| (0..grid.width).map(move |i| grid.offset(i, j))).collect();
-            deep.orbits(&offsets, out, &mut counters);
+            deep.orbits(&offsets, out, &mut counters, params.orbit.simd);
         }
     } else {
         // Traps see every iteration: one sample at a time, row by row.

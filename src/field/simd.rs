@@ -62,7 +62,7 @@ pub fn iterate(
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
     let final_z = final_z || params.derivative;
-    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z, cancel })
+    params.simd.arch().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z, cancel })
 }
 
 /// As [`iterate`] when only N is wanted (no derivative), writing each point's N straight
@@ -76,7 +76,7 @@ pub fn iterate_n(
     assert_eq!(points.len(), n.len());
     assert!(!params.derivative, "iterate_n is for N alone");
     let out = &mut NOnly(n);
-    pulp::Arch::new().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z: false, cancel })
+    params.simd.arch().dispatch(Job { params, points, out, shape: None, trap_out: &mut [], final_z: false, cancel })
 }
 
 /// Where the kernel writes each sample's result.
@@ -115,7 +115,7 @@ pub fn iterate_with_trap(
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
     assert_eq!(points.len(), trap_out.len());
-    pulp::Arch::new().dispatch(Job { params, points, out, shape: Some(shape), trap_out, final_z: true, cancel })
+    params.simd.arch().dispatch(Job { params, points, out, shape: Some(shape), trap_out, final_z: true, cancel })
 }
 
 struct Job<'a, O: Sink + ?Sized> {
@@ -729,23 +729,39 @@ impl<S: Simd> TrapV<S> {
 mod tests {
     use super::*;
     use crate::field::{SampleGrid, scalar};
+    use crate::simd_level::SimdLevel;
     use crate::trap::Shape;
 
     fn check(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool) {
         check_with(family, center, radius, max_iter, derivative, 1024.0);
     }
 
+    /// Every instruction set this CPU runs (scalar included) against the scalar kernel.
     fn check_with(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool, escape_radius: f64) {
+        for simd in SimdLevel::usable() {
+            check_level(family, center, radius, max_iter, derivative, escape_radius, simd);
+        }
+    }
+
+    fn check_level(
+        family: Family,
+        center: [f64; 2],
+        radius: f64,
+        max_iter: u32,
+        derivative: bool,
+        escape_radius: f64,
+        simd: SimdLevel,
+    ) {
         let grid = SampleGrid { center, radius, width: 67, height: 31 };
         let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
-        let params = OrbitParams { family, max_iter, escape_radius, derivative };
+        let params = OrbitParams { family, max_iter, escape_radius, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let its = iterate(&params, &points, &mut out, true, &AtomicBool::new(false)).unwrap();
         let mut total = 0;
         for (p, o) in points.iter().zip(&out) {
             let (want, n) = scalar::orbit(&params, *p, &[], &mut []);
             total += n;
-            assert_eq!(*o, want, "at {p:?}");
+            assert_eq!(*o, want, "{simd} at {p:?}");
         }
         // Periodicity detection may stop interior orbits at different points; escapes agree.
         if out.iter().all(|o| o.n != crate::field::INTERIOR) {
@@ -769,9 +785,23 @@ mod tests {
 
     /// The vectorised trap path against the scalar kernel: same orbits, same trap distance.
     fn check_trap(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool, shape: Shape) {
+        for simd in SimdLevel::usable() {
+            check_trap_level(family, center, radius, max_iter, derivative, shape, simd);
+        }
+    }
+
+    fn check_trap_level(
+        family: Family,
+        center: [f64; 2],
+        radius: f64,
+        max_iter: u32,
+        derivative: bool,
+        shape: Shape,
+        simd: SimdLevel,
+    ) {
         let grid = SampleGrid { center, radius, width: 53, height: 29 };
         let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
-        let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative };
+        let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let mut dist = vec![0.0; points.len()];
         iterate_with_trap(&params, shape, &points, &mut out, &mut dist, &AtomicBool::new(false)).unwrap();
@@ -779,7 +809,7 @@ mod tests {
         for (k, p) in points.iter().enumerate() {
             let mut state = [trap.initial()];
             let (want, _) = scalar::orbit(&params, *p, std::slice::from_ref(&trap), &mut state);
-            assert_eq!(out[k], want, "{shape:?} at {p:?}");
+            assert_eq!(out[k], want, "{simd} {shape:?} at {p:?}");
             let crate::trap::TrapState::Distance(d) = state[0] else { unreachable!() };
             assert_eq!(dist[k].to_bits(), d.to_bits(), "{shape:?} at {p:?}: {} vs {d}", dist[k]);
         }

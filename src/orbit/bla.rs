@@ -317,7 +317,8 @@ mod tests {
         // perturbed steps, at a delta where the linear terms alone would be far off.
         let c = [Float::from(-0.75), Float::from(0.1)];
         let z0 = [Float::from(0.0), Float::from(0.0)];
-        let r = Reference::compute(&z0, &c, 64, 1e10, 128, &|_| {}, &AtomicBool::new(false)).unwrap();
+        let r =
+            Reference::compute(&z0, &c, 64, 1e10, 128, Default::default(), &|_| {}, &AtomicBool::new(false)).unwrap();
         let dc = [FloatExp::from(1e-9), FloatExp::from(-2e-9)];
         let eps = 1e-6;
         let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);

@@ -7,10 +7,14 @@
 
 pub mod bigfloat;
 pub mod bla;
+pub mod fixed;
+#[cfg(feature = "mpfr")]
+pub mod mpfr;
 pub mod perturb;
 pub mod reference;
+pub mod square;
 
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use malachite_base::num::conversion::traits::FromSciString;
 use malachite_float::Float;
@@ -22,6 +26,7 @@ pub use reference::Reference;
 
 use crate::field::Cancelled;
 use crate::num::{Decimal, FloatExp};
+use crate::simd_level::SimdLevel;
 
 /// The default BLA tolerance ε (relative size of the dropped nonlinear term per step).
 /// Chosen with `deepfield compare` on 4000 pixels of bench-e50 (README): at 1e-12 the NF
@@ -81,6 +86,9 @@ pub struct DeepSpec {
     pub bla: Option<f64>,
     /// Delta number types.
     pub numbers: Numbers,
+    /// The instruction set the reference orbit's squares run with (the same bits on every
+    /// one).
+    pub simd: SimdLevel,
 }
 
 /// Progress of the shared work: (reference iterations done, of at most this many).
@@ -92,36 +100,35 @@ pub fn prepare(
     progress: ReferenceProgress<'_>,
     cancel: &AtomicBool,
 ) -> Result<Perturbation, Cancelled> {
+    let started = std::time::Instant::now();
     let bits = bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10);
     let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
     let zero = [Float::from(0u32), Float::from(0u32)];
     let center = big(&spec.center);
     let total = spec.max_iter as u64 * if spec.julia.is_some() { 2 } else { 1 };
-    let mut refs = Vec::new();
-    let mut done = 0u64;
-    let mut run = |start: &[Float; 2], c: &[Float; 2]| -> Result<Reference, Cancelled> {
-        let r = Reference::compute(
-            start,
-            c,
-            spec.max_iter,
-            spec.escape_radius,
-            bits,
-            &|n| progress(done + n as u64, total),
-            cancel,
-        )?;
-        done += spec.max_iter as u64;
-        Ok(r)
+    // Progress of each orbit, summed (the Julia set's two are computed side by side).
+    let done = [AtomicU64::new(0), AtomicU64::new(0)];
+    let report = |k: usize, n: u32| {
+        done[k].store(n as u64, Ordering::Relaxed);
+        progress(done[0].load(Ordering::Relaxed) + done[1].load(Ordering::Relaxed), total);
+    };
+    let run = |k: usize, start: &[Float; 2], c: &[Float; 2], share: bool| {
+        let steps = reference::Stepping { share, simd: spec.simd };
+        Reference::compute(start, c, spec.max_iter, spec.escape_radius, bits, steps, &|n| report(k, n), cancel)
     };
     let mandelbrot = spec.julia.is_none();
-    match &spec.julia {
-        None => refs.push(run(&zero, &center)?),
+    let refs = match &spec.julia {
+        // One orbit: it may share its steps with a helper thread.
+        None => vec![run(0, &zero, &center, true)?],
         Some(c) => {
+            // Two orbits: one thread each.
             let c = big(c);
-            refs.push(run(&center, &c)?);
-            refs.push(run(&zero, &c)?);
+            let (a, b) = rayon::join(|| run(0, &center, &c, false), || run(1, &zero, &c, false));
+            vec![a?, b?]
         }
-    }
+    };
     progress(total, total);
+    let orbit_seconds = started.elapsed().as_secs_f64();
     let dc_max = if mandelbrot { spec.spacing.mul_f64(spec.max_offset) } else { FloatExp::ZERO };
     let mut bla_fe = [None, None];
     let mut bla_f64 = [None, None];
@@ -156,6 +163,8 @@ pub fn prepare(
         numbers: spec.numbers,
         skip,
         single_d2,
+        orbit_seconds,
+        tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
     })
 }
 

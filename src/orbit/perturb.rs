@@ -22,7 +22,6 @@
 //! Traps observe z = Z_m + δ in f64 at every iteration, so BLA (which skips iterations) is
 //! off when traps are on.
 
-#[cfg(target_arch = "x86_64")]
 mod lanes;
 
 use super::bla::{BlaTable, Step};
@@ -30,6 +29,7 @@ use super::reference::Reference;
 use crate::field::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real};
+use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
@@ -124,9 +124,13 @@ pub struct Perturbation {
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
     pub skip: Option<Skip>,
     /// BLA is tried only while |δ|^2 is at most this (f64 phase); above it a sample takes
-    /// single steps, which run in vector lanes where the CPU has AVX-512 (see
-    /// [`single_step_threshold`]); 0 with BLA off.
+    /// single steps, which run in vector lanes (see [`single_step_threshold`]); 0 with
+    /// BLA off.
     pub single_d2: f64,
+    /// Seconds the reference orbit(s) took.
+    pub orbit_seconds: f64,
+    /// Seconds the BLA tables took.
+    pub tables_seconds: f64,
 }
 
 /// The run of BLA steps from the start of the primary reference that is valid for every
@@ -471,13 +475,12 @@ impl Perturbation {
     }
 
     /// Iterates many samples without traps. Same results as [`Perturbation::orbit`], bit for
-    /// bit: with AVX-512, single steps above `single_d2` run eight samples to a vector
-    /// (`perturb/lanes.rs`); otherwise `LANES` samples at a time in the f64 phase (samples in their
-    /// FloatExp phase run one at a time).
-    pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
-        #[cfg(target_arch = "x86_64")]
-        if lanes::available() {
-            lanes::orbits(self, offsets, out, counters);
+    /// bit, whatever `simd` is: with vectors (AVX2, AVX-512, NEON), single steps above
+    /// `single_d2` run several samples to a vector (`perturb/lanes.rs`); with `scalar`,
+    /// `LANES` samples at a time in the f64 phase (samples in their FloatExp phase run one at
+    /// a time).
+    pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
+        if lanes::orbits(self, offsets, out, counters, simd) {
             return;
         }
         if self.derivative {
@@ -910,6 +913,7 @@ mod tests {
                 derivative: false,
                 bla: Some(eps),
                 numbers: Numbers::FloatExp,
+                simd: SimdLevel::detect(),
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let skip = p.skip.expect("the view has common steps");
@@ -945,9 +949,10 @@ mod tests {
         [Decimal::parse(v[0]).unwrap(), Decimal::parse(v[1]).unwrap()]
     }
 
-    /// Every sample of a 32x24 view through `orbits` (the vector lanes where the CPU has
-    /// AVX-512, else the two-sample loop) and one at a time through `orbit`: bit for bit the
-    /// same escape, z_n and derivative, and the same iteration count.
+    /// Every sample of a 32x24 view through `orbits` with every instruction set this CPU
+    /// runs (the vector lanes of each width, and the two-sample scalar loop) and one at a
+    /// time through `orbit`: bit for bit the same escape, z_n and derivative, and the same
+    /// iteration count.
     fn same_both_ways(
         center: [&str; 2],
         julia: Option<[&str; 2]>,
@@ -968,25 +973,29 @@ mod tests {
                 derivative,
                 bla,
                 numbers,
+                simd: SimdLevel::detect(),
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let offsets: Vec<[f64; 2]> = (0..h)
                 .flat_map(|j| (0..w).map(move |i| [i as f64 - w as f64 / 2.0 + 0.5, j as f64 - h as f64 / 2.0 + 0.5]))
                 .collect();
-            let mut many = vec![Orbit::interior(); offsets.len()];
-            let mut c_many = Counters::default();
-            p.orbits(&offsets, &mut many, &mut c_many);
             let mut c_one = Counters::default();
             let mut escaped = 0;
-            for (k, off) in offsets.iter().enumerate() {
-                let one = p.orbit(*off, &[], &mut [], &mut c_one);
-                let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
-                assert_eq!(bits(&many[k]), bits(&one), "{radius} derivative {derivative}: sample {k} differs");
-                escaped += (one.n != crate::field::INTERIOR) as u32;
+            let one: Vec<Orbit> = offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one)).collect();
+            let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
+            for simd in SimdLevel::usable() {
+                let mut many = vec![Orbit::interior(); offsets.len()];
+                let mut c_many = Counters::default();
+                p.orbits(&offsets, &mut many, &mut c_many, simd);
+                for k in 0..offsets.len() {
+                    assert_eq!(bits(&many[k]), bits(&one[k]), "{radius} {simd} derivative {derivative}: sample {k}");
+                    escaped += (one[k].n != crate::field::INTERIOR) as u32;
+                }
+                assert_eq!(c_many.iterations, c_one.iterations, "{radius} {simd}: iteration counts");
+                let steps = |c: &Counters| c.steps + c.bla_steps;
+                assert_eq!(steps(&c_many), steps(&c_one), "{radius} {simd}: step counts");
+                assert_eq!(c_many.rebases, c_one.rebases, "{radius} {simd}: rebases");
             }
-            assert_eq!(c_many.iterations, c_one.iterations, "{radius}: iteration counts");
-            assert_eq!(c_many.steps + c_many.bla_steps, c_one.steps + c_one.bla_steps, "{radius}: step counts");
-            assert_eq!(c_many.rebases, c_one.rebases, "{radius}: rebases");
             assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
         }
     }

@@ -12,14 +12,26 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use malachite_float::Float;
 
 use super::bigfloat::{self, BigComplex};
+use super::fixed::FixedOrbit;
 use crate::field::Cancelled;
 use crate::num::FloatExp;
+use crate::simd_level::SimdLevel;
 
 /// Values below this magnitude are kept as `FloatExp` as well.
 const TINY: f64 = 1.0 / (1u128 << 100) as f64 / (1u128 << 100) as f64 / (1u128 << 100) as f64;
 
 /// Iterations between progress reports and cancellation checks.
 const REPORT_EVERY: u32 = 4096;
+
+/// How a reference orbit's steps run: shared with a helper thread where that pays (see
+/// [`FixedOrbit::with_stepper`]), and with which instruction set.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Stepping {
+    /// Share wide steps with a helper thread.
+    pub share: bool,
+    /// Instruction set of the fixed-point squares.
+    pub simd: SimdLevel,
+}
 
 /// An orbit Z_0 .. Z_last of z -> z^2 + C.
 #[derive(Debug, Clone)]
@@ -32,23 +44,28 @@ pub struct Reference {
 
 impl Reference {
     /// Iterates from `start` with parameter `c` until |Z| > `escape_radius` or `max_iter`.
-    /// `progress` receives the iterations done so far; `cancel` stops the work.
+    /// `progress` receives the iterations done so far; `cancel` stops the work. `steps` says
+    /// how the steps run (the same bits whichever way).
+    ///
+    /// The orbit is iterated in fixed point ([`FixedOrbit`]) wherever its values fit (escape
+    /// radius, |c| and |z_0| up to 2^30: every view of the Mandelbrot set, and Julia sets
+    /// near theirs), else in malachite's floats; the choice depends on the scene alone, so
+    /// the same scene gives the same orbit everywhere.
+    #[allow(clippy::too_many_arguments)]
     pub fn compute(
         start: &BigComplex,
         c: &BigComplex,
         max_iter: u32,
         escape_radius: f64,
         bits: u64,
+        steps: Stepping,
         progress: &dyn Fn(u32),
         cancel: &AtomicBool,
     ) -> Result<Reference, Cancelled> {
-        let r2 = escape_radius * escape_radius;
         let mut out = Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits };
-        let mut z: BigComplex =
-            [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
-        let mut n = 0u32;
-        loop {
-            let fe = [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])];
+        let r2 = escape_radius * escape_radius;
+        // Stores Z_n; true when the orbit ends there.
+        let mut keep = |n: u32, fe: [FloatExp; 2]| -> Result<bool, Cancelled> {
             let f = [fe[0].to_f64(), fe[1].to_f64()];
             if f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero()) {
                 out.tiny.push((n, fe));
@@ -56,10 +73,10 @@ impl Reference {
             out.z.push(f);
             if f[0] * f[0] + f[1] * f[1] > r2 {
                 out.escaped = true;
-                break;
+                return Ok(true);
             }
             if n >= max_iter {
-                break;
+                return Ok(true);
             }
             if n.is_multiple_of(REPORT_EVERY) {
                 if cancel.load(Ordering::Relaxed) {
@@ -67,8 +84,25 @@ impl Reference {
                 }
                 progress(n);
             }
-            bigfloat::step_assign(&mut z, c, bits);
-            n += 1;
+            Ok(false)
+        };
+        if let Some(mut orbit) = FixedOrbit::new(start, c, bits, escape_radius, steps.simd) {
+            orbit.with_stepper(steps.share, |s| -> Result<(), Cancelled> {
+                let mut n = 0u32;
+                while !keep(n, s.get())? {
+                    s.step();
+                    n += 1;
+                }
+                Ok(())
+            })?;
+        } else {
+            let mut z: BigComplex =
+                [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
+            let mut n = 0u32;
+            while !keep(n, [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])])? {
+                bigfloat::step_assign(&mut z, c, bits);
+                n += 1;
+            }
         }
         out.z.shrink_to_fit();
         Ok(out)
@@ -128,7 +162,8 @@ mod tests {
     fn orbit_of_minus_two_stays_on_two() {
         let c = [Float::from(-2.0), Float::from(0.0)];
         let z0 = [Float::from(0.0), Float::from(0.0)];
-        let r = Reference::compute(&z0, &c, 50, 1024.0, 128, &|_| {}, &AtomicBool::new(false)).unwrap();
+        let r = Reference::compute(&z0, &c, 50, 1024.0, 128, Stepping::default(), &|_| {}, &AtomicBool::new(false))
+            .unwrap();
         assert_eq!(r.last(), 50);
         assert!(!r.escaped());
         assert_eq!(r.get(1), [-2.0, 0.0]);
@@ -137,11 +172,13 @@ mod tests {
 
     #[test]
     fn tiny_values_keep_their_exponent() {
-        // Z_0 = 1e-400 (beyond f64): stored exactly as FloatExp.
+        // Z_0 = 1e-400 (beyond f64) at the precision of a view of that depth: stored as
+        // FloatExp, to its 53 bits.
         let d = crate::num::Decimal::parse("1e-400").unwrap();
-        let z0 = [bigfloat::from_decimal(&d, 200), Float::from(0.0)];
+        let z0 = [bigfloat::from_decimal(&d, 1500), Float::from(0.0)];
         let c = [Float::from(0.25), Float::from(0.0)];
-        let r = Reference::compute(&z0, &c, 3, 4.0, 200, &|_| {}, &AtomicBool::new(false)).unwrap();
+        let r =
+            Reference::compute(&z0, &c, 3, 4.0, 1500, Stepping::default(), &|_| {}, &AtomicBool::new(false)).unwrap();
         assert_eq!(r.get(0), [0.0, 0.0]);
         let fe = r.get_fe(0);
         assert!((fe[0].log2() / std::f64::consts::LOG2_10 + 400.0).abs() < 1e-9);

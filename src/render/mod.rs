@@ -27,6 +27,7 @@ use crate::formula::Family;
 use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec};
 use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::simd_level::SimdLevel;
 
 /// Why a render did not complete.
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +92,10 @@ pub struct DeepStats {
     pub reference_escaped: bool,
     /// Seconds spent on reference orbits and BLA tables.
     pub reference_seconds: f64,
+    /// Of those, seconds the reference orbit(s) took.
+    pub orbit_seconds: f64,
+    /// And seconds the BLA tables took.
+    pub tables_seconds: f64,
     /// Bytes of the reference orbit(s).
     pub reference_bytes: usize,
     /// Bytes of the BLA tables.
@@ -146,6 +151,16 @@ pub struct Options {
     pub threads: usize,
     /// Raw channels wanted by an EXR output (empty: none).
     pub exr_channels: ChannelSet,
+    /// The instruction set the kernels run with (default: the widest this CPU has; every
+    /// level gives the same bits).
+    pub simd: SimdLevel,
+}
+
+impl Options {
+    /// The defaults, with these EXR channels.
+    pub fn with_channels(exr_channels: ChannelSet) -> Options {
+        Options { exr_channels, ..Options::default() }
+    }
 }
 
 /// Output rows per strip: sample rows a multiple of 16 (the EXR block height) and about
@@ -185,12 +200,13 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
 pub fn prepare_field(
     scene: &Scene,
     plan: &EnginePlan,
-    exr_channels: ChannelSet,
+    options: Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(FieldParams, f64), Cancelled> {
     let start = Instant::now();
-    let mut params = field_params(scene, exr_channels);
+    let mut params = field_params(scene, options.exr_channels);
+    params.orbit.simd = options.simd;
     if let EngineKind::Perturb { numbers, bla } = plan.kind {
         let spec = DeepSpec {
             center: scene.center.clone(),
@@ -205,6 +221,7 @@ pub fn prepare_field(
             derivative: params.needs.de,
             bla,
             numbers,
+            simd: params.orbit.simd,
         };
         let report = |done, total| progress(Progress::Reference { done, total });
         params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
@@ -232,7 +249,7 @@ pub fn render<P: Send>(
         }
         _ => None,
     };
-    let (params, reference_seconds) = prepare_field(scene, &plan, options.exr_channels, cancel, progress)?;
+    let (params, reference_seconds) = prepare_field(scene, &plan, options, cancel, progress)?;
     let counters = Mutex::new(Counters::default());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
@@ -356,6 +373,8 @@ pub fn render<P: Send>(
             reference_iterations: d.reference_length(),
             reference_escaped: d.reference_escaped(),
             reference_seconds,
+            orbit_seconds: d.orbit_seconds,
+            tables_seconds: d.tables_seconds,
             reference_bytes,
             bla_bytes,
             steps: c.steps,
@@ -384,7 +403,7 @@ pub fn render<P: Send>(
         deep,
         simd: match &gpu {
             Some((ctx, _)) => format!("GPU: {}", ctx.adapter_name()),
-            None => simd_name(),
+            None => options.simd.describe().to_string(),
         },
         pixels,
         samples: pixels * (aa as u64).pow(2),
@@ -393,15 +412,4 @@ pub fn render<P: Send>(
         iterations_per_second: if wall > 0.0 { its as f64 / wall } else { 0.0 },
         threads,
     })
-}
-
-/// The instruction set pulp dispatches the kernels to on this machine.
-pub fn simd_name() -> String {
-    match pulp::Arch::new() {
-        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-        pulp::Arch::V4(_) => "AVX-512 (8 f64 lanes)".into(),
-        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-        pulp::Arch::V3(_) => "AVX2+FMA (4 f64 lanes)".into(),
-        other => format!("{other:?}"),
-    }
 }

@@ -174,7 +174,7 @@ fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &Atomic
     };
     let stats = render::render(
         scene,
-        Options { threads: 0, exr_channels: channels },
+        Options { threads: 0, exr_channels: channels, ..Options::default() },
         cancel,
         &progress,
         &prepare,

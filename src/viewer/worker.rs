@@ -229,7 +229,7 @@ fn render_pass(
     };
     let stats = render::render(
         scene,
-        Options { threads: 0, exr_channels: ChannelSet::default() },
+        Options { threads: 0, exr_channels: ChannelSet::default(), ..Options::default() },
         cancel,
         &progress,
         &prepare,

@@ -273,7 +273,7 @@ fn stripe_average_at_depth_agrees_with_direct() {
     let plane = |s: &deepfield::scene::Scene| {
         let plan = s.engine().unwrap();
         let (params, _) =
-            render::prepare_field(s, &plan, ChannelSet::default(), &AtomicBool::new(false), &|_| {}).unwrap();
+            render::prepare_field(s, &plan, render::Options::default(), &AtomicBool::new(false), &|_| {}).unwrap();
         let strip = field::compute_strip(&params, 0..54, &AtomicBool::new(false)).unwrap();
         let TrapPlane::Stripe { value, .. } = &strip.planes.traps[0] else { panic!("stripe plane") };
         (strip.planes.n.clone(), value.clone())

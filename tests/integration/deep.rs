@@ -12,7 +12,7 @@ use std::sync::atomic::AtomicBool;
 
 use astro_float::BigFloat;
 use deepfield::field::{self, ChannelSet};
-use deepfield::render;
+use deepfield::render::{self, Options};
 
 use super::accuracy::{Sample, judge, summary};
 use super::reference;
@@ -70,7 +70,9 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     let s = scene(&text);
     let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
-    let (params, _) = render::prepare_field(&s, &plan, ChannelSet::default_exr(), &cancel, &|_| {}).expect("prepared");
+    let (params, _) =
+        render::prepare_field(&s, &plan, Options::with_channels(ChannelSet::default_exr()), &cancel, &|_| {})
+            .expect("prepared");
     let planes = field::compute_strip(&params, 0..SIZE.1, &cancel).expect("computed").planes;
     let ln_r = params.orbit.escape_radius.ln();
     // Enough bits to place every pixel exactly and iterate it without loss.
@@ -102,7 +104,7 @@ fn check(name: &str, v: View, expect_engine: &str) {
 }
 
 fn assert_targets(name: &str, s: &[Sample], engine: &str, expect_engine: &str, samples: u32) {
-    summary(&format!("{name} ({engine})"), &s);
+    summary(&format!("{name} ({engine})"), s);
     assert_eq!(engine, expect_engine, "{name}: engine");
     assert!(s.len() as u32 >= samples * 9 / 10, "{name}: too few comparable pixels");
     for x in s {
@@ -251,7 +253,9 @@ fn planes(text: &str) -> (field::Planes, String) {
     let s = scene(text);
     let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
-    let (params, _) = render::prepare_field(&s, &plan, ChannelSet::default_exr(), &cancel, &|_| {}).expect("prepared");
+    let (params, _) =
+        render::prepare_field(&s, &plan, Options::with_channels(ChannelSet::default_exr()), &cancel, &|_| {})
+            .expect("prepared");
     let h = params.grid.height;
     (field::compute_strip(&params, 0..h, &cancel).expect("computed").planes, plan.name.to_string())
 }

@@ -25,7 +25,7 @@ pub fn render_rgb8(text: &str, threads: usize) -> (u32, u32, Vec<u8>) {
     let prepare = |strip: &render::RenderedStrip| Ok(enc.encode(&strip.rgb));
     render::render(
         &s,
-        Options { threads, exr_channels: ChannelSet::default() },
+        Options { threads, exr_channels: ChannelSet::default(), ..Options::default() },
         &cancel,
         &|_| {},
         &prepare,

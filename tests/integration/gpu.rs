@@ -209,7 +209,7 @@ fn where_f32_and_double_float_stop_agreeing() {
         let plan = scene.engine_for(EngineChoice::PerturbF64).expect("perturbation");
         let cancel = AtomicBool::new(false);
         let (deep, _) =
-            render::prepare_field(&scene, &plan, ChannelSet::default(), &cancel, &|_| {}).expect("reference");
+            render::prepare_field(&scene, &plan, render::Options::default(), &cancel, &|_| {}).expect("reference");
         let reference = field::compute_strip(&deep, 0..48, &cancel).expect("not cancelled").planes;
         let direct = render::field_params(&scene, ChannelSet::default());
         let mut row = vec![e as f64];

@@ -1,0 +1,207 @@
+//! Which vector instruction set the kernels run with: the best one this CPU has, or one
+//! forced by the user (`--simd`) so that every path the program can take on some CPU can be
+//! run, timed and tested on this one.
+//!
+//! Two families of kernels depend on it: the direct f64 kernels (`field::simd`, generic over
+//! pulp's [`pulp::Simd`]) and the perturbation engine's single-step lanes
+//! (`orbit::perturb::lanes`, generic over the same trait, with one small load routine per
+//! instruction set). Every level gives the same bits: the kernels do the same IEEE
+//! operations in the same order whatever the vector width, which the tests check by running
+//! every level the CPU has against the scalar one. So the level is a property of a run, never
+//! of a scene: it is not stored in scene files, only reported (`--stats`, the EXR header).
+
+use std::fmt;
+
+/// An instruction set the kernels can run with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SimdLevel {
+    /// No vector unit: one f64 at a time (the perturbation engine keeps two samples in
+    /// flight instead).
+    Scalar,
+    /// x86-64 AVX2 with FMA (pulp's x86-64-v3): 4 f64 lanes.
+    Avx2,
+    /// x86-64 AVX-512 F/BW/CD/DQ/VL (pulp's x86-64-v4): 8 f64 lanes.
+    Avx512,
+    /// aarch64 NEON: 2 f64 lanes.
+    Neon,
+}
+
+/// What the user asked for: the best available level, or one in particular.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SimdChoice {
+    /// The best level this CPU has.
+    #[default]
+    Auto,
+    /// This level, refused where the CPU lacks it.
+    Level(SimdLevel),
+}
+
+/// A level was asked for that this CPU (or this build's target) cannot run.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("--simd {asked}: {why}; this CPU runs {available}")]
+pub struct SimdUnavailable {
+    /// The level asked for (its flag spelling).
+    pub asked: &'static str,
+    /// Why it cannot run.
+    pub why: &'static str,
+    /// The levels that can run here, comma-separated.
+    pub available: String,
+}
+
+/// The flag spellings `--simd` accepts, `auto` first.
+pub const CHOICES: [&str; 5] = ["auto", "scalar", "avx2", "avx512", "neon"];
+
+impl SimdLevel {
+    /// Every level, narrowest first.
+    pub const ALL: [SimdLevel; 4] = [SimdLevel::Scalar, SimdLevel::Neon, SimdLevel::Avx2, SimdLevel::Avx512];
+
+    /// The flag spelling (`scalar`, `avx2`, `avx512`, `neon`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SimdLevel::Scalar => "scalar",
+            SimdLevel::Avx2 => "avx2",
+            SimdLevel::Avx512 => "avx512",
+            SimdLevel::Neon => "neon",
+        }
+    }
+
+    /// A description for statistics, e.g. "AVX2+FMA (4 f64 lanes)".
+    pub fn describe(self) -> &'static str {
+        match self {
+            SimdLevel::Scalar => "scalar (1 f64 lane)",
+            SimdLevel::Avx2 => "AVX2+FMA (4 f64 lanes)",
+            SimdLevel::Avx512 => "AVX-512 (8 f64 lanes)",
+            SimdLevel::Neon => "NEON (2 f64 lanes)",
+        }
+    }
+
+    /// f64 values per vector.
+    pub fn f64_lanes(self) -> usize {
+        match self {
+            SimdLevel::Scalar => 1,
+            SimdLevel::Neon => 2,
+            SimdLevel::Avx2 => 4,
+            SimdLevel::Avx512 => 8,
+        }
+    }
+
+    /// Why this CPU cannot run the level, or None when it can.
+    fn missing(self) -> Option<&'static str> {
+        match self {
+            SimdLevel::Scalar => None,
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx2 => pulp::x86::V3::try_new().is_none().then_some("this CPU lacks AVX2, FMA or BMI2"),
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx512 => {
+                pulp::x86::V4::try_new().is_none().then_some("this CPU lacks AVX-512 (F, BW, CD, DQ and VL are needed)")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            SimdLevel::Avx2 | SimdLevel::Avx512 => {
+                Some("it is an x86-64 instruction set and this is not an x86-64 build")
+            }
+            #[cfg(target_arch = "aarch64")]
+            SimdLevel::Neon => pulp::aarch64::Neon::try_new().is_none().then_some("this CPU lacks NEON"),
+            #[cfg(not(target_arch = "aarch64"))]
+            SimdLevel::Neon => Some("it is an aarch64 instruction set and this is not an aarch64 build"),
+        }
+    }
+
+    /// True when this CPU runs the level.
+    pub fn available(self) -> bool {
+        self.missing().is_none()
+    }
+
+    /// Every level this CPU runs, narrowest first (scalar always).
+    pub fn usable() -> Vec<SimdLevel> {
+        SimdLevel::ALL.into_iter().filter(|l| l.available()).collect()
+    }
+
+    /// The widest level this CPU runs.
+    pub fn detect() -> SimdLevel {
+        SimdLevel::usable().into_iter().max_by_key(|l| l.f64_lanes()).unwrap_or(SimdLevel::Scalar)
+    }
+
+    /// pulp's dispatcher for this level (scalar if the CPU cannot run it; levels are checked
+    /// where they are chosen, [`SimdChoice::resolve`]).
+    pub(crate) fn arch(self) -> pulp::Arch {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx2 => pulp::x86::V3::try_new().map_or(pulp::Arch::Scalar, pulp::Arch::V3),
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx512 => pulp::x86::V4::try_new().map_or(pulp::Arch::Scalar, pulp::Arch::V4),
+            #[cfg(target_arch = "aarch64")]
+            SimdLevel::Neon => pulp::aarch64::Neon::try_new().map_or(pulp::Arch::Scalar, pulp::Arch::Neon),
+            _ => pulp::Arch::Scalar,
+        }
+    }
+}
+
+impl Default for SimdLevel {
+    /// The widest level this CPU runs.
+    fn default() -> Self {
+        SimdLevel::detect()
+    }
+}
+
+impl fmt::Display for SimdLevel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl SimdChoice {
+    /// Parses a flag spelling ([`CHOICES`]).
+    pub fn parse(text: &str) -> Option<SimdChoice> {
+        if text == "auto" {
+            return Some(SimdChoice::Auto);
+        }
+        SimdLevel::ALL.into_iter().find(|l| l.name() == text).map(SimdChoice::Level)
+    }
+
+    /// The level to run: the best one for `Auto`, else the one asked for if this CPU runs it.
+    pub fn resolve(self) -> Result<SimdLevel, SimdUnavailable> {
+        match self {
+            SimdChoice::Auto => Ok(SimdLevel::detect()),
+            SimdChoice::Level(l) => match l.missing() {
+                None => Ok(l),
+                Some(why) => Err(SimdUnavailable {
+                    asked: l.name(),
+                    why,
+                    available: SimdLevel::usable().iter().map(|l| l.name()).collect::<Vec<_>>().join(", "),
+                }),
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scalar_is_always_available_and_auto_picks_the_widest() {
+        assert!(SimdLevel::Scalar.available());
+        let best = SimdChoice::Auto.resolve().expect("auto always resolves");
+        assert!(SimdLevel::usable().iter().all(|l| l.f64_lanes() <= best.f64_lanes()));
+        for l in SimdLevel::usable() {
+            assert_eq!(SimdChoice::Level(l).resolve(), Ok(l));
+        }
+    }
+
+    #[test]
+    fn a_level_the_cpu_lacks_is_refused_with_a_reason() {
+        // NEON and the x86 levels cannot both be available in one build.
+        let foreign = if cfg!(target_arch = "aarch64") { SimdLevel::Avx2 } else { SimdLevel::Neon };
+        let e = SimdChoice::Level(foreign).resolve().expect_err("not this architecture");
+        assert_eq!(e.asked, foreign.name());
+        assert!(e.to_string().contains("scalar"), "{e}");
+    }
+
+    #[test]
+    fn every_spelling_parses() {
+        for c in CHOICES {
+            assert!(SimdChoice::parse(c).is_some(), "{c}");
+        }
+        assert_eq!(SimdChoice::parse("sse"), None);
+    }
+}
