@@ -13,6 +13,7 @@ pub mod field;
 pub mod formula;
 pub mod gpu;
 pub mod io;
+pub mod locate;
 pub mod num;
 pub mod orbit;
 pub mod palette;

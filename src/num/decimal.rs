@@ -6,6 +6,12 @@
 
 use std::fmt;
 
+use malachite_base::num::arithmetic::traits::{Pow, RoundToMultiple};
+use malachite_base::num::conversion::traits::{FromSciString, RoundingFrom};
+use malachite_base::rounding_modes::RoundingMode;
+use malachite_nz::integer::Integer;
+use malachite_q::Rational;
+
 /// Why a string is not a decimal number.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
@@ -104,6 +110,34 @@ impl Decimal {
     }
 }
 
+impl Decimal {
+    /// `r` rounded to `digits` digits after the point (trailing zeros dropped): the exact
+    /// text of a value computed in rationals or big floats, e.g. a view centre found by
+    /// Newton's method.
+    pub fn from_rational(r: &Rational, digits: u64) -> Decimal {
+        let scale = Rational::from(10u32).pow(digits);
+        let scaled = (r * &scale).round_to_multiple(Rational::from(1u32), RoundingMode::Nearest).0;
+        let int: Integer = Integer::rounding_from(&scaled, RoundingMode::Exact).0;
+        let full = int.to_string();
+        let neg = full.starts_with('-');
+        let mut s = full.trim_start_matches('-').to_string();
+        while s.len() <= digits as usize {
+            s.insert(0, '0');
+        }
+        s.insert(s.len() - digits as usize, '.');
+        let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        let text = if neg && s != "0" { format!("-{s}") } else { s };
+        // Digits, a point and a sign: always a valid decimal.
+        Decimal::parse(&text).unwrap_or_else(|_| Decimal { text: "0".into(), mantissa: 0.0, exp10: 0 })
+    }
+
+    /// The exact value as a rational (zero if the text were somehow unreadable).
+    pub fn to_rational(&self) -> Rational {
+        let t = self.text.strip_prefix('+').unwrap_or(&self.text);
+        Rational::from_sci_string(t).unwrap_or_default()
+    }
+}
+
 impl fmt::Display for Decimal {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.text)
@@ -124,6 +158,16 @@ mod tests {
         assert_eq!(deep.log10_abs(), 1000.0);
         assert!(deep.to_f64().is_infinite());
         assert!(Decimal::parse("0.000").unwrap().is_zero());
+    }
+
+    #[test]
+    fn rationals_round_to_decimal_text() {
+        let third = Rational::from(1u32) / Rational::from(3u32);
+        assert_eq!(Decimal::from_rational(&third, 5).text(), "0.33333");
+        assert_eq!(Decimal::from_rational(&-(Rational::from(7u32) / Rational::from(4u32)), 1).text(), "-1.8");
+        assert_eq!(Decimal::from_rational(&Rational::from(0u32), 3).text(), "0");
+        let d = Decimal::parse("-1.25e-3").unwrap();
+        assert_eq!(Decimal::from_rational(&d.to_rational(), 10).text(), "-0.00125");
     }
 
     #[test]

@@ -6,7 +6,6 @@
 //! (malachite), so navigation works at any depth; they are rounded to a few digits finer
 //! than the pixel spacing, which keeps them exact for rendering and short to store.
 
-use malachite_base::num::arithmetic::traits::{Pow, RoundToMultiple};
 use malachite_base::num::conversion::traits::FromSciString;
 use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
@@ -118,19 +117,7 @@ fn rat(t: &str) -> Rational {
 /// intermediate values that are rounded again), trailing zeros dropped.
 fn text(r: &Rational, digits: u64) -> String {
     let digits = if digits == 0 { 60 } else { digits };
-    let scale = Rational::from(10u32).pow(digits);
-    let scaled = (r * &scale).round_to_multiple(Rational::from(1u32), RoundingMode::Nearest).0;
-    let int = malachite_base::num::conversion::traits::RoundingFrom::rounding_from(&scaled, RoundingMode::Exact).0;
-    let int: malachite_nz::integer::Integer = int;
-    let full = int.to_string();
-    let neg = full.starts_with('-');
-    let mut s = full.trim_start_matches('-').to_string();
-    while s.len() <= digits as usize {
-        s.insert(0, '0');
-    }
-    s.insert(s.len() - digits as usize, '.');
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if neg && s != "0" { format!("-{s}") } else { s }
+    crate::num::Decimal::from_rational(r, digits).text().to_string()
 }
 
 /// Back/forward history of views.

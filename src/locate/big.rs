@@ -1,0 +1,134 @@
+//! Complex numbers in big floats at a fixed precision, for Newton's method and period
+//! detection: the few operations those need, each rounded once to the working precision.
+
+use malachite_float::Float;
+use malachite_q::Rational;
+
+use crate::num::{Decimal, FloatExp};
+use crate::orbit::bigfloat;
+
+/// A complex number of two malachite floats, with the precision its operations round to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BigC {
+    /// Real part.
+    pub re: Float,
+    /// Imaginary part.
+    pub im: Float,
+    /// Bits every operation rounds to.
+    pub bits: u64,
+}
+
+impl BigC {
+    /// Zero at `bits`.
+    pub fn zero(bits: u64) -> BigC {
+        BigC { re: Float::from(0u32), im: Float::from(0u32), bits }
+    }
+
+    /// From decimal parts, correctly rounded to `bits`.
+    pub fn from_decimals(re: &Decimal, im: &Decimal, bits: u64) -> BigC {
+        BigC { re: bigfloat::from_decimal(re, bits), im: bigfloat::from_decimal(im, bits), bits }
+    }
+
+    /// From f64 parts (exact).
+    pub fn from_f64(re: f64, im: f64, bits: u64) -> BigC {
+        let f = |x: f64| Float::from_primitive_float_prec(x, bits.max(64)).0;
+        BigC { re: f(re), im: f(im), bits }
+    }
+
+    /// The same value at another precision (rounded when narrower).
+    pub fn with_bits(&self, bits: u64) -> BigC {
+        let f = |x: &Float| Float::from_float_prec_ref(x, bits).0;
+        BigC { re: f(&self.re), im: f(&self.im), bits }
+    }
+
+    /// self + o.
+    pub fn add(&self, o: &BigC) -> BigC {
+        let p = self.bits;
+        BigC { re: self.re.add_prec_ref_ref(&o.re, p).0, im: self.im.add_prec_ref_ref(&o.im, p).0, bits: p }
+    }
+
+    /// self - o.
+    pub fn sub(&self, o: &BigC) -> BigC {
+        let p = self.bits;
+        BigC { re: self.re.sub_prec_ref_ref(&o.re, p).0, im: self.im.sub_prec_ref_ref(&o.im, p).0, bits: p }
+    }
+
+    /// self * o.
+    pub fn mul(&self, o: &BigC) -> BigC {
+        let p = self.bits;
+        let m = |a: &Float, b: &Float| a.mul_prec_ref_ref(b, p).0;
+        let re = m(&self.re, &o.re).sub_prec(m(&self.im, &o.im), p).0;
+        let im = m(&self.re, &o.im).add_prec(m(&self.im, &o.re), p).0;
+        BigC { re, im, bits: p }
+    }
+
+    /// self^2.
+    pub fn square(&self) -> BigC {
+        let p = self.bits;
+        let re = self.re.square_prec_ref(p).0.sub_prec(self.im.square_prec_ref(p).0, p).0;
+        let im = self.re.mul_prec_ref_ref(&self.im, p).0 << 1u32;
+        BigC { re, im, bits: p }
+    }
+
+    /// self * 2^k (exact).
+    pub fn ldexp(&self, k: i32) -> BigC {
+        BigC { re: self.re.clone() << k, im: self.im.clone() << k, bits: self.bits }
+    }
+
+    /// self / o (zero when o is zero).
+    pub fn div(&self, o: &BigC) -> BigC {
+        let p = self.bits;
+        let d = o.re.square_prec_ref(p).0.add_prec(o.im.square_prec_ref(p).0, p).0;
+        if d.is_zero() {
+            return BigC::zero(p);
+        }
+        let m = |a: &Float, b: &Float| a.mul_prec_ref_ref(b, p).0;
+        let re = m(&self.re, &o.re).add_prec(m(&self.im, &o.im), p).0.div_prec(d.clone(), p).0;
+        let im = m(&self.im, &o.re).sub_prec(m(&self.re, &o.im), p).0.div_prec(d, p).0;
+        BigC { re, im, bits: p }
+    }
+
+    /// The value as FloatExp parts (53 bits each).
+    pub fn to_fe(&self) -> [FloatExp; 2] {
+        [bigfloat::to_floatexp(&self.re), bigfloat::to_floatexp(&self.im)]
+    }
+
+    /// |self| as FloatExp (to about 53 bits).
+    pub fn abs(&self) -> FloatExp {
+        let [a, b] = self.to_fe();
+        (a * a + b * b).sqrt()
+    }
+
+    /// The parts as exact rationals (zero for non-finite parts).
+    pub fn to_rationals(&self) -> [Rational; 2] {
+        let r = |x: &Float| Rational::try_from(x).unwrap_or_default();
+        [r(&self.re), r(&self.im)]
+    }
+
+    /// The parts as decimal text with enough digits to hold every bit of the precision,
+    /// plus `extra` digits.
+    pub fn to_decimals(&self, extra: u64) -> [Decimal; 2] {
+        let digits = (self.bits as f64 * std::f64::consts::LOG10_2).ceil() as u64 + extra;
+        let [re, im] = self.to_rationals();
+        [Decimal::from_rational(&re, digits), Decimal::from_rational(&im, digits)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arithmetic_is_complex_arithmetic() {
+        let a = BigC::from_f64(1.5, -2.0, 128);
+        let b = BigC::from_f64(0.25, 0.5, 128);
+        let f = |c: &BigC| c.to_fe().map(|v| v.to_f64());
+        assert_eq!(f(&a.mul(&b)), [1.5 * 0.25 + 2.0 * 0.5, 1.5 * 0.5 - 2.0 * 0.25]);
+        assert_eq!(f(&a.square()), [1.5 * 1.5 - 4.0, 2.0 * 1.5 * -2.0]);
+        assert_eq!(f(&a.mul(&b).div(&b)), f(&a));
+        assert_eq!(f(&a.ldexp(3)), [12.0, -16.0]);
+        assert_eq!(a.abs().to_f64(), 2.5);
+        let [re, im] = BigC::from_f64(-0.125, 3.0, 64).to_decimals(0);
+        assert_eq!((re.text(), im.text()), ("-0.125", "3"));
+    }
+}

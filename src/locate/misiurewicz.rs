@@ -1,0 +1,99 @@
+//! Misiurewicz points: parameters whose critical orbit is eventually periodic, z_(k+p) =
+//! z_k with preperiod k and period p. They lie on the boundary of the Mandelbrot set, and the
+//! set looks the same at every depth around them (spirals and branches), so views of any
+//! depth can be centred on one.
+//!
+//! Newton's method solves z_(k+p)(c) - z_k(c) = 0, with the derivatives carried alongside
+//! (z_(n+1)' = 2 z_n z_n' + 1). Its roots also include points of lower preperiod or period
+//! (and nuclei), so a root found is checked for the preperiod and period its orbit really
+//! has ([`orbit_type`]).
+
+use crate::num::FloatExp;
+
+use super::big::BigC;
+
+/// Newton's method for a root of z_(k+p) - z_k from `start`, at `start`'s precision;
+/// None unless the steps converge within `max_steps`.
+pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Option<BigC> {
+    let bits = start.bits;
+    let one = BigC::from_f64(1.0, 0.0, bits);
+    let tolerance = FloatExp::new(1.0, 16 - bits as i32);
+    let mut c = start.clone();
+    for _ in 0..max_steps {
+        let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
+        let (mut zk, mut dzk) = (BigC::zero(bits), BigC::zero(bits));
+        for n in 1..=preperiod + period {
+            dz = z.mul(&dz).ldexp(1).add(&one);
+            z = z.square().add(&c);
+            if n == preperiod {
+                (zk, dzk) = (z.clone(), dz.clone());
+            }
+        }
+        let f = z.sub(&zk);
+        let df = dz.sub(&dzk);
+        if df.abs().is_zero() {
+            return None;
+        }
+        let step = f.div(&df);
+        c = c.sub(&step);
+        if step.abs() <= tolerance * FloatExp::ONE.max(c.abs()) {
+            return Some(c);
+        }
+        if !(c.abs() < FloatExp::from(4.0)) {
+            return None;
+        }
+    }
+    None
+}
+
+/// The smallest preperiod k <= `max_preperiod` and period p <= `max_period` with
+/// |z_(k+p) - z_k| below 2^(32 - bits) (relative to |z_k| or 1): what the orbit of `c` really
+/// is, to the precision it was found with. None when nothing repeats that soon; a nucleus
+/// (z_p = 0, so preperiod 0) is reported as (0, p).
+pub fn orbit_type(c: &BigC, max_preperiod: u32, max_period: u32) -> Option<(u32, u32)> {
+    let tolerance = FloatExp::new(1.0, 32 - c.bits as i32);
+    let mut orbit = vec![BigC::zero(c.bits)];
+    for _ in 0..max_preperiod + max_period {
+        let z = orbit.last().unwrap_or(&orbit[0]).square().add(c);
+        orbit.push(z);
+    }
+    for k in 0..=max_preperiod as usize {
+        for p in 1..=max_period as usize {
+            if k + p >= orbit.len() {
+                break;
+            }
+            let scale = FloatExp::ONE.max(orbit[k].abs());
+            if orbit[k + p].sub(&orbit[k]).abs() <= tolerance * scale {
+                return Some((k as u32, p as u32));
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Published Misiurewicz points: c = -2 (0, -2, 2, 2, ...: preperiod 2, period 1), c = i
+    /// (0, i, -1 + i, -i, -1 + i: preperiod 2, period 2), and the tip of the spiral at
+    /// -0.77568377 + 0.13646737i (preperiod 23, period 2: the main spiral of seahorse
+    /// valley's neighbour, as listed in the Mandelbrot encyclopedia).
+    #[test]
+    fn misiurewicz_points_agree_with_published_coordinates() {
+        let found = |re: f64, im: f64, k: u32, p: u32| {
+            let c = newton(&BigC::from_f64(re, im, 200), k, p, 100).expect("converges");
+            (c.to_fe().map(|v| v.to_f64()), orbit_type(&c, 40, 8))
+        };
+        assert_eq!(found(-1.98, 0.01, 2, 1), ([-2.0, 0.0], Some((2, 1))));
+        let (c, t) = found(0.02, 0.98, 2, 2);
+        assert!((c[0]).abs() < 1e-15 && (c[1] - 1.0).abs() < 1e-15, "{c:?}");
+        assert_eq!(t, Some((2, 2)));
+    }
+
+    #[test]
+    fn a_nucleus_is_preperiod_zero() {
+        let c = super::super::nucleus::newton(&BigC::from_f64(-1.75, 0.0, 200), 3, 100).expect("converges");
+        assert_eq!(orbit_type(&c, 10, 10), Some((0, 3)));
+    }
+}
