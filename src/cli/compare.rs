@@ -82,7 +82,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 b.set_position(k as u64 + 1);
             }
         }
-        let suspects = compare::suspects(&measured, &truths);
+        let suspects = compare::suspects(&measured, &truths, scene.escape_radius);
         if let Some(b) = &bar {
             b.set_message(format!("conditioning of {} disagreeing pixels", suspects.len()));
         }
@@ -115,7 +115,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
     std::io::stdout().lock().write_all(text.as_bytes()).map_err(|e| Failure::Runtime(anyhow!(e)))
 }
 
-const KEYS: [&str; 10] = [
+const KEYS: [&str; 11] = [
     "engine",
     "seconds",
     "iterations_per_second",
@@ -126,9 +126,10 @@ const KEYS: [&str; 10] = [
     "de_error_p99",
     "compared",
     "ill_conditioned",
+    "nf_ill_conditioned",
 ];
 
-fn fields(r: &Row) -> [String; 10] {
+fn fields(r: &Row) -> [String; 11] {
     [
         r.engine.clone(),
         format!("{:.4}", r.seconds),
@@ -140,6 +141,7 @@ fn fields(r: &Row) -> [String; 10] {
         format!("{:.3e}", r.de_error_p99),
         r.compared.to_string(),
         r.ill_conditioned.to_string(),
+        r.nf_ill_conditioned.to_string(),
     ]
 }
 
@@ -152,9 +154,20 @@ fn csv(rows: &[Row]) -> String {
 }
 
 fn table(rows: &[Row], origin: &str, samples: usize) -> String {
-    let heads =
-        ["engine", "seconds", "iter/s", "N mismatch", "NF p50", "NF p99", "DE p50", "DE p99", "pixels", "ill-cond."];
-    let cells: Vec<[String; 10]> = rows.iter().map(fields).collect();
+    let heads = [
+        "engine",
+        "seconds",
+        "iter/s",
+        "N mismatch",
+        "NF p50",
+        "NF p99",
+        "DE p50",
+        "DE p99",
+        "pixels",
+        "ill-cond.",
+        "NF ill-cond.",
+    ];
+    let cells: Vec<[String; 11]> = rows.iter().map(fields).collect();
     let width: Vec<usize> =
         (0..heads.len()).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
     let line = |c: &[&str]| -> String {
@@ -170,5 +183,7 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
         out += &line(&c.iter().map(String::as_str).collect::<Vec<_>>());
     }
     out + "pixels: compared for N (orbits passing within 1e-9 of the escape circle left out); \
-           ill-cond.: wrong N where the true N changes within 1e-9 pixel (left out)\n"
+           ill-cond.: wrong N where the true N changes within 1e-9 pixel (left out); \
+           NF ill-cond.: NF more than 1e-4 off where the true NF changes by more than 1e-4 within 1e-9 pixel \
+           (left out of the NF and DE errors)\n"
 }

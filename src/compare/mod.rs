@@ -16,7 +16,9 @@
 //! The GPU engines (`gpu`, `gpu-df`) are listed where they can address the view; whether a
 //! GPU adapter exists is for the caller to check ([`crate::gpu::GpuContext::shared`]).
 
+pub mod fuzz;
 mod truth;
+pub mod views;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -102,6 +104,10 @@ pub struct Row {
     /// Pixels whose N this variant got wrong where N is ill-conditioned (it changes within
     /// 1e-9 sample spacings, [`mark_ill_conditioned`]); not counted as mismatches.
     pub ill_conditioned: usize,
+    /// Pixels left out of the NF and distance errors because the true NF changes by more
+    /// than [`NF_CONDITION`] within 1e-9 sample spacings, where this variant's NF is that far
+    /// off.
+    pub nf_ill_conditioned: usize,
 }
 
 /// Smallest f32/f64 ulps per sample at which a direct kernel is still listed.
@@ -237,12 +243,22 @@ fn escape_index(n: u32) -> Option<u32> {
 /// How far [`mark_ill_conditioned`] moves a pixel, in sample spacings.
 pub const CONDITION_SHIFT: f64 = 1e-9;
 
-/// The sampled pixels (indices) whose N some variant got wrong, near-circle ones left out:
-/// the only ones whose conditioning matters.
-pub fn suspects(measured: &[Measured], truths: &[Truth]) -> Vec<usize> {
-    (0..truths.len())
-        .filter(|&k| !truths[k].near_circle && measured.iter().any(|m| escape_index(m.values[k].0) != truths[k].n))
-        .collect()
+/// An NF error above this, or a change of the true NF by more than this within
+/// [`CONDITION_SHIFT`], makes a pixel's NF suspect or ill-conditioned (the fuzzer's bar for
+/// NF's 99th percentile).
+pub const NF_CONDITION: f64 = 1e-4;
+
+/// The sampled pixels (indices) whose N some variant got wrong, or whose NF some variant got
+/// more than [`NF_CONDITION`] wrong, near-circle ones left out: the only ones whose
+/// conditioning matters.
+pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64) -> Vec<usize> {
+    let ln_r = escape_radius.ln();
+    let wrong = |m: &Measured, k: usize| {
+        let (n, nf, _, _) = m.values[k];
+        let t = &truths[k];
+        escape_index(n) != t.n || (t.n.is_some() && (nf as f64 - true_nf(t, ln_r)).abs() > NF_CONDITION)
+    };
+    (0..truths.len()).filter(|&k| !truths[k].near_circle && measured.iter().any(|m| wrong(m, k))).collect()
 }
 
 /// Marks the truths at `suspects` whose N changes when the pixel moves [`CONDITION_SHIFT`]
@@ -250,7 +266,10 @@ pub fn suspects(measured: &[Measured], truths: &[Truth]) -> Vec<usize> {
 /// than the pixel: the orbit passes so close to the Julia set (or to a preimage of the
 /// critical point) that no engine with f64 or FloatExp deltas, whose rounding alone is
 /// worth ~1e-13 of the image, can be expected to reproduce it, and big-float iteration at
-/// the pixel's centre is one draw among the many values inside the pixel.
+/// the pixel's centre is one draw among the many values inside the pixel. Where N holds but
+/// NF changes by more than [`NF_CONDITION`] under the same shifts, NF is ill-conditioned in
+/// the same sense (it varies by more than 1e5 per pixel: the pixel shows noise at any
+/// precision) and is marked so.
 pub fn mark_ill_conditioned(
     scene: &Scene,
     pixels: &[(u32, u32)],
@@ -259,18 +278,24 @@ pub fn mark_ill_conditioned(
     cancel: &AtomicBool,
 ) -> Result<(), Cancelled> {
     let grid = TruthGrid::new(scene);
-    let flags: Vec<(usize, bool)> = suspects
+    let flags: Vec<(usize, bool, bool)> = suspects
         .par_iter()
         .map(|&k| {
             if cancel.load(Ordering::Relaxed) {
                 return Err(Cancelled);
             }
             let moved = [[CONDITION_SHIFT, 0.0], [0.0, CONDITION_SHIFT]];
-            Ok((k, moved.iter().any(|&s| grid.truth(pixels[k], s).n != truths[k].n)))
+            let t = &truths[k];
+            let ln_r = scene.escape_radius.ln();
+            let shifted: Vec<Truth> = moved.iter().map(|&s| grid.truth(pixels[k], s)).collect();
+            let n_ill = shifted.iter().any(|m| m.n != t.n);
+            let nf_ill = shifted.iter().any(|m| (true_nf(m, ln_r) - true_nf(t, ln_r)).abs() > NF_CONDITION);
+            Ok((k, n_ill, nf_ill))
         })
         .collect::<Result<_, _>>()?;
-    for (k, ill) in flags {
-        truths[k].ill_conditioned = ill;
+    for (k, n_ill, nf_ill) in flags {
+        truths[k].ill_conditioned = n_ill;
+        truths[k].nf_ill_conditioned = !n_ill && nf_ill;
     }
     Ok(())
 }
@@ -407,14 +432,15 @@ pub fn pixel_csv(
     escape_radius: f64,
 ) -> String {
     let ln_r = escape_radius.ln();
-    let mut out = String::from("x,y,n_true,nf_true,near_circle,ill_conditioned");
+    let mut out = String::from("x,y,n_true,nf_true,near_circle,ill_conditioned,nf_ill_conditioned");
     for name in names {
         out += &format!(",{name} n,{name} nf");
     }
     out.push('\n');
     let n_text = |n: Option<u32>| n.map(|n| n.to_string()).unwrap_or_default();
     for (k, (&(x, y), t)) in pixels.iter().zip(truths).enumerate() {
-        out += &format!("{x},{y},{},{:.9},{},{}", n_text(t.n), true_nf(t, ln_r), t.near_circle, t.ill_conditioned);
+        let (nc, ill, nf_ill) = (t.near_circle, t.ill_conditioned, t.nf_ill_conditioned);
+        out += &format!("{x},{y},{},{:.9},{nc},{ill},{nf_ill}", n_text(t.n), true_nf(t, ln_r));
         for m in measured {
             let (n, f, _, _) = m.values[k];
             out += &format!(",{},{f:.9}", n_text(escape_index(n)));
@@ -427,7 +453,7 @@ pub fn pixel_csv(
 /// Scores a variant's values against the truth.
 pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64) -> Row {
     let ln_r = escape_radius.ln();
-    let (mut compared, mut mismatched, mut excused) = (0usize, 0usize, 0usize);
+    let (mut compared, mut mismatched, mut excused, mut nf_excused) = (0usize, 0usize, 0usize, 0usize);
     let (mut nf, mut de) = (Vec::new(), Vec::new());
     for (&(n, f, dx, dy), t) in measured.values.iter().zip(truths) {
         if t.near_circle {
@@ -446,7 +472,12 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         if t.n.is_none() {
             continue;
         }
-        nf.push((f as f64 - true_nf(t, ln_r)).abs());
+        let nf_err = (f as f64 - true_nf(t, ln_r)).abs();
+        if (t.ill_conditioned || t.nf_ill_conditioned) && nf_err > NF_CONDITION {
+            nf_excused += 1;
+            continue;
+        }
+        nf.push(nf_err);
         let abs_z = t.z[0].hypot(t.z[1]);
         let d_true = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
         let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
@@ -469,6 +500,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         de_error_p99: quantile(&de, 0.99),
         compared,
         ill_conditioned: excused,
+        nf_ill_conditioned: nf_excused,
     }
 }
 
@@ -477,7 +509,14 @@ mod tests {
     use super::*;
 
     fn truth(n: u32) -> Truth {
-        Truth { n: Some(n), z: [1e3, 0.0], dz: [1.0, 0.0], near_circle: false, ill_conditioned: false }
+        Truth {
+            n: Some(n),
+            z: [1e3, 0.0],
+            dz: [1.0, 0.0],
+            near_circle: false,
+            ill_conditioned: false,
+            nf_ill_conditioned: false,
+        }
     }
 
     #[test]
@@ -485,13 +524,22 @@ mod tests {
         let mut truths = vec![truth(10), truth(10), truth(10), truth(10)];
         truths[1].ill_conditioned = true;
         truths[2].near_circle = true;
-        // Wrong on every pixel but the last.
-        let values = vec![(11, 0.5, 0.0, 0.0), (11, 0.5, 0.0, 0.0), (11, 0.5, 0.0, 0.0), (10, 0.5, 0.0, 0.0)];
+        // Wrong on every pixel but the last, whose NF is the truth's too.
+        let nf = true_nf(&truths[3], 2f64.ln()) as f32;
+        let values = vec![(11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (10, nf, 0.0, 0.0)];
         let m = Measured { values, iterations: 40, seconds: 1.0 };
         let row = score("x", &m, &truths, 2.0);
         assert_eq!((row.compared, row.ill_conditioned), (2, 1), "{row:?}");
         assert_eq!(row.n_mismatch_fraction, 0.5, "{row:?}");
-        assert_eq!(suspects(&[m], &truths), vec![0, 1]);
+        assert_eq!(suspects(std::slice::from_ref(&m), &truths, 2.0), vec![0, 1]);
+        // NF: an ill-conditioned pixel's NF error is left out, an ordinary one's is not.
+        let mut truths = vec![truth(10), truth(10)];
+        truths[0].nf_ill_conditioned = true;
+        let values = vec![(10, 0.3, 0.0, 0.0), (10, 0.3, 0.0, 0.0)];
+        let m = Measured { values, iterations: 20, seconds: 1.0 };
+        let row = score("x", &m, &truths, 2.0);
+        assert_eq!(row.nf_ill_conditioned, 1, "{row:?}");
+        assert_eq!(suspects(&[m], &truths, 2.0), vec![0, 1]);
     }
 
     /// Pixel (506, 307) of julia-deep-e40 escapes at 702 in big floats and at 713 a

@@ -25,6 +25,9 @@ pub struct Truth {
     /// N changes when the point moves 1e-9 sample spacings (set by
     /// [`super::mark_ill_conditioned`], only on pixels some engine got wrong).
     pub ill_conditioned: bool,
+    /// N holds but NF changes by more than [`super::NF_CONDITION`] when the point moves 1e-9
+    /// sample spacings (set likewise, only where some engine's NF is that far off).
+    pub nf_ill_conditioned: bool,
 }
 
 /// Iterates the orbit of `point` (Mandelbrot: c = point, z_0 = 0; Julia: z_0 = point).
@@ -57,7 +60,7 @@ pub fn orbit(
                 v.to_f64()
             };
             let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
-            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false };
+            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false, nf_ill_conditioned: false };
         }
         if n == max_iter {
             break;
@@ -74,5 +77,5 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false }
+    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false }
 }

@@ -70,6 +70,23 @@ impl BigC {
         BigC { re, im, bits: p }
     }
 
+    /// The principal square root (non-negative real part; the imaginary part takes the sign
+    /// of self's).
+    pub fn sqrt(&self) -> BigC {
+        let p = self.bits;
+        let m = self.re.square_prec_ref(p).0.add_prec(self.im.square_prec_ref(p).0, p).0.sqrt_prec(p).0;
+        let half = |x: Float| (x >> 1u32).sqrt_prec(p).0;
+        let re = half(m.add_prec_ref_ref(&self.re, p).0);
+        let im = half(m.sub_prec_ref_ref(&self.re, p).0);
+        let im = if self.im.is_sign_negative() { -im } else { im };
+        BigC { re, im, bits: p }
+    }
+
+    /// -self.
+    pub fn neg(&self) -> BigC {
+        BigC { re: -self.re.clone(), im: -self.im.clone(), bits: self.bits }
+    }
+
     /// self * 2^k (exact).
     pub fn ldexp(&self, k: i32) -> BigC {
         BigC { re: self.re.clone() << k, im: self.im.clone() << k, bits: self.bits }
@@ -128,6 +145,8 @@ mod tests {
         assert_eq!(f(&a.mul(&b).div(&b)), f(&a));
         assert_eq!(f(&a.ldexp(3)), [12.0, -16.0]);
         assert_eq!(a.abs().to_f64(), 2.5);
+        let r = BigC::from_f64(-3.0, -4.0, 128).sqrt();
+        assert_eq!(f(&r), [1.0, -2.0]);
         let [re, im] = BigC::from_f64(-0.125, 3.0, 64).to_decimals(0);
         assert_eq!((re.text(), im.text()), ("-0.125", "3"));
     }

@@ -39,7 +39,8 @@ pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Opti
         if step.abs() <= tolerance * FloatExp::ONE.max(c.abs()) {
             return Some(c);
         }
-        if !(c.abs() < FloatExp::from(4.0)) {
+        // Diverged (or NaN: then the comparison is false too).
+        if c.abs().partial_cmp(&FloatExp::from(4.0)) != Some(std::cmp::Ordering::Less) {
             return None;
         }
     }

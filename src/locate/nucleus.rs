@@ -48,7 +48,8 @@ pub fn newton(start: &BigC, period: u32, max_steps: u32) -> Option<BigC> {
         if step.abs() <= tolerance * scale {
             return Some(c);
         }
-        if !(c.abs() < FloatExp::from(4.0)) {
+        // Diverged (or NaN: then the comparison is false too).
+        if c.abs().partial_cmp(&FloatExp::from(4.0)) != Some(std::cmp::Ordering::Less) {
             return None;
         }
     }
@@ -141,8 +142,12 @@ mod tests {
         // below 2^(24 - bits), far below the minibrot's size of ~1e-73).
         let d = |t: &str| crate::num::Decimal::parse(t).unwrap();
         let near = BigC::from_decimals(
-            &d("-1.76861049301467707450317565327022652023967790758866549483767725757530464097880847527463570736246404425"),
-            &d("0.00126661350386871770206641119224260157619394056047140981718501017176252479258890361669150134602850245"),
+            &d(
+                "-1.76861049301467707450317565327022652023967790758866549483767725757530464097880847527463570736246404425",
+            ),
+            &d(
+                "0.00126661350386871770206641119224260157619394056047140981718501017176252479258890361669150134602850245",
+            ),
             400,
         );
         let p = super::super::period::ball_period(&near, FloatExp::exp10(-40.0), 100_000).expect("a period");

@@ -5,6 +5,7 @@ mod accuracy;
 mod cli;
 mod coloring;
 mod deep;
+mod fuzz;
 mod golden;
 mod gpu;
 mod import;

@@ -1,0 +1,151 @@
+//! The deep-view fuzzer: generated views nobody tuned the engine to, every engine
+//! configuration and instruction set against direct big-float iteration, for as long as
+//! asked. Every view that breaks the accuracy bar is written as a scene file that
+//! reproduces it (`deepfield compare FILE --sample-only` shows the rows again).
+//!
+//! ```sh
+//! cargo run --release --example deep_fuzz -- --seconds 3600 --out fuzz-failures
+//! scripts/fuzz-deep.sh 3600            # the same, with a log
+//! ```
+//!
+//! Flags: `--seed S` (default 1), `--seconds T` (default 60), `--count N` (stop after N
+//! views), `--out DIR` (default `fuzz-failures`), `--pixels K` (sampled pixels per view,
+//! default 24), `--size WxH` (default 64x48), `--max-depth D` (log10 of the deepest zoom,
+//! default 2000), `--max-iter N` (default 1000000), `--kinds a,b` (default all:
+//! descent, minibrot, misiurewicz, early-escape, floatexp-line, julia).
+#![allow(clippy::print_stdout)] // printing the findings is the point
+
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use deepfield::compare::fuzz::{self, BAR};
+use deepfield::compare::views::{self, Rng, ViewKind, ViewSpec};
+use deepfield::simd_level::SimdLevel;
+
+struct Flags {
+    seed: u64,
+    seconds: f64,
+    count: u32,
+    out: std::path::PathBuf,
+    pixels: u32,
+    size: (u32, u32),
+    max_depth: f64,
+    max_iter: u32,
+    kinds: Vec<ViewKind>,
+}
+
+fn flags() -> Result<Flags, String> {
+    let mut f = Flags {
+        seed: 1,
+        seconds: 60.0,
+        count: u32::MAX,
+        out: "fuzz-failures".into(),
+        pixels: 24,
+        size: (64, 48),
+        max_depth: 2000.0,
+        max_iter: 1_000_000,
+        kinds: ViewKind::ALL.to_vec(),
+    };
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or(format!("{a} needs a value"));
+        let bad = |a: &str| format!("{a}: not a number");
+        match a.as_str() {
+            "--seed" => f.seed = value()?.parse().map_err(|_| bad(a))?,
+            "--seconds" => f.seconds = value()?.parse().map_err(|_| bad(a))?,
+            "--count" => f.count = value()?.parse().map_err(|_| bad(a))?,
+            "--out" => f.out = value()?.into(),
+            "--pixels" => f.pixels = value()?.parse().map_err(|_| bad(a))?,
+            "--max-depth" => f.max_depth = value()?.parse().map_err(|_| bad(a))?,
+            "--max-iter" => f.max_iter = value()?.parse().map_err(|_| bad(a))?,
+            "--size" => {
+                let v = value()?;
+                let (w, h) = v.split_once('x').ok_or(format!("--size {v}: not WxH"))?;
+                f.size = (w.parse().map_err(|_| bad(a))?, h.parse().map_err(|_| bad(a))?);
+            }
+            "--kinds" => {
+                let v = value()?;
+                f.kinds = v
+                    .split(',')
+                    .map(|k| ViewKind::ALL.into_iter().find(|x| x.name() == k).ok_or(format!("--kinds: no kind {k}")))
+                    .collect::<Result<_, _>>()?;
+            }
+            other => return Err(format!("unknown flag {other}")),
+        }
+    }
+    Ok(f)
+}
+
+fn main() {
+    let f = match flags() {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    let levels = SimdLevel::usable();
+    let cancel = AtomicBool::new(false);
+    let start = Instant::now();
+    let mut rng = Rng::new(f.seed);
+    let (mut checked, mut failed) = (0u32, 0u32);
+    println!(
+        "seed {}, instruction sets {:?}, bar {BAR:?}",
+        f.seed,
+        levels.iter().map(|l| l.name()).collect::<Vec<_>>()
+    );
+    let mut draw = 0u32;
+    while checked < f.count && start.elapsed().as_secs_f64() < f.seconds {
+        let kind = f.kinds[draw as usize % f.kinds.len()];
+        // Depths log-uniform from 1e15 to the deepest asked (minibrot descents stop sooner
+        // where their periods grow past what the check can iterate).
+        let top = match kind {
+            ViewKind::Misiurewicz | ViewKind::Julia => f.max_depth,
+            _ => f.max_depth.min(400.0),
+        };
+        let depth = 10f64.powf(rng.uniform(15f64.log10(), top.max(16.0).log10()));
+        let spec = ViewSpec { kind, log10_zoom: depth, max_iter: f.max_iter, width: f.size.0, height: f.size.1 };
+        draw += 1;
+        let Some(view) = views::generate(f.seed, draw, &spec) else { continue };
+        let t = Instant::now();
+        let verdict = match fuzz::check(&view.scene, f.pixels, &levels, BAR, &cancel) {
+            Ok(v) => v,
+            Err(e) => {
+                println!("{}: not checked: {e}", view.name);
+                continue;
+            }
+        };
+        checked += 1;
+        let worst = verdict.rows.iter().map(|r| r.nf_error_p99).fold(0.0, f64::max);
+        println!(
+            "{:<28} zoom 1e{:<7.1} max {:>8} {:>5.1} s  {} configurations, NF p99 <= {worst:.1e}{}",
+            view.name,
+            -view.scene.log10_spacing() - (view.scene.height as f64 / 4.0).log10(),
+            view.scene.max_iter,
+            t.elapsed().as_secs_f64(),
+            verdict.rows.len(),
+            if verdict.failures.is_empty() { "" } else { "  FAILED" }
+        );
+        if !verdict.failures.is_empty() {
+            failed += 1;
+            for line in &verdict.failures {
+                println!("    {line}");
+            }
+            let _ = std::fs::create_dir_all(&f.out);
+            let path = f.out.join(format!("{}.toml", view.name));
+            let header: String = verdict.failures.iter().map(|l| format!("# {l}\n")).collect();
+            let text = format!(
+                "# Generated by the deep-view fuzzer (seed {}, draw {draw}); it broke the bar:\n{header}{}",
+                f.seed, view.toml
+            );
+            if let Err(e) = std::fs::write(&path, text) {
+                eprintln!("error: {}: {e}", path.display());
+            }
+        }
+    }
+    println!("{checked} views checked in {:.0} s, {failed} failed", start.elapsed().as_secs_f64());
+    if failed > 0 {
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,125 @@
+//! The deep-view fuzzer's check: every engine configuration on a generated view against
+//! direct big-float iteration, held to the accuracy bar.
+//!
+//! A configuration is a perturbation engine (f64 deltas where the spacing allows them,
+//! FloatExp deltas always; direct f64 where the view is shallow enough), with BLA at the
+//! scene's tolerance and without BLA, each run with every instruction set the CPU has. The
+//! instruction sets must agree bit for bit (they do the same arithmetic); each engine's
+//! values at the sampled pixels are then scored against the truth as `deepfield compare`
+//! scores them, with the same exemptions (orbits passing within 1e-9 of the escape circle,
+//! pixels whose true N changes within 1e-9 of a pixel, and, for NF and distance errors,
+//! pixels whose true NF changes by more than 1e-4 within 1e-9 of a pixel). The bar, per
+//! configuration: no N mismatch, NF error median <= 1e-6 and 99th percentile <= 1e-4,
+//! distance-estimate error median <= 1e-6, and no NaN or infinity in any value.
+
+use std::sync::atomic::AtomicBool;
+
+use super::{
+    Measured, Row, RunError, Variant, VariantKind, mark_ill_conditioned, run, sample_pixels, score, suspects, truths,
+};
+use crate::field::INTERIOR;
+use crate::scene::Scene;
+use crate::simd_level::SimdLevel;
+
+/// The accuracy bar every configuration must meet.
+#[derive(Debug, Clone, Copy)]
+pub struct Bar {
+    /// Largest fraction of compared pixels with a wrong N.
+    pub n_mismatch: f64,
+    /// Largest NF error median.
+    pub nf_p50: f64,
+    /// Largest NF error 99th percentile.
+    pub nf_p99: f64,
+    /// Largest distance-estimate error median.
+    pub de_p50: f64,
+}
+
+/// The bar of the module docs.
+pub const BAR: Bar = Bar { n_mismatch: 0.0, nf_p50: 1e-6, nf_p99: 1e-4, de_p50: 1e-6 };
+
+/// What the check found on one view.
+#[derive(Debug, Clone)]
+pub struct Verdict {
+    /// One row per engine configuration (scored on the first instruction set).
+    pub rows: Vec<Row>,
+    /// What broke the bar, one line each (empty: the view passes).
+    pub failures: Vec<String>,
+}
+
+/// The configurations checked on `scene`: `compare`'s variants without the loose BLA
+/// tolerance (a speed setting shown beside the default, not held to the bar), the f32 and
+/// GPU kernels (not exact engines).
+pub fn configurations(scene: &Scene) -> Vec<Variant> {
+    super::variants(scene)
+        .into_iter()
+        .filter(|v| match v.kind {
+            VariantKind::Engine(crate::scene::EngineKind::Perturb { bla: Some(eps), .. }) => {
+                eps != super::LOOSE_BLA_TOLERANCE || scene.bla == Some(super::LOOSE_BLA_TOLERANCE)
+            }
+            // Direct f64 only where the engine choice would use it (a forced f64 is refused
+            // beyond that: its coordinates no longer resolve a sample).
+            VariantKind::Engine(crate::scene::EngineKind::Direct) => {
+                scene.engine_for(crate::scene::EngineChoice::F64).is_ok()
+            }
+            VariantKind::Engine(_) => true,
+            VariantKind::F32 | VariantKind::Gpu(_) => false,
+        })
+        .collect()
+}
+
+/// Checks every configuration of `scene` on `pixels` sampled pixels, each with every
+/// instruction set in `levels`, against the truth and `bar`.
+pub fn check(
+    scene: &Scene,
+    pixels: u32,
+    levels: &[SimdLevel],
+    bar: Bar,
+    cancel: &AtomicBool,
+) -> Result<Verdict, RunError> {
+    let sampled = sample_pixels(scene, pixels);
+    let mut failures = Vec::new();
+    let variants = configurations(scene);
+    let mut measured: Vec<Measured> = Vec::new();
+    for v in &variants {
+        let mut first: Option<Measured> = None;
+        for &level in levels {
+            let m = run(scene, v, &sampled, true, level, cancel)?;
+            match &first {
+                None => first = Some(m),
+                Some(f) => {
+                    let bits = |x: &Measured| -> Vec<[u32; 4]> {
+                        x.values.iter().map(|&(n, a, b, c)| [n, a.to_bits(), b.to_bits(), c.to_bits()]).collect()
+                    };
+                    if bits(f) != bits(&m) {
+                        failures.push(format!("{}: {} gives other values than {}", v.name, level, levels[0]));
+                    }
+                }
+            }
+        }
+        let m = first.ok_or(RunError::Cancelled)?;
+        for (k, &(n, nf, dx, dy)) in m.values.iter().enumerate() {
+            if n != INTERIOR && !(nf.is_finite() && dx.is_finite() && dy.is_finite()) {
+                failures.push(format!("{}: pixel {:?} has NF {nf}, DE ({dx}, {dy})", v.name, sampled[k]));
+            }
+        }
+        measured.push(m);
+    }
+    let mut truth = truths(scene, &sampled, cancel, &|_| {})?;
+    let suspect = suspects(&measured, &truth, scene.escape_radius);
+    mark_ill_conditioned(scene, &sampled, &mut truth, &suspect, cancel)?;
+    let rows: Vec<Row> =
+        variants.iter().zip(&measured).map(|(v, m)| score(&v.name, m, &truth, scene.escape_radius)).collect();
+    for r in &rows {
+        let mut fail = |what: &str, value: f64, limit: f64| {
+            // NaN fails too.
+            if value.is_nan() || value > limit {
+                failures.push(format!("{}: {what} {value:.3e} > {limit:e}", r.engine));
+            }
+        };
+        fail("N mismatch", r.n_mismatch_fraction, bar.n_mismatch);
+        fail("NF p50", r.nf_error_p50, bar.nf_p50);
+        fail("NF p99", r.nf_error_p99, bar.nf_p99);
+        fail("DE p50", r.de_error_p50, bar.de_p50);
+    }
+    Ok(Verdict { rows, failures })
+}

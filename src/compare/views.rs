@@ -1,0 +1,322 @@
+//! A seeded generator of deep views nobody tuned the engine to, for the deep-view fuzzer
+//! ([`super::fuzz`]).
+//!
+//! Hand-picked test locations share the habits of whoever picked them; these are drawn at
+//! random from the places deep zooms go: the neighbourhoods of minibrots of random period
+//! (found by a descent of ball-method periods and Newton's method, [`crate::locate`]),
+//! Misiurewicz points of random preperiod and period (self-similar at every depth, so any
+//! zoom up to 1e2000 and beyond is cheap to reach exactly), views whose reference point lies
+//! just outside a minibrot (the reference escapes before many of the samples), views whose
+//! sample spacing straddles the line between f64 and FloatExp deltas (1e-280 .. 1e-320),
+//! and Julia sets with c near the boundary of the Mandelbrot set, centred on a point of the
+//! Julia set found by inverse iteration. The same seed gives the same views, on every
+//! machine: everything is computed in big floats from a fixed pseudo-random sequence.
+
+use std::fmt::Write as _;
+
+use crate::locate::{BigC, Minibrot, misiurewicz, nucleus, period};
+use crate::num::{Decimal, FloatExp};
+use crate::scene::Scene;
+
+/// The kinds of view the generator draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViewKind {
+    /// The decorations around a minibrot reached by a random descent (a few minibrot
+    /// sizes away from its nucleus).
+    Descent,
+    /// A minibrot of random period, framed at a random scale about its nucleus.
+    Minibrot,
+    /// A Misiurewicz point of random preperiod and period, at any depth.
+    Misiurewicz,
+    /// A view whose centre (the reference) lies just outside a minibrot that fills part of
+    /// it: the reference escapes before the samples inside and near the minibrot.
+    EarlyEscape,
+    /// A Misiurewicz view whose sample spacing is between 1e-280 and 1e-320, where the
+    /// engine changes from f64 to FloatExp deltas.
+    FloatExpLine,
+    /// A Julia set with c near the Mandelbrot set's boundary, centred on the Julia set.
+    Julia,
+}
+
+impl ViewKind {
+    /// Every kind.
+    pub const ALL: [ViewKind; 6] = [
+        ViewKind::Descent,
+        ViewKind::Minibrot,
+        ViewKind::Misiurewicz,
+        ViewKind::EarlyEscape,
+        ViewKind::FloatExpLine,
+        ViewKind::Julia,
+    ];
+
+    /// A short name for file names and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewKind::Descent => "descent",
+            ViewKind::Minibrot => "minibrot",
+            ViewKind::Misiurewicz => "misiurewicz",
+            ViewKind::EarlyEscape => "early-escape",
+            ViewKind::FloatExpLine => "floatexp-line",
+            ViewKind::Julia => "julia",
+        }
+    }
+}
+
+/// What to draw: a kind, a depth and limits.
+#[derive(Debug, Clone, Copy)]
+pub struct ViewSpec {
+    /// The kind of view.
+    pub kind: ViewKind,
+    /// log10 of the zoom to aim for (the kinds found by descent land near it).
+    pub log10_zoom: f64,
+    /// The largest iteration limit a view may get.
+    pub max_iter: u32,
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+}
+
+/// A generated view: the scene, its text (to write out and reproduce) and how it was made.
+#[derive(Debug, Clone)]
+pub struct GeneratedView {
+    /// A name: kind, seed and draw.
+    pub name: String,
+    /// The scene file's text.
+    pub toml: String,
+    /// The validated scene.
+    pub scene: Scene,
+}
+
+/// A small deterministic pseudo-random sequence (SplitMix64).
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// The sequence of `seed`.
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed ^ 0x5eed_de9f_1e1d_0000)
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [a, b).
+    pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform integer in [a, b].
+    pub fn int(&mut self, a: u32, b: u32) -> u32 {
+        a + (self.next_u64() % (b - a + 1) as u64) as u32
+    }
+}
+
+/// Bits that place a point exactly at zoom 10^log10_zoom, with a margin.
+fn bits_for(log10_zoom: f64) -> u64 {
+    (log10_zoom.max(0.0) * std::f64::consts::LOG2_10) as u64 + 96
+}
+
+/// A point at distance `dist` from `p` in direction `angle`, at `p`'s precision.
+fn offset(p: &BigC, dist: FloatExp, angle: f64) -> BigC {
+    let d = |x: FloatExp| {
+        let e = x.exponent();
+        BigC::from_f64(x.mantissa(), 0.0, p.bits).ldexp(e).re
+    };
+    let dx = d(dist.mul_f64(angle.cos()));
+    let dy = d(dist.mul_f64(angle.sin()));
+    p.add(&BigC { re: dx, im: dy, bits: p.bits })
+}
+
+/// A Misiurewicz point of random preperiod (2..=10) and period (1..=4) at low precision:
+/// Newton's method from random starts until one converges to a point with preperiod >= 1.
+fn random_misiurewicz(rng: &mut Rng) -> Option<(BigC, u32, u32)> {
+    for _ in 0..200 {
+        let (k, p) = (rng.int(2, 10), rng.int(1, 4));
+        let start = BigC::from_f64(rng.uniform(-2.0, 0.5), rng.uniform(-1.2, 1.2), 128);
+        let Some(c) = misiurewicz::newton(&start, k, p, 60) else { continue };
+        if let Some((k, p)) = misiurewicz::orbit_type(&c, 12, 8)
+            && k >= 1
+        {
+            return Some((c, k, p));
+        }
+    }
+    None
+}
+
+/// The multiplier of the cycle a Misiurewicz point's orbit lands on: |prod 2 z_j| over one
+/// period from z_k (> 1: the cycle repels).
+fn cycle_multiplier(c: &BigC, k: u32, p: u32) -> f64 {
+    let mut z = BigC::zero(c.bits.min(256));
+    let c = c.with_bits(c.bits.min(256));
+    let mut log2 = 0.0;
+    for n in 1..=k + p {
+        z = z.square().add(&c);
+        if n > k {
+            log2 += (z.abs().ldexp(1)).log2();
+        }
+    }
+    log2.exp2()
+}
+
+/// A minibrot reached by a random descent: from a random Misiurewicz point, the ball
+/// method's period near a point, Newton's method to its nucleus, then a point a few sizes
+/// away and again, until the minibrot is at least as small as 10^-`log10_zoom` (or the
+/// periods pass `max_period`, or a step finds no period or no nucleus: then the deepest
+/// minibrot reached, so minibrot views come out at depths up to the one asked; in practice
+/// descents often stall between 1e40 and 1e60, where the ball method's period and Newton's
+/// basin stop agreeing).
+fn descend(rng: &mut Rng, log10_zoom: f64, max_period: u32) -> Option<Minibrot> {
+    let (start, _, _) = random_misiurewicz(rng)?;
+    let mut point = offset(&start, FloatExp::from(rng.uniform(1e-4, 1e-2)), rng.uniform(0.0, std::f64::consts::TAU));
+    let mut radius = FloatExp::from(rng.uniform(1e-5, 1e-3));
+    let mut found: Option<Minibrot> = None;
+    for _ in 0..40 {
+        let bits = ((-radius.log2()).max(0.0) as u64 + 96).max(128);
+        let here = point.with_bits(bits);
+        // A step that finds nothing ends the descent where it is: the deepest minibrot so
+        // far still makes a view nobody tuned to, only shallower than asked.
+        let Some(p) = period::ball_period(&here, radius, max_period) else { break };
+        let Some(m) = nucleus::minibrot(&here, p) else { break };
+        let depth = -m.size.log2() * std::f64::consts::LOG10_2;
+        if depth >= log10_zoom - 1.0 {
+            return Some(m);
+        }
+        // Into the minibrot's neighbourhood, clear of the minibrot itself: the embedded
+        // copies of its Julia set there hold minibrots of higher period. (A disc that still
+        // reaches the minibrot finds it again; then the next try goes further out.)
+        let m = match found {
+            Some(f) if f.period == m.period && f.size == m.size => f,
+            _ => m,
+        };
+        let bits = bits_for(depth + 10.0);
+        let dist = m.size.mul_f64(rng.uniform(3.0, 30.0));
+        point = offset(&m.nucleus.with_bits(bits), dist, rng.uniform(0.0, std::f64::consts::TAU));
+        radius = dist.mul_f64(rng.uniform(0.01, 0.1));
+        found = Some(m);
+    }
+    found
+}
+
+/// A point on the Julia set of `c`, to `bits`: inverse iteration z <- ±sqrt(z - c) with
+/// random branches, which converges onto the Julia set (the inverse branches contract
+/// towards it), for about twice as many steps as there are bits.
+fn julia_point(rng: &mut Rng, c: &BigC, bits: u64) -> BigC {
+    let c = c.with_bits(bits);
+    let mut z = BigC::from_f64(0.5, 0.25, bits);
+    for _ in 0..(2 * bits).max(200) {
+        z = z.sub(&c).sqrt();
+        if rng.next_u64() & 1 == 1 {
+            z = z.neg();
+        }
+    }
+    z
+}
+
+/// The scene text of a view.
+fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max_iter: u32, spec: &ViewSpec) -> String {
+    let [re, im] = center.to_decimals(3);
+    let mut t = String::from("version = 1\n");
+    if let Some([cr, ci]) = julia {
+        let _ = writeln!(t, "[formula]\nkind = \"julia\"\nc = [\"{cr}\", \"{ci}\"]");
+    }
+    let (m, e) = (radius.mantissa(), radius.exponent());
+    // radius = m 2^e, written in decimal: 10^(e log10 2) m.
+    let l10 = e as f64 * std::f64::consts::LOG10_2 + m.abs().log10();
+    let (exp10, mant10) = (l10.floor(), 10f64.powf(l10 - l10.floor()));
+    let _ = writeln!(t, "[view]\ncenter = [\"{re}\", \"{im}\"]\nradius = \"{mant10:.9}e{exp10}\"");
+    let _ = writeln!(t, "width = {}\nheight = {}\n[iteration]\nmax = {max_iter}", spec.width, spec.height);
+    t
+}
+
+/// Draws one view of `spec` with draw number `draw` of generator `seed`; None when the
+/// random draw found nothing usable (the caller draws again).
+pub fn generate(seed: u64, draw: u32, spec: &ViewSpec) -> Option<GeneratedView> {
+    let mut rng = Rng::new(seed.wrapping_mul(0x1_0000_0001).wrapping_add(draw as u64));
+    let tau = std::f64::consts::TAU;
+    let depth = spec.log10_zoom;
+    let (center, radius, julia, max_iter) = match spec.kind {
+        ViewKind::Misiurewicz | ViewKind::FloatExpLine => {
+            let depth = if spec.kind == ViewKind::FloatExpLine {
+                // Spacing 2 radius / height between 1e-320 and 1e-280.
+                let spacing = rng.uniform(-320.0, -280.0);
+                -(spacing + (spec.height as f64 / 2.0).log10())
+            } else {
+                depth
+            };
+            let (rough, k, p) = random_misiurewicz(&mut rng)?;
+            let point = misiurewicz::newton(&rough.with_bits(bits_for(depth)), k, p, 60)?;
+            let radius = FloatExp::exp10(-depth).mul_f64(2.0 * rng.uniform(0.5, 5.0));
+            let center = offset(&point, radius.mul_f64(rng.uniform(0.0, 1.0)), rng.uniform(0.0, tau));
+            // Samples escape after about depth / log10(multiplier) periods.
+            let per = cycle_multiplier(&point, k, p).max(1.5).log10();
+            let need = k as f64 + p as f64 * (depth + 2.0) / per;
+            (center, radius, None, (2.0 * need + 1000.0) as u32)
+        }
+        ViewKind::Minibrot | ViewKind::Descent | ViewKind::EarlyEscape => {
+            let m = descend(&mut rng, depth, 50_000)?;
+            let s = m.size;
+            let bits = bits_for(-s.log2() * std::f64::consts::LOG10_2 + 6.0);
+            let nucleus = m.nucleus.with_bits(bits.max(m.nucleus.bits));
+            let (dist, radius) = match spec.kind {
+                ViewKind::Minibrot => (s.mul_f64(rng.uniform(0.0, 0.5)), s.mul_f64(rng.uniform(1.0, 30.0))),
+                ViewKind::Descent => (s.mul_f64(rng.uniform(3.0, 30.0)), s.mul_f64(rng.uniform(1.0, 10.0))),
+                _ => (s.mul_f64(rng.uniform(1.3, 3.0)), s.mul_f64(rng.uniform(2.0, 8.0))),
+            };
+            let center = offset(&nucleus, dist, rng.uniform(0.0, tau));
+            let max_iter = (m.period as f64 * rng.uniform(20.0, 200.0)) as u32 + 1000;
+            (center, radius, None, max_iter)
+        }
+        ViewKind::Julia => {
+            // c near the boundary: a Misiurewicz point (a dendrite) moved a little, inside or
+            // out.
+            let (rough, _, _) = random_misiurewicz(&mut rng)?;
+            let moved = offset(&rough, FloatExp::exp10(rng.uniform(-6.0, -2.0)), rng.uniform(0.0, tau));
+            // c as the scene states it (20 decimals), and exactly that value in big floats.
+            let c = moved.to_rationals().map(|r| Decimal::from_rational(&r, 20));
+            let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
+            let z = julia_point(&mut rng, &big, bits_for(depth));
+            let radius = FloatExp::exp10(-depth).mul_f64(2.0 * rng.uniform(0.5, 5.0));
+            let center = offset(&z, radius.mul_f64(rng.uniform(0.0, 1.0)), rng.uniform(0.0, tau));
+            (center, radius, Some(c), (3000.0 + 30.0 * depth) as u32)
+        }
+    };
+    let max_iter = max_iter.clamp(100, spec.max_iter);
+    let toml = scene_text(&center, radius, julia.as_ref(), max_iter, spec);
+    let name = format!("{}-{seed}-{draw}", spec.kind.name());
+    let file = Scene::parse_file(&name, &toml).ok()?;
+    let no_bitmaps = |_: &std::path::Path| Err("no bitmaps".to_string());
+    let scene = Scene::validate(file, &name, &toml, std::path::Path::new("."), &no_bitmaps).ok()?;
+    Some(GeneratedView { name, toml, scene })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_same_seed_gives_the_same_views() {
+        for kind in [ViewKind::Misiurewicz, ViewKind::Julia, ViewKind::Minibrot] {
+            let spec = ViewSpec { kind, log10_zoom: 30.0, max_iter: 100_000, width: 16, height: 12 };
+            let a = (0..8).find_map(|d| generate(7, d, &spec)).expect("some draw works");
+            let b = (0..8).find_map(|d| generate(7, d, &spec)).expect("some draw works");
+            assert_eq!(a.toml, b.toml);
+            assert_eq!(a.scene.width, 16);
+        }
+    }
+
+    #[test]
+    fn misiurewicz_views_reach_any_depth() {
+        let spec =
+            ViewSpec { kind: ViewKind::Misiurewicz, log10_zoom: 1500.0, max_iter: 1_000_000, width: 8, height: 6 };
+        let v = (0..8).find_map(|d| generate(3, d, &spec)).expect("some draw works");
+        let l = v.scene.log10_spacing();
+        assert!((-1502.0..-1498.0).contains(&l), "spacing 1e{l}");
+    }
+}
