@@ -28,6 +28,13 @@ use crate::trap::Trap;
 pub const MAX_ITER_LIMIT: u64 = u32::MAX as u64 - 1;
 /// Largest accepted width or height in pixels.
 pub const MAX_SIDE: i64 = 1 << 17;
+/// Deepest accepted view, as a decimal exponent: zoom up to 1e100000000. A reference orbit
+/// there takes 332 million bits per number (about 40 MB, each square seconds long), and much
+/// deeper spacings (past 1e-600000000) leave the range of `FloatExp`'s 32-bit exponent.
+pub const MAX_LOG10_ZOOM: f64 = 1e8;
+/// Largest accepted magnitude of a centre or Julia parameter component, as a decimal
+/// exponent (1e6).
+pub const MAX_LOG10_COORDINATE: f64 = 6.0;
 /// Largest accepted supersampling factor.
 pub const MAX_AA: i64 = 16;
 /// Largest accepted number of samples (width * height * aa^2).

@@ -5,7 +5,10 @@ use std::path::Path;
 use toml::Spanned;
 
 use super::raw::{CLI, SceneFile};
-use super::{EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_SAMPLES, MAX_SIDE, Scene};
+use super::{
+    EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_LOG10_COORDINATE, MAX_LOG10_ZOOM, MAX_SAMPLES, MAX_SIDE,
+    Scene,
+};
 use crate::compose::Stack;
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
@@ -37,7 +40,21 @@ impl Ctx<'_> {
 
     pub(super) fn pair(&self, s: &Spanned<[String; 2]>, what: &str) -> Result<[Decimal; 2], SourceError> {
         let [re, im] = s.get_ref();
-        let p = |t: &String| Decimal::parse(t).or_else(|e| self.err(s.span(), format!("{what}: {e}")));
+        let p = |t: &String| {
+            let d = Decimal::parse(t).or_else(|e| self.err(s.span(), format!("{what}: {e}")))?;
+            // Everything past a few units from the origin escapes at once, and a value of
+            // 1e100000 would cost a 330000-bit reference for nothing: refused before any
+            // big number is built from it.
+            if !d.is_zero() && d.log10_abs() > MAX_LOG10_COORDINATE {
+                return self.err(
+                    s.span(),
+                    format!(
+                        "{what}: {d} is too far from the origin; each part must lie within 1e{MAX_LOG10_COORDINATE:.0} (every sample beyond a few units escapes at the first iteration)"
+                    ),
+                );
+            }
+            Ok(d)
+        };
         Ok([p(re)?, p(im)?])
     }
 
@@ -118,6 +135,15 @@ pub(super) fn validate(
         // The whole set.
         (None, None) => (1.25f64.log10(), 1.25, Scale::Radius(Decimal::parse("1.25").expect("valid literal"))),
     };
+    if log10_radius < -MAX_LOG10_ZOOM {
+        return cx.err(
+            view.zoom.as_ref().or(view.radius.as_ref()).map_or(0..0, |s| s.span()),
+            format!(
+                "the view is deeper than deepfield renders: zoom is limited to 1e{MAX_LOG10_ZOOM:.0} (a reference orbit there needs {:.0} million bits per number, and deeper spacings leave the exponent range of the extended floats)",
+                MAX_LOG10_ZOOM * std::f64::consts::LOG2_10 / 1e6
+            ),
+        );
+    }
     if log10_radius > 3.0 {
         return cx.err(
             view.zoom.as_ref().or(view.radius.as_ref()).map_or(0..0, |s| s.span()),

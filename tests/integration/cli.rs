@@ -78,6 +78,19 @@ fn zero_or_absurd_sizes_are_refused() {
 }
 
 #[test]
+fn numbers_beyond_what_a_view_needs_are_refused_before_anything_is_allocated() {
+    rejects("far-centre", None, &["--center=1e99999999999,0"], "too far from the origin");
+    rejects(
+        "far-julia-c",
+        Some("version = 1\n[formula]\nkind = \"julia\"\nc = [\"0\", \"-3e9\"]\n"),
+        &[],
+        "scene.toml:4:5",
+    );
+    rejects("too-deep", None, &["--zoom", "1e1000000000", "--size", "8x6"], "zoom is limited to 1e100000000");
+    rejects("too-deep-scene", Some("version = 1\n[view]\nradius = \"1e-200000000\"\n"), &[], "scene.toml:3:10");
+}
+
+#[test]
 fn zero_max_iterations_are_refused() {
     rejects("max-iter-0", Some("version = 1\n[iteration]\nmax = 0\n"), &[], "scene.toml:3:7");
     rejects("max-iter-flag", None, &["--max-iter", "0"], "max-iter");
