@@ -21,32 +21,20 @@
 //! into stops (within 1/255); RGB slices need only their ends. A slice marked `-` becomes
 //! transparent white (GMT leaves it unpainted, showing the page).
 //!
-//! Not supported, each with a clear error: CMYK colours and `COLOR_MODEL = CMYK`,
-//! categorical tables (`key colour` lines), pattern fills, and z values that are not
-//! plain numbers (GMT also accepts dates and `dd:mm:ss`). Colour names: the basic ones
-//! (`black white red green blue yellow cyan magenta gray grey orange purple brown pink`,
-//! with GMT's X11 values), not GMT's full list of 663.
+//! Categorical tables (every data line `key colour`, GMT's `categorical.cpt`, `paired.cpt`
+//! and the `*S.cpt` tables of Crameri's Scientific Colour Maps) become hard-edged
+//! palettes: one equal band per key, in the order the file lists them (the only order the
+//! format gives; keys may be words). A table mixing the two kinds of line is refused.
+//!
+//! Not supported, each with a clear error: CMYK colours and `COLOR_MODEL = CMYK`, pattern
+//! fills, and z values that are not plain numbers (GMT also accepts dates and
+//! `dd:mm:ss`). Colour names: the X11 names GMT accepts (`seagreen3`, `gray80`,
+//! `mediumaquamarine`, 658 of them: the X.Org database, spaces removed, case folded).
 
 use super::{Ctx, ImportError, Rgba, StopList, hsv_to_rgb, palette_name, rgb_to_hsv, words};
 use crate::palette::{Mode, Palette};
 
-/// GMT's X11 values for the colour names we know.
-const NAMES: &[(&str, [u8; 3])] = &[
-    ("black", [0, 0, 0]),
-    ("white", [255, 255, 255]),
-    ("red", [255, 0, 0]),
-    ("green", [0, 255, 0]),
-    ("blue", [0, 0, 255]),
-    ("yellow", [255, 255, 0]),
-    ("cyan", [0, 255, 255]),
-    ("magenta", [255, 0, 255]),
-    ("gray", [190, 190, 190]),
-    ("grey", [190, 190, 190]),
-    ("orange", [255, 165, 0]),
-    ("purple", [160, 32, 240]),
-    ("brown", [165, 42, 42]),
-    ("pink", [255, 192, 203]),
-];
+use super::x11::X11_NAMES;
 
 /// A colour as written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +85,7 @@ struct Slice {
 pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
     let mut hsv_model = false;
     let mut slices: Vec<Slice> = Vec::new();
+    let mut categories: Vec<Color> = Vec::new();
     for (start, line) in super::lines(ctx.text) {
         let body = line.trim_start();
         let indent = line.len() - body.len();
@@ -132,7 +121,15 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
                 z1: z(ctx, w[4])?,
                 c1: triple(ctx, &w[5..8], hsv_model)?,
             },
-            2 => return Err(ctx.err(w[0].0, "categorical colour tables (`key colour`) are not supported")),
+            2 => {
+                if !slices.is_empty() {
+                    return Err(
+                        ctx.err(w[0].0, "a `key colour` line in a table of z-slices (GMT allows one kind only)")
+                    );
+                }
+                categories.push(word_color(ctx, w[1])?);
+                continue;
+            }
             10 => return Err(ctx.err(w[0].0, "CMYK colours are not supported")),
             n => {
                 return Err(
@@ -140,6 +137,9 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
                 );
             }
         };
+        if !categories.is_empty() {
+            return Err(ctx.err(w[0].0, "a z-slice in a categorical table (GMT allows one kind only)"));
+        }
         let z1_at = if w.len() == 4 { w[2].0 } else { w[4].0 };
         if slice.z1 <= slice.z0 {
             return Err(ctx.err(z1_at, format!("z1 = {} must be above z0 = {}", slice.z1, slice.z0)));
@@ -157,6 +157,9 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
             }
         }
         slices.push(slice);
+    }
+    if !categories.is_empty() {
+        return Ok(vec![categorical(ctx, &categories)]);
     }
     let (Some(first), Some(last)) = (slices.first(), slices.last()) else { return Ok(Vec::new()) };
     let (lo, hi) = (first.z0, last.z1);
@@ -191,6 +194,18 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
     let stops = stops.finish(prev_end.unwrap_or([0.0, 0.0, 0.0, 1.0]));
     let detail = if hsv_model { "HSV" } else { "" };
     Ok(vec![ctx.palette(palette_name(&ctx.stem), detail, Mode::Clamp, stops)])
+}
+
+/// A categorical table: one band per key, hard edges between them.
+fn categorical(ctx: &Ctx<'_>, colours: &[Color]) -> Palette {
+    let n = colours.len() as f64;
+    let mut stops = StopList::default();
+    stops.push(0.0, colours[0].rgba());
+    for (k, pair) in colours.windows(2).enumerate() {
+        stops.edge((k + 1) as f64 / n, pair[0].rgba(), pair[1].rgba());
+    }
+    let last = colours[colours.len() - 1].rgba();
+    ctx.palette(palette_name(&ctx.stem), "categorical", Mode::Clamp, stops.finish(last))
 }
 
 /// A z value.
@@ -282,14 +297,11 @@ fn word_color(ctx: &Ctx<'_>, (at, word): (usize, &str)) -> Result<Color, ImportE
         return Ok(Color::Rgb([g; 3], alpha));
     }
     let lower = base.to_ascii_lowercase();
-    match NAMES.iter().find(|(n, _)| *n == lower) {
-        Some((_, rgb)) => Ok(Color::Rgb(rgb.map(|v| v as f64 / 255.0), alpha)),
-        None => Err(ctx.err(
+    match X11_NAMES.binary_search_by(|(n, _)| (*n).cmp(lower.as_str())) {
+        Ok(k) => Ok(Color::Rgb(X11_NAMES[k].1.map(|v| v as f64 / 255.0), alpha)),
+        Err(_) => Err(ctx.err(
             at,
-            format!(
-                "unknown colour `{base}` (use R/G/B, #rrggbb, H-S-V, a grey level, or one of: {})",
-                NAMES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(" ")
-            ),
+            format!("unknown colour `{base}` (use R/G/B, #rrggbb, H-S-V, a grey level, or an X11 colour name such as `seagreen3`)"),
         )),
     }
 }
@@ -343,16 +355,43 @@ mod tests {
     }
 
     #[test]
+    fn categorical_tables_become_hard_edged_bands_in_file_order() {
+        let text = "# COLOR_MODEL = RGB\n0 red ;first\n1 0/0/255\nWater #00ff00\n";
+        let p = import_text(Format::Cpt, "x.cpt", text).unwrap().remove(0);
+        assert!(p.description.contains("categorical"), "{}", p.description);
+        let at = |t: f64| p.at(t).map(|v| (color::linear_to_srgb(v) * 255.0).round() as u8);
+        assert_eq!(at(0.1)[..3], [255, 0, 0]);
+        assert_eq!(at(0.3)[..3], [255, 0, 0]);
+        assert_eq!(at(0.34)[..3], [0, 0, 255]);
+        assert_eq!(at(0.66)[..3], [0, 0, 255]);
+        assert_eq!(at(0.67)[..3], [0, 255, 0]);
+        assert_eq!(at(1.0)[..3], [0, 255, 0]);
+    }
+
+    #[test]
+    fn x11_colour_names_as_gmt_spells_them() {
+        let text = "0 mediumaquamarine 1 mediumaquamarine\n1 SeaGreen3 2 seagreen3\n2 gray80 3 grey\n";
+        let p = import_text(Format::Cpt, "x.cpt", text).unwrap().remove(0);
+        let at = |t: f64| p.at(t).map(|v| (color::linear_to_srgb(v) * 255.0).round() as u8);
+        assert_eq!(at(0.1)[..3], [102, 205, 170]);
+        assert_eq!(at(0.5)[..3], [67, 205, 128]);
+        assert_eq!(at(0.67)[..3], [204, 204, 204]);
+        assert_eq!(at(1.0)[..3], [190, 190, 190]);
+    }
+
+    #[test]
     fn errors_name_line_and_column() {
         let bad = [
             ("0 0 0 0 1 255 255 256\n", "x.cpt:1:19:", "0 to 255"),
             ("0 red 1 blue\n2 red 3 blue\n", "x.cpt:2:1:", "follow on"),
-            ("0 red 1 chartreuse\n", "x.cpt:1:9:", "unknown colour"),
+            ("0 red 1 chartreuse9\n", "x.cpt:1:9:", "unknown colour"),
             ("0 red 0 blue\n", "x.cpt:1:7:", "above"),
             ("0 red 1\n", "x.cpt:1:1:", "3 fields"),
             ("# COLOR_MODEL = CMYK\n", "x.cpt:1:3:", "CMYK"),
             ("0 1/2/3/4 1 red\n", "x.cpt:1:3:", "CMYK"),
-            ("0 red\n", "x.cpt:1:1:", "categorical"),
+            ("0 red\n0 red 1 blue\n", "x.cpt:2:1:", "categorical"),
+            ("0 red 1 blue\n1 red\n", "x.cpt:2:1:", "key colour"),
+            ("Ocean 1/2\n", "x.cpt:1:7:", "R/G/B"),
             ("0 10/20/x 1 red\n", "x.cpt:1:9:", "`x`"),
             ("0 red@150 1 red\n", "x.cpt:1:7:", "transparency"),
             ("2012-01-01 red 2013-01-01 blue\n", "x.cpt:1:1:", "plain number"),

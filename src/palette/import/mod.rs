@@ -22,6 +22,7 @@ mod ggr;
 mod kfp;
 mod map;
 mod ugr;
+mod x11;
 
 use std::path::Path;
 
