@@ -1,4 +1,4 @@
-//! The perturbation engine on the public benchmark locations, at 800x600 as the issue states
+//! The perturbation engine on the public benchmark locations, at 800x600 (the size rust-fractal-core's own benchmark files use)
 //! its targets (liiiines < 1 s, bench-e50 < 2 s on two cores).
 //!
 //! `cargo bench --bench deep` times the whole raw-data computation of each scene: reference

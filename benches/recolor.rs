@@ -1,6 +1,6 @@
 //! Recolouring speed (`deepfield::render::recolor_rgb8`, what `deepfield recolor` runs for
 //! 8-bit output): raw planes already in memory -> 8-bit sRGB output bytes, at
-//! 3840x2160 (one sample per pixel), the target being under 0.3 s on 2 cores.
+//! 3840x2160 (one sample per pixel), the target being under 0.3 s on 2 cores.
 //!
 //! The planes are those of `scenes/seahorse-valley.toml`'s view rendered at 3840x2160 with
 //! 1000 iterations (computed once, before timing). `cargo bench --bench recolor` times:

@@ -1,6 +1,6 @@
 //! deepfield: escape-time and distance-estimate rasters of the Mandelbrot and Julia sets.
 //!
-//! The library is layered as DESIGN.md describes: numbers and maps at the bottom
+//! The library is layered as docs/design.md describes: numbers and maps at the bottom
 //! ([`num`], [`formula`]), raw per-sample data above them ([`field`], [`trap`]), colour on top
 //! of raw data ([`palette`], [`coloring`], [`compose`]), and scenes, rendering and files
 //! around it all ([`scene`], [`render`], [`io`]); [`gpu`] runs the 2D paths on a GPU through

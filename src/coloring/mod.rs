@@ -59,7 +59,7 @@ pub enum Coloring {
         interior: [f32; 4],
     },
     /// Distance estimate through a palette (clamped at the ends for the soft style), or as
-    /// an sRGB grey level when no palette is given (the seeds' look).
+    /// an sRGB grey level when no palette is given (the look of Inigo Quilez's Mandelbrot distance shader).
     Distance {
         /// Distance to value.
         style: DistanceStyle,
@@ -122,7 +122,7 @@ pub enum Coloring {
         /// Index of the trap in the field's trap list.
         trap: usize,
     },
-    /// The seeds' IFS density field (a 2D layer independent of the fractal): through a
+    /// The minimal IFS density field (a 2D layer independent of the fractal): through a
     /// palette at `v * density + offset`, or as white with opacity v when there is none.
     Ifs {
         /// Index of the field's plane in the trap list.

@@ -1,4 +1,4 @@
-//! Pure per-sample functions of the distance estimate: the seeds' soft distance colouring,
+//! Pure per-sample functions of the distance estimate: the soft distance colouring of Inigo Quilez's Mandelbrot distance shader,
 //! distance transfers, antialiased boundary coverage and slope lighting.
 //!
 //! Distances arrive in image pixels. The DE vector (DEX, DEY) points along the gradient of
@@ -11,7 +11,7 @@ use crate::num::fastmath;
 /// How a distance layer maps distance (image pixels) to palette position or grey level.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DistanceStyle {
-    /// The seeds' soft colouring: clamp((k d)^0.2, 0, 1).
+    /// Inigo Quilez's soft colouring: clamp((k d)^0.2, 0, 1).
     Soft {
         /// Scale k per pixel.
         k: f64,

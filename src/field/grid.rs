@@ -1,4 +1,4 @@
-//! The sample raster: which point of the plane each sample stands for (DESIGN.md convention).
+//! The sample raster: which point of the plane each sample stands for (the coordinate convention of docs/design.md).
 
 /// A raster of samples over a view: sample (i, j) sits at the centre of its cell,
 /// `x = cx + radius * (2(i + 0.5) - width) / height`, `y = cy - radius * (2(j + 0.5) - height) / height`.

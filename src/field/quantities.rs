@@ -1,4 +1,4 @@
-//! Pure functions from an orbit's end (z_n, dz_n) to the per-sample quantities of DESIGN.md.
+//! Pure functions from an orbit's end (z_n, dz_n) to the per-sample quantities defined in docs/design.md.
 
 /// Largest f32 below 1: NF is clamped into [0, 1).
 const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;

@@ -1,4 +1,4 @@
-//! The seeds' minimal IFS density field (variant 5 of "Minimal IFS Field") as a 2D layer
+//! The minimal IFS density field, a shader idiom (p ← abs(p)/dot(p,p) + offset, weighted accumulation), as a 2D layer
 //! quantity, on the CPU ([`density`]) and on the GPU ([`compute_ifs`], `ifs.wgsl`).
 //!
 //! The field folds a 3D point again and again, p -> |p| / (p . p) + offset (the "kali"

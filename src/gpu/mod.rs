@@ -14,7 +14,7 @@
 //! * [`uniforms`]: the single uniform block all pipelines share.
 //! * [`shaders`]: the WGSL text and how modules are assembled from shared pieces.
 //! * [`field`]: raw planes of a strip of the sample grid ([`field::compute_planes`]).
-//! * [`ifs`]: the seeds' minimal IFS density field, on the CPU and on the GPU.
+//! * [`ifs`]: the minimal IFS density field (p ← abs(p)/dot(p,p) + offset), on the CPU and on the GPU.
 //! * [`paint`]: the egui paint callback that draws the escape-time image in the viewer.
 //! * `runner`: chunked compute dispatches with readback.
 //!

@@ -5,7 +5,7 @@
 //! kernel (`escape.wgsl`), so the viewer and `--engine gpu` iterate identically. It
 //! colours by smooth iteration nu = N + NF through a palette table (linear RGBA sampled
 //! from a [`Palette`] with [`palette_table`]) at position nu * density + offset (the table
-//! repeats), and can multiply the seeds' soft distance shading clamp((k d)^0.2, 0, 1)
+//! repeats), and can multiply Inigo Quilez's soft distance shading clamp((k d)^0.2, 0, 1)
 //! over it (d in physical pixels, the grey read as sRGB as the CPU's distance layer does).
 //! Output is opaque (premultiplied colour over black) and encoded for the target: linear
 //! when the target format is sRGB (the hardware encodes), sRGB-encoded otherwise; egui-wgpu

@@ -20,7 +20,7 @@ pub const PRESETS: &[(&str, &str, &str)] = &[
         "[[layer]]\nkind = \"smooth\"\ntransfer = \"log\"\ndensity = 1.0\n",
     ),
     ("histogram", "histogram-equalised iteration", "[[layer]]\nkind = \"histogram\"\n"),
-    ("soft-distance", "the seeds' soft distance colouring, grey", "[[layer]]\nkind = \"distance\"\n"),
+    ("soft-distance", "Inigo Quilez's soft distance colouring, grey", "[[layer]]\nkind = \"distance\"\n"),
     (
         "distance-linear",
         "distance estimate, linear, through a palette",

@@ -68,7 +68,7 @@ pub struct BitmapTrap {
 }
 
 /// A frame of a sprite sheet: the image holds `count` frames side by side, each
-/// `width` texels wide from the left edge (the seeds' animated trap: 6 frames of 40 texels
+/// `width` texels wide from the left edge (the animated trap of Inigo Quilez's "Bitmap Orbit Traps": 6 frames of 40 texels
 /// in a 256-texel texture, frame = floor(20 t) mod 6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Frame {

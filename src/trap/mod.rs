@@ -23,7 +23,7 @@ pub enum Trap {
     Bitmap(BitmapTrap),
     /// Stripe average of the orbit's arguments (not a trap, but observed the same way).
     Stripe(Stripe),
-    /// The seeds' IFS density field at the sample's point: not an orbit statistic (it
+    /// The minimal IFS density field at the sample's point: not an orbit statistic (it
     /// observes nothing), kept in the trap list so that its plane travels with the others
     /// (EXR channel, recolouring).
     Ifs(crate::gpu::ifs::IfsParams),

@@ -8,7 +8,7 @@
 //! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export;
 //! - [`difference`]: the CPU-vs-GPU per-pixel difference view.
 //!
-//! eframe (and egui) live only here, as DESIGN.md asks; the rest of the crate never sees them.
+//! eframe (and egui) live only here, as docs/design.md lays out; the rest of the crate never sees them.
 
 pub mod app;
 pub mod difference;

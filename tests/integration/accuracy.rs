@@ -6,7 +6,7 @@
 //! orbit that amplifies any perturbation of its coordinates or of one rounding by about
 //! 1/d: no f64 computation can pin its values down better than ~1e-16/d, so for d < 1e-6 px
 //! the bound is scaled by the condition (1e-12 / d) instead of being flat. Orbits passing
-//! within 1e-9 of the escape circle (N ill-conditioned) are excluded, as the issue states.
+//! within 1e-9 of the escape circle (N ill-conditioned) are excluded.
 
 use std::sync::atomic::AtomicBool;
 
@@ -175,7 +175,7 @@ fn julia_sets_match_reference() {
 /// Seahorse valley at zoom 1e10, centred on the famous spiral (a dense, hard view).
 /// Here f64 is the limit: a pixel's coordinates are rounded to 1/15000 of a pixel and
 /// the orbits amplify that. Pixels well clear of the set (d >= 0.01 px, where no pixel
-/// value should depend on 1e-4 px) must meet the issue's plain-f64 figures; all pixels
+/// value should depend on 1e-4 px) must meet the plain-f64 figures; all pixels
 /// together must keep the median distance error within them.
 #[test]
 fn seahorse_valley_at_zoom_1e10_is_within_f64_limits() {

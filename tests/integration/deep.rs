@@ -3,7 +3,7 @@
 //! Each view is rendered by the real path (scene, engine choice, reference orbit, BLA,
 //! perturbation loop, quantities) and random pixels are iterated directly by `reference`
 //! (astro-float, a different big-float implementation than the engine's malachite), from
-//! exact pixel coordinates. Targets (issue 3): N identical (orbits passing within 1e-9 of
+//! exact pixel coordinates. Targets: N identical (orbits passing within 1e-9 of
 //! the escape circle excepted), NF within 1e-4, distance estimate within 1e-3 relative at
 //! the median; pixels nearer the set than 1e-6 px get the conditioning allowance of
 //! `accuracy::allowed` (no arithmetic pins them down better than 1e-16 / d).

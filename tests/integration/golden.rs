@@ -176,7 +176,7 @@ fn golden_mask() {
     );
 }
 
-/// The seeds' animated bitmap trap: frame 1 of a 2-frame sheet (the star bitmap cut in two).
+/// The animated bitmap trap of Inigo Quilez's "Bitmap Orbit Traps": frame 1 of a 2-frame sheet (the star bitmap cut in two).
 #[test]
 fn golden_sprite_frame() {
     golden(

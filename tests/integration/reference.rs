@@ -25,7 +25,7 @@ pub fn parse(text: &str, p: usize) -> BigFloat {
     BigFloat::parse(text, Radix::Dec, p, RM, &mut cc)
 }
 
-/// The exact point of pixel (i, j) of a view (DESIGN.md convention).
+/// The exact point of pixel (i, j) of a view (the coordinate convention of docs/design.md).
 pub fn pixel(center: [&str; 2], radius: &str, width: u32, height: u32, i: u32, j: u32, p: usize) -> [BigFloat; 2] {
     let r = parse(radius, p);
     let h = BigFloat::from_f64(height as f64, p);
