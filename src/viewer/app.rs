@@ -660,12 +660,41 @@ impl ViewerApp {
                         }
                     });
             }
-            let mut density = l.density.as_ref().map(|d| *d.get_ref());
-            if let Some(d) = &mut density
-                && ui.add(egui::Slider::new(d, 0.001..=10.0).logarithmic(true).text("density")).changed()
+            // Number fields, not sliders: a scene's value shows as it is, however large
+            // (bench-e1086's density is 5000), and drags scale with the value.
+            for (key, value) in [("density", &mut l.density), ("offset", &mut l.offset), ("k", &mut l.k)] {
+                if let Some(v) = value {
+                    let mut x = *v.get_ref();
+                    let speed = (x.abs() * 0.01).max(1e-3);
+                    let edited = ui
+                        .horizontal(|ui| {
+                            let r = ui.add(egui::DragValue::new(&mut x).speed(speed).max_decimals(6));
+                            let label = ui.label(key);
+                            r.labelled_by(label.id).changed()
+                        })
+                        .inner;
+                    if edited && x.is_finite() && (key != "density" || x > 0.0) {
+                        *v = cli(x);
+                        changed = true;
+                    }
+                }
+            }
+            if crate::scene::LAYER_KINDS
+                .iter()
+                .any(|(kind, keys)| *kind == l.kind.get_ref() && keys.contains(&"transfer"))
             {
-                l.density = Some(cli(*d));
-                changed = true;
+                let mut t = l.transfer.as_ref().map_or_else(Default::default, |t| *t.get_ref());
+                let name = |t: crate::coloring::Transfer| {
+                    crate::coloring::Transfer::ALL.iter().find(|(x, _)| *x == t).map_or("linear", |(_, n)| *n)
+                };
+                egui::ComboBox::new(("transfer", k), "transfer").selected_text(name(t)).show_ui(ui, |ui| {
+                    for (v, n) in crate::coloring::Transfer::ALL {
+                        if ui.selectable_value(&mut t, v, n).clicked() {
+                            l.transfer = Some(cli(t));
+                            changed = true;
+                        }
+                    }
+                });
             }
             let mut opacity = l.opacity.as_ref().map_or(1.0, |o| *o.get_ref());
             if k > 0 && ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0).text("opacity")).changed() {
@@ -957,9 +986,8 @@ impl ViewerApp {
             // Where the image's own view lies in the current one.
             let h = self.size_px[1].max(1) as f64;
             let scale = 10f64.powf(self.nav.log10_zoom - nav.log10_zoom) as f32;
-            let off = self.nav.offset_of(nav);
-            let s = self.nav.spacing(h);
-            let centre = rect.center() + Vec2::new((off[0] / s) as f32 / ppp, -(off[1] / s) as f32 / ppp);
+            let off = self.nav.offset_px_of(nav, h);
+            let centre = rect.center() + Vec2::new(off[0] as f32 / ppp, -off[1] as f32 / ppp);
             let img_size =
                 Vec2::new(size[0] as f32, size[1] as f32) * (self.size_px[1] as f32 / size[1].max(1) as f32) * scale
                     / ppp;

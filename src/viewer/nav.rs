@@ -6,6 +6,7 @@
 //! (malachite), so navigation works at any depth; they are rounded to a few digits finer
 //! than the pixel spacing, which keeps them exact for rendering and short to store.
 
+use malachite_base::num::arithmetic::traits::Pow;
 use malachite_base::num::conversion::traits::FromSciString;
 use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
@@ -26,9 +27,27 @@ impl Nav {
         Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10() }
     }
 
-    /// Plane units per pixel for an image `height` pixels high.
+    /// Plane units per pixel for an image `height` pixels high, as f64 (0 past 1e-308: for
+    /// the GPU paths' precision checks; navigation uses [`Nav::log10_spacing`] and exact
+    /// rationals so it works at any depth).
     pub fn spacing(&self, height: f64) -> f64 {
-        4.0 / height * 10f64.powf(-self.log10_zoom)
+        10f64.powf(self.log10_spacing(height))
+    }
+
+    /// log10 of the plane units per pixel: finite at any depth.
+    pub fn log10_spacing(&self, height: f64) -> f64 {
+        (4.0 / height).log10() - self.log10_zoom
+    }
+
+    /// Plane units per pixel as an exact rational (10^-floor(log10) times an f64 mantissa):
+    /// pans and offsets at any depth go through this rather than through an f64 spacing that
+    /// underflows past 1e-308.
+    fn spacing_rational(&self, height: f64) -> Rational {
+        let l = self.log10_spacing(height);
+        let e = l.floor();
+        let mantissa = Rational::try_from(10f64.powf(l - e)).unwrap_or_default();
+        let scale = Rational::from(malachite_nz::natural::Natural::from(10u32).pow(e.abs() as u64));
+        if e < 0.0 { mantissa / scale } else { mantissa * scale }
     }
 
     /// The zoom as a decimal string for a scene file.
@@ -41,16 +60,14 @@ impl Nav {
     /// Moves the centre by (dx, dy) pixels of an image `height` pixels high (x right, y down
     /// on screen; the imaginary axis points up).
     pub fn pan(&self, dx: f64, dy: f64, height: f64) -> Self {
-        let s = self.spacing(height);
-        self.shifted(dx * s, -dy * s, height)
+        self.shifted_px(dx, dy, height)
     }
 
     /// Zooms by `factor` (> 1 zooms in) keeping the point `at` (pixels from the image centre,
     /// y down) where it is on screen.
     pub fn zoom_about(&self, factor: f64, at: [f64; 2], height: f64) -> Self {
-        let s = self.spacing(height);
         let k = 1.0 - 1.0 / factor;
-        let mut out = self.shifted(at[0] * s * k, -at[1] * s * k, height);
+        let mut out = self.shifted_px(at[0] * k, at[1] * k, height);
         out.log10_zoom += factor.log10();
         out.round(height)
     }
@@ -66,10 +83,15 @@ impl Nav {
         out.round(height)
     }
 
-    /// The plane offset of another view's centre from this one's (f64; for placing an old
-    /// image under a new view while the new one renders).
-    pub fn offset_of(&self, other: &Nav) -> [f64; 2] {
-        let d = |a: &String, b: &String| -> f64 { f64::rounding_from(&(rat(b) - rat(a))) };
+    /// Where another view's centre lies from this one's, in pixels of an image `height`
+    /// pixels high (x right, y up), exact up to the final rounding at any depth (for placing
+    /// an old image under a new view while the new one renders).
+    pub fn offset_px_of(&self, other: &Nav, height: f64) -> [f64; 2] {
+        let s = self.spacing_rational(height);
+        if s == Rational::default() {
+            return [0.0; 2];
+        }
+        let d = |a: &String, b: &String| -> f64 { f64::rounding_from(&((rat(b) - rat(a)) / &s)) };
         [d(&self.center[0], &other.center[0]), d(&self.center[1], &other.center[1])]
     }
 
@@ -80,18 +102,26 @@ impl Nav {
         [c(&self.center[0]) + at[0] * s, c(&self.center[1]) - at[1] * s]
     }
 
-    fn shifted(&self, dre: f64, dim: f64, height: f64) -> Self {
-        let add = |t: &String, d: f64| rat(t) + Rational::try_from(d).unwrap_or_default();
+    /// The view moved by (dx, dy) pixels (y down), in exact rationals.
+    fn shifted_px(&self, dx: f64, dy: f64, height: f64) -> Self {
+        let s = self.spacing_rational(height);
+        let add = |t: &String, d: f64| rat(t) + Rational::try_from(d).unwrap_or_default() * &s;
+        let digits = self.digits(height);
         let out = Self {
-            center: [text(&add(&self.center[0], dre), 0), text(&add(&self.center[1], dim), 0)],
+            center: [text(&add(&self.center[0], dx), digits), text(&add(&self.center[1], -dy), digits)],
             log10_zoom: self.log10_zoom,
         };
         out.round(height)
     }
 
+    /// Decimal digits after the point that keep the centre to 1/1000 of the pixel spacing.
+    fn digits(&self, height: f64) -> u64 {
+        (3.0 - self.log10_spacing(height)).ceil().max(1.0) as u64
+    }
+
     /// Rounds the centre to 1/1000 of the pixel spacing (in decimal digits).
     fn round(&self, height: f64) -> Self {
-        let digits = (-(self.spacing(height) / 1000.0).log10()).ceil().max(1.0) as u64;
+        let digits = self.digits(height);
         let r = |t: &String| text(&rat(t), digits);
         Self { center: [r(&self.center[0]), r(&self.center[1])], log10_zoom: self.log10_zoom }
     }
@@ -182,9 +212,30 @@ mod tests {
         let p = n.pan(100.0, 0.0, 1000.0).pan(-100.0, 0.0, 1000.0);
         assert_eq!(p.center, n.center);
         let q = n.pan(1.0, 0.0, 1000.0);
-        let d = n.offset_of(&q);
-        assert!((d[0] / n.spacing(1000.0) - 1.0).abs() < 1e-9, "{d:?}");
+        let d = n.offset_px_of(&q, 1000.0);
+        assert!((d[0] - 1.0).abs() < 1e-9 && d[1] == 0.0, "{d:?}");
         assert!(q.center[0].len() > 30);
+    }
+
+    /// Past 1e-308 an f64 spacing is zero: pans, zooms about a point and offsets still move
+    /// by the right number of pixels (1e-1086, the depth of a public benchmark location).
+    #[test]
+    fn pans_and_zooms_work_past_the_f64_range() {
+        // 1080 digits: within the thousandth of a spacing the centre is rounded to.
+        let digits = "7".repeat(1080);
+        let n = Nav { center: [format!("-1.{digits}"), "0.001".into()], log10_zoom: 1086.0 };
+        let p = n.pan(250.0, -40.0, 800.0);
+        assert_ne!(p.center, n.center);
+        let d = n.offset_px_of(&p, 800.0);
+        assert!((d[0] - 250.0).abs() < 1e-3 && (d[1] - 40.0).abs() < 1e-3, "{d:?}");
+        assert_eq!(p.pan(-250.0, 40.0, 800.0).center, n.center);
+        // Zoom in by 2 about a point 100 px right of the centre: the centre moves 50 px.
+        let z = n.zoom_about(2.0, [100.0, 0.0], 800.0);
+        let d = n.offset_px_of(&z, 800.0);
+        assert!((d[0] - 50.0).abs() < 1e-3 && d[1].abs() < 1e-3, "{d:?}");
+        assert!((z.log10_zoom - 1086.0 - 2f64.log10()).abs() < 1e-12);
+        // The centre keeps digits down to a thousandth of the spacing, no more.
+        assert!(z.center[0].len() < 1100 + 10, "{}", z.center[0].len());
     }
 
     #[test]

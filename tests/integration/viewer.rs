@@ -102,9 +102,8 @@ fn drag_pans_and_history_goes_back_and_forward() {
     settle(&mut h);
     let moved = h.state().nav.clone();
     // Dragging left by 100 px moves the view right by 100 pixel spacings (y: up is +).
-    let d = start.offset_of(&moved);
-    let s = start.spacing(height);
-    assert!((d[0] / s - 100.0).abs() < 1.0 && (d[1] / s - 40.0).abs() < 1.0, "{:?}", [d[0] / s, d[1] / s]);
+    let d = start.offset_px_of(&moved, height);
+    assert!((d[0] - 100.0).abs() < 1.0 && (d[1] - 40.0).abs() < 1.0, "{d:?}");
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
     assert_eq!(h.state().nav, start, "Backspace goes back");
@@ -289,4 +288,54 @@ fn dropped_palettes_recolour_and_dropped_scenes_open() {
     assert_eq!(h.state().nav.center, ["-1.25".to_string(), "0.02".to_string()]);
     assert!((h.state().nav.log10_zoom - 40f64.log10()).abs() < 1e-12);
     assert!(h.state().counters().renders > after.renders);
+}
+
+/// A scene shipped in `scenes/`, with `edit` applied to its text.
+fn shipped(name: &str, edit: impl Fn(String) -> String) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    edit(std::fs::read_to_string(path).unwrap())
+}
+
+/// The viewer's image area against `deepfield render` of the same view at the same size:
+/// the texture is drawn 1:1, so pixels agree up to the texture's sRGB round trip.
+fn image_matches_render(name: &str, text: &str) {
+    let dir = scratch(&format!("viewer-deep-{name}"));
+    let mut h = harness(&dir, text);
+    let shot = h.render().expect("a frame");
+    let rect = h.state().image_rect();
+    let [w, hgt] = h.state().image_size_px();
+    // The same view, rendered by the command line at the image area's size.
+    let scene = scene_file(&dir, text);
+    let out = dir.join("render.png");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_deepfield"))
+        .args(["render", scene.to_str().unwrap(), "--size", &format!("{w}x{hgt}"), "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let want = image::open(&out).unwrap().to_rgb8();
+    let (x0, y0) = (rect.min.x.round() as u32, rect.min.y.round() as u32);
+    let (mut far, mut total, mut spread) = (0usize, 0usize, [255u8, 0u8]);
+    for y in 0..hgt.min(want.height()) {
+        for x in 0..w.min(want.width()) {
+            let (Some(a), b) = (shot.get_pixel_checked(x0 + x, y0 + y), want.get_pixel(x, y)) else { continue };
+            let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+            far += (d > 12) as usize;
+            total += 1;
+            spread = [spread[0].min(a[1]), spread[1].max(a[1])];
+        }
+    }
+    assert!(total > 10_000, "{name}: compared {total} pixels");
+    // Not the empty background: the image has structure.
+    assert!(spread[1] - spread[0] > 64, "{name}: green only spans {spread:?}");
+    assert!((far as f64) < 0.01 * total as f64, "{name}: {far} of {total} pixels differ by more than 12 levels");
+}
+
+/// Deep views show their image: at 1e50 (f64 deltas) and at 1e321 (FloatExp deltas, where
+/// an f64 pixel spacing is zero and once left the image area empty).
+#[test]
+fn deep_views_show_the_image_render_draws() {
+    let e50 = shipped("floral-fantasy.toml", |t| t.replace("zoom = \"1.55413511378E85\"", "zoom = \"1e50\""));
+    assert!(e50.contains("zoom = \"1e50\""));
+    image_matches_render("e50", &e50);
+    image_matches_render("e321", &shipped("liiiines.toml", |t| t));
 }
