@@ -31,6 +31,29 @@ pub enum Command {
     Palettes(PalettesArgs),
     /// Explore interactively (egui window; wgpu renderer).
     View(ViewArgs),
+    /// Search a view for the lowest-period minibrot (or the simplest Misiurewicz point) and
+    /// print it as a scene framed on it, centre in full precision.
+    Find(Box<FindArgs>),
+}
+
+/// `deepfield find`.
+#[derive(Debug, Args)]
+pub struct FindArgs {
+    /// The view to search (a scene and flags that override it: --center, --zoom).
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Find a Misiurewicz point (preperiod and period) instead of a minibrot.
+    #[arg(long)]
+    pub misiurewicz: bool,
+    /// Largest period searched (default: 100000 for minibrots, 64 for Misiurewicz points).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    pub max_period: Option<u32>,
+    /// Largest preperiod searched (Misiurewicz points).
+    #[arg(long, value_name = "N", default_value_t = 5000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub max_preperiod: u32,
+    /// Write the scene here instead of printing it.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// `deepfield view`.

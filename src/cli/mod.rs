@@ -8,6 +8,7 @@
 
 mod args;
 mod compare;
+mod find;
 mod palettes;
 mod recolor;
 mod render;
@@ -74,6 +75,7 @@ pub fn main() -> ExitCode {
         args::Command::Sheet(s) => sheet::run(*s),
         args::Command::Palettes(p) => palettes::run(p),
         args::Command::View(v) => view::run(v),
+        args::Command::Find(f) => find::run(*f),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,7 @@
 //! Finding locations: the minibrot nearest a point (its period by the ball method, its
 //! nucleus by Newton's method in big floats, its size and orientation for framing) and
-//! Misiurewicz points (preperiod and period, by Newton's method).
+//! Misiurewicz points (preperiod and period, by Newton's method), and the search of a view
+//! for either ([`search`], behind `deepfield find` and the viewer's Newton zoom).
 //!
 //! These are what explorers use to reach deep views in a few steps (Kalles Fraktaler's and
 //! Fraktaler-3's Newton zooming, after Claude Heiland-Allen's notes on atom domains, nucleus
@@ -13,6 +14,7 @@ pub mod big;
 pub mod misiurewicz;
 pub mod nucleus;
 pub mod period;
+pub mod search;
 
 pub use big::BigC;
 pub use nucleus::Minibrot;

@@ -13,7 +13,7 @@ use crate::num::FloatExp;
 use super::big::BigC;
 
 /// A minibrot found: its nucleus, period and size.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Minibrot {
     /// The nucleus (z_p = 0 to the working precision).
     pub nucleus: BigC,

@@ -461,3 +461,27 @@ fn exr_rgb_channels_hold_the_composited_linear_colour() {
         assert!(encoded.abs_diff(p[0]) <= 1, "pixel {k}: EXR {encoded} vs PNG {}", p[0]);
     }
 }
+
+/// `deepfield find`: the airplane's minibrot (period 3, nucleus -1.7548776662466927...,
+/// published) from a view on the antenna, written as a scene that renders; c = i (preperiod
+/// 2, period 2) as a Misiurewicz point; and a refusal where nothing is in range.
+#[test]
+fn find_prints_the_minibrot_or_misiurewicz_point_of_a_view_as_a_scene() {
+    let dir = scratch("cli-find");
+    let o = deepfield(&["find", "--center=-1.752,0", "--zoom", "100", "-o", "found.toml"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(dir.join("found.toml")).unwrap();
+    assert!(text.contains("minibrot of period 3,"), "{text}");
+    assert!(text.contains("\"-1.754877666246692760049508896358528"), "{text}");
+    let o = deepfield(&["render", "found.toml", "--size", "32x24", "-o", "found.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let o = deepfield(&["find", "--center=0.01,1.02", "--zoom", "20", "--misiurewicz"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("preperiod 2 and period 2"), "{text}");
+
+    let o = deepfield(&["find", "--center=0.5,0.5", "--zoom", "1e6", "--max-period", "40"], &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no minibrot of period up to 40"), "{}", stderr(&o));
+}
