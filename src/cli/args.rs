@@ -34,6 +34,20 @@ pub enum Command {
     /// Search a view for the lowest-period minibrot (or the simplest Misiurewicz point) and
     /// print it as a scene framed on it, centre in full precision.
     Find(Box<FindArgs>),
+    /// Join the work units of `render --tile K/N` into the whole PNG (streamed, one row in
+    /// memory at a time).
+    Assemble(AssembleArgs),
+}
+
+/// `deepfield assemble`.
+#[derive(Debug, Args)]
+pub struct AssembleArgs {
+    /// The units' PNG files, in any order (all N of them).
+    #[arg(value_name = "UNIT", required = true)]
+    pub units: Vec<PathBuf>,
+    /// The whole image.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
 }
 
 /// `deepfield find`.
@@ -195,6 +209,10 @@ pub struct RenderArgs {
     /// Also write the raw per-pixel data as OpenEXR (channels: see --channels).
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
+    /// Render only work unit K of N (0-based): rows K·H/N .. (K+1)·H/N, as a PNG that
+    /// `deepfield assemble` joins with the others into the whole image, byte for byte.
+    #[arg(long, value_name = "K/N", value_parser = parse_tile, conflicts_with = "exr")]
+    pub tile: Option<(u32, u32)>,
     /// Worker threads (default: one per core). Output does not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -312,6 +330,16 @@ pub struct CompareArgs {
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not K/N with 0 <= K < N (a work unit and the number of units), like 3/8");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+    if k >= n {
+        return Err(bad());
+    }
+    Ok((k, n))
 }
 
 fn parse_decimal(s: &str) -> Result<String, String> {

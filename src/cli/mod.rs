@@ -76,6 +76,9 @@ pub fn main() -> ExitCode {
         args::Command::Palettes(p) => palettes::run(p),
         args::Command::View(v) => view::run(v),
         args::Command::Find(f) => find::run(*f),
+        args::Command::Assemble(a) => {
+            deepfield::io::assemble_png(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -32,7 +32,29 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         Some(path) => Some(io::AtomicFile::create(path).map_err(Failure::input)?),
         None => None,
     };
-    let png = PngWriter::create(&png_path, scene.width, scene.height, scene.png_bits, &toml).map_err(Failure::input)?;
+    let rows = match args.tile {
+        Some((k, n)) => {
+            if n > scene.height {
+                return Err(Failure::Input(anyhow!("--tile {k}/{n}: the image has only {} rows", scene.height)));
+            }
+            if scene.stack.is_global() {
+                return Err(Failure::Input(anyhow!(
+                    "--tile: a histogram layer colours each pixel from the whole image, which one unit does not see; render such scenes in one piece"
+                )));
+            }
+            Some(io::band_rows(k, n, scene.height))
+        }
+        None => None,
+    };
+    let png = match args.tile {
+        Some((k, n)) => {
+            let band = rows.clone().unwrap_or_default();
+            let tile = [(io::TILE_KEYWORD, io::tile_text(k, n, scene.width, scene.height))];
+            PngWriter::create_with(&png_path, scene.width, band.end - band.start, scene.png_bits, &toml, &tile)
+        }
+        None => PngWriter::create(&png_path, scene.width, scene.height, scene.png_bits, &toml),
+    }
+    .map_err(Failure::input)?;
     let png_enc = PngEncoder::new(scene.png_bits);
     let exr = match &args.exr {
         Some(path) => {
@@ -48,7 +70,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         None => (None, None),
     };
 
-    let bar = bar(args.quiet, scene.height as u64);
+    let bar = bar(args.quiet, rows.as_ref().map_or(scene.height, |r| r.end - r.start) as u64);
     let progress = |p: render::Progress| show(&bar, p);
     let aa = scene.aa as usize;
     let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
@@ -63,7 +85,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let result = {
         let png = &mut png;
         let exr_writer = &mut exr_writer;
-        let options = Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd };
+        let options = Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd, rows };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, (bytes, chunks)| {
             png.as_mut().expect("open until finished").write_encoded(&bytes).map_err(|e| e.to_string())?;
             if let (Some(w), Some(c)) = (exr_writer.as_mut(), chunks) {

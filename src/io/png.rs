@@ -51,6 +51,18 @@ impl PngEncoder {
 impl PngWriter {
     /// Starts a PNG at `path` (written to a temporary file until [`PngWriter::finish`]).
     pub fn create(path: &Path, width: u32, height: u32, bits: u8, scene_toml: &str) -> Result<Self, IoError> {
+        Self::create_with(path, width, height, bits, scene_toml, &[])
+    }
+
+    /// [`PngWriter::create`] with more iTXt chunks (keyword, text) after the scene's.
+    pub fn create_with(
+        path: &Path,
+        width: u32,
+        height: u32,
+        bits: u8,
+        scene_toml: &str,
+        extra: &[(&str, String)],
+    ) -> Result<Self, IoError> {
         let (file, out) = AtomicFile::create(path)?;
         let (out, tail_error) = Tail::new(out);
         let mut enc = ::png::Encoder::new(out, width, height);
@@ -59,6 +71,9 @@ impl PngWriter {
         enc.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
         enc.set_compression(::png::Compression::Fast);
         enc.add_itxt_chunk(SCENE_KEYWORD.into(), scene_toml.into()).map_err(|e| IoError::new(path, e))?;
+        for (key, text) in extra {
+            enc.add_itxt_chunk((*key).into(), text.clone()).map_err(|e| IoError::new(path, e))?;
+        }
         enc.add_text_chunk("Software".into(), format!("deepfield {}", env!("CARGO_PKG_VERSION")))
             .map_err(|e| IoError::new(path, e))?;
         let writer = enc.write_header().map_err(|e| IoError::new(path, e))?;

@@ -145,7 +145,7 @@ pub struct Stats {
 }
 
 /// Options that are not part of the scene.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Options {
     /// Worker threads (0: one per core).
     pub threads: usize,
@@ -154,6 +154,9 @@ pub struct Options {
     /// The instruction set the kernels run with (default: the widest this CPU has; every
     /// level gives the same bits).
     pub simd: SimdLevel,
+    /// Only these output rows (a work unit of a larger render; default: all). Every sample
+    /// depends only on the scene, so a band's rows are the whole render's rows, bit for bit.
+    pub rows: Option<std::ops::Range<u32>>,
 }
 
 impl Options {
@@ -249,7 +252,7 @@ pub fn render<P: Send>(
         }
         _ => None,
     };
-    let (params, reference_seconds) = prepare_field(scene, &plan, options, cancel, progress)?;
+    let (params, reference_seconds) = prepare_field(scene, &plan, options.clone(), cancel, progress)?;
     let counters = Mutex::new(Counters::default());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
@@ -257,8 +260,15 @@ pub fn render<P: Send>(
         .map_err(|_| RenderError::Threads(options.threads))?;
     let threads = pool.current_num_threads();
     let rows_per = strip_rows(scene);
+    let band = options.rows.clone().unwrap_or(0..scene.height);
+    if band.start >= band.end || band.end > scene.height {
+        return Err(RenderError::Engine(format!(
+            "rows {}..{} are not within the image's {} rows",
+            band.start, band.end, scene.height
+        )));
+    }
     let strips: Vec<(u32, u32)> =
-        (0..scene.height).step_by(rows_per as usize).map(|r| (r, rows_per.min(scene.height - r))).collect();
+        band.clone().step_by(rows_per as usize).map(|r| (r, rows_per.min(band.end - r))).collect();
     let strip_samples = (rows_per * scene.aa) as u64 * (scene.width * scene.aa) as u64;
     // Strips in flight: ~4M samples, at least two per thread, at most 64 unless threads need more.
     let lo = threads as u64 * 2;

@@ -10,5 +10,6 @@ mod golden;
 mod gpu;
 mod import;
 mod reference;
+mod units;
 mod util;
 mod viewer;
