@@ -56,7 +56,8 @@ fn shallow_supersampled_units_assemble_to_the_whole_render() {
 
 #[test]
 fn deep_units_assemble_to_the_whole_render() {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/julia-deep-e310.toml")).unwrap();
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/julia-deep-e310.toml")).unwrap();
     units_assemble_to_the_whole("deep", &text, &["--size", "80x45"], 5);
 }
 
