@@ -2,13 +2,17 @@
 //! job to the viewer's render worker until its coarse (1/8) pass and its final pass arrive.
 //!
 //! `cargo run --release --example viewer_latency [SCENE] [WxH]` (default
-//! `scenes/seahorse-valley.toml` at 1100x680, the image area of a 1400x800 window), five
-//! times each, the worker on its own thread exactly as in the viewer.
+//! `scenes/seahorse-valley.toml` at 1100x680, the image area of a 1400x800 window), the
+//! worker on its own thread exactly as in the viewer: the view itself five times, then a
+//! navigation sequence (pans of a quarter view, zooms in by 2 about the centre), where a
+//! deep view keeps its reference orbit and BLA tables while they serve.
 #![allow(clippy::print_stdout)] // printing the measurement is the point
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use deepfield::num::Decimal;
+use deepfield::orbit::Scale;
 use deepfield::scene::Scene;
 use deepfield::viewer::nav::Nav;
 use deepfield::viewer::worker::{Job, Report, Worker};
@@ -28,16 +32,20 @@ fn main() {
     scene.height = h;
     let mut worker = Worker::spawn(Arc::new(|| {}));
     println!("{path} at {w}x{h} (aa {} in the final pass)", scene.aa);
-    for run in 0..5 {
+    let mut run = |label: &str, scene: &Scene| {
         let start = Instant::now();
         worker.submit(Job { scene: scene.clone(), nav: Nav::home(), passes: vec![8, 2, 1] });
         let mut first = None;
         loop {
             let mut done = false;
             for r in worker.poll() {
-                if let Report::Pass(p) = r {
-                    first.get_or_insert(start.elapsed());
-                    done |= p.last;
+                match r {
+                    Report::Pass(p) => {
+                        first.get_or_insert(start.elapsed());
+                        done |= p.last;
+                    }
+                    Report::Failed { message, .. } => panic!("{message}"),
+                    _ => {}
                 }
             }
             if done {
@@ -46,6 +54,26 @@ fn main() {
             std::thread::sleep(Duration::from_micros(200));
         }
         let first = first.unwrap_or_default().as_secs_f64() * 1e3;
-        println!("run {run}: coarse pass {first:.1} ms, final pass {:.1} ms", start.elapsed().as_secs_f64() * 1e3);
+        println!("{label}: coarse pass {first:.1} ms, final pass {:.1} ms", start.elapsed().as_secs_f64() * 1e3);
+    };
+    for k in 0..5 {
+        run(&format!("run {k}"), &scene);
+    }
+    let mut nav = Nav { center: scene.center.clone().map(|d| d.text().to_string()), log10_zoom: 0.0 };
+    nav.log10_zoom = 2f64.log10() - scene.log10_radius;
+    for step in ["pan", "pan", "zoom", "pan", "zoom"] {
+        nav = match step {
+            "pan" => nav.pan(w as f64 / 4.0, 0.0, h as f64),
+            _ => nav.zoom_about(2.0, [0.0, 0.0], h as f64),
+        };
+        scene.center = nav.center.clone().map(|t| Decimal::parse(&t).expect("a decimal"));
+        if step == "zoom" {
+            let zoom = Decimal::parse(&nav.zoom_text()).expect("a decimal");
+            scene.log10_radius = 2f64.log10() - nav.log10_zoom;
+            scene.radius = 10f64.powf(scene.log10_radius);
+            scene.scale = Scale::Zoom(zoom);
+        }
+        let label = if step == "pan" { "pan by a quarter view" } else { "zoom in by 2" };
+        run(label, &scene);
     }
 }

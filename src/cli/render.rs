@@ -85,7 +85,8 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let result = {
         let png = &mut png;
         let exr_writer = &mut exr_writer;
-        let options = Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd, rows };
+        let options =
+            Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd, rows, ..Options::default() };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, (bytes, chunks)| {
             png.as_mut().expect("open until finished").write_encoded(&bytes).map_err(|e| e.to_string())?;
             if let (Some(w), Some(c)) = (exr_writer.as_mut(), chunks) {

@@ -88,7 +88,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
             threads: args.threads.unwrap_or(0) as usize,
             exr_channels: ChannelSet::default(),
             simd: super::simd_level(args.simd.as_deref())?,
-            rows: None,
+            ..Options::default()
         },
         &cancel,
         &progress,

@@ -152,9 +152,11 @@ pub fn prepare(
     }
     let single_d2 = perturb::single_step_threshold(&bla_f64);
     Ok(Perturbation {
-        refs,
-        bla_fe,
-        bla_f64,
+        refs: std::sync::Arc::new(refs),
+        bla_fe: std::sync::Arc::new(bla_fe),
+        bla_f64: std::sync::Arc::new(bla_f64),
+        extent: spec.spacing.mul_f64(spec.max_offset),
+        origin: [FloatExp::ZERO; 2],
         mandelbrot,
         spacing: spec.spacing,
         max_iter: spec.max_iter,

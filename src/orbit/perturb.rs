@@ -104,11 +104,19 @@ impl Counters {
 pub struct Perturbation {
     /// [primary reference, orbit of 0 used after rebasing]; Mandelbrot has only the first
     /// (its reference starts at 0 and serves both).
-    pub refs: Vec<Reference>,
+    /// Shared (`Arc`) with every [`Perturbation::with_spacing`] of it.
+    pub refs: std::sync::Arc<Vec<Reference>>,
     /// BLA tables per reference in FloatExp and f64 (None: BLA off).
-    pub bla_fe: [Option<BlaTable<FloatExp>>; 2],
+    pub bla_fe: std::sync::Arc<[Option<BlaTable<FloatExp>>; 2]>,
     /// The same tables for f64 deltas.
-    pub bla_f64: [Option<BlaTable<f64>>; 2],
+    pub bla_f64: std::sync::Arc<[Option<BlaTable<f64>>; 2]>,
+    /// The largest |δc| (plane units) the tables and `skip` were built for: the view's
+    /// extent, spacing × largest offset (times the reach asked for, see
+    /// `render::Options::deep_reach`).
+    pub extent: FloatExp,
+    /// Where the raster's centre lies from the reference point (plane units): zero for a
+    /// render of its own; a viewer panning about an older reference sets it.
+    pub origin: [FloatExp; 2],
     /// True for Mandelbrot (δc is the sample offset; the derivative adds the spacing).
     pub mandelbrot: bool,
     /// Sample spacing.
@@ -131,6 +139,47 @@ pub struct Perturbation {
     pub orbit_seconds: f64,
     /// Seconds the BLA tables took.
     pub tables_seconds: f64,
+}
+
+impl Perturbation {
+    /// The same engine for a raster of another `spacing` over the same or a smaller extent
+    /// (a coarse preview pass of the same view): the reference orbits, tables and common
+    /// steps are shared, since they depend on the centre and on the extent of the offsets,
+    /// not on the spacing. None when the raster (about [`Perturbation::origin`]) reaches
+    /// beyond the extent they were built for, or its spacing needs more bits than the
+    /// reference has.
+    pub fn with_spacing(&self, spacing: FloatExp, max_offset: f64) -> Option<Perturbation> {
+        // `precision_for` keeps 96 bits below the spacing; a zoom-in may use 16 of them
+        // (the reference then still errs by less than 2^-80 of a sample spacing).
+        let bits = super::bigfloat::precision_for(spacing.log2() / std::f64::consts::LOG2_10);
+        let origin = (self.origin[0] * self.origin[0] + self.origin[1] * self.origin[1]).sqrt();
+        if origin + spacing.mul_f64(max_offset) > self.extent || bits > self.refs[0].bits() + 16 {
+            return None;
+        }
+        Some(Perturbation {
+            refs: self.refs.clone(),
+            bla_fe: self.bla_fe.clone(),
+            bla_f64: self.bla_f64.clone(),
+            spacing,
+            orbit_seconds: 0.0,
+            tables_seconds: 0.0,
+            ..*self
+        })
+    }
+
+    /// The same engine for a raster centred `origin` (plane units) away from the reference
+    /// point: a pan that keeps the old reference. None when `origin` lies outside the
+    /// extent; [`Perturbation::with_spacing`] then checks the raster's own reach.
+    pub fn with_origin(&self, origin: [FloatExp; 2]) -> Option<Perturbation> {
+        let r = (origin[0] * origin[0] + origin[1] * origin[1]).sqrt();
+        (r < self.extent).then(|| Perturbation {
+            refs: self.refs.clone(),
+            bla_fe: self.bla_fe.clone(),
+            bla_f64: self.bla_f64.clone(),
+            origin,
+            ..*self
+        })
+    }
 }
 
 /// The run of BLA steps from the start of the primary reference that is valid for every
@@ -431,8 +480,10 @@ impl Perturbation {
     /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
     /// after the view's common BLA steps when `skip` (counted into `counters`).
     fn start(&self, offset: [f64; 2], skip: bool, counters: &mut Counters) -> (Sample<FloatExp>, Der, FloatExp) {
-        let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         let zero = FloatExp::ZERO;
+        let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
+        // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
+        let d = if self.origin == [zero; 2] { d } else { cadd(self.origin, d) };
         let (mut start, add_fe) = if self.mandelbrot {
             (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false }, self.spacing)
         } else {

@@ -25,7 +25,7 @@ use std::sync::{Arc, Mutex};
 use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
 use crate::gpu;
-use crate::orbit::{self, Counters, DeepSpec};
+use crate::orbit::{self, Counters, DeepSpec, Perturbation};
 use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
 
@@ -157,6 +157,13 @@ pub struct Options {
     /// Only these output rows (a work unit of a larger render; default: all). Every sample
     /// depends only on the scene, so a band's rows are the whole render's rows, bit for bit.
     pub rows: Option<std::ops::Range<u32>>,
+    /// A deep engine prepared for this view (see [`prepare_deep`]), reused when it covers
+    /// this raster: a viewer's coarse passes share the final pass's reference orbit and
+    /// BLA tables instead of computing their own.
+    pub deep: Option<Arc<Perturbation>>,
+    /// A deep engine computed here is built for offsets this many times the raster's own
+    /// (None: 1), so that later rasters panned or zoomed out by up to that much reuse it.
+    pub deep_reach: Option<f64>,
 }
 
 impl Options {
@@ -218,7 +225,7 @@ pub fn prepare_field(
                 FamilySpec::Julia { c } => Some(c.clone()),
             },
             spacing: scene.scale.spacing(params.grid.height),
-            max_offset: params.grid.max_offset(),
+            max_offset: params.grid.max_offset() * options.deep_reach.unwrap_or(1.0).max(1.0),
             max_iter: scene.max_iter,
             escape_radius: scene.escape_radius,
             derivative: params.needs.de,
@@ -226,10 +233,37 @@ pub fn prepare_field(
             numbers,
             simd: params.orbit.simd,
         };
-        let report = |done, total| progress(Progress::Reference { done, total });
-        params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
+        let shared = options.deep.as_ref().filter(|d| {
+            (d.max_iter, d.escape2, d.derivative, d.mandelbrot)
+                == (spec.max_iter, spec.escape_radius * spec.escape_radius, spec.derivative, spec.julia.is_none())
+        });
+        if let Some(q) = shared.and_then(|d| d.with_spacing(spec.spacing, params.grid.max_offset())) {
+            params.deep = Some(Arc::new(q));
+        } else {
+            let report = |done, total| progress(Progress::Reference { done, total });
+            params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
+        }
     }
     Ok((params, start.elapsed().as_secs_f64()))
+}
+
+/// The deep engine of `scene` (reference orbits and BLA tables), or None when the scene
+/// does not run the perturbation engine: computed once and given to several renders
+/// through [`Options::deep`]. `options.deep`, when it serves this scene, is reused (moved
+/// to this raster's spacing). The caller keeps an engine only for renders of the same
+/// formula, iteration limit and centre (or sets its origin); a render checks the rest.
+pub fn prepare_deep(
+    scene: &Scene,
+    options: &Options,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Option<Arc<Perturbation>>, RenderError> {
+    let plan = scene.engine().map_err(RenderError::Engine)?;
+    if !matches!(plan.kind, EngineKind::Perturb { .. }) {
+        return Ok(None);
+    }
+    let (params, _) = prepare_field(scene, &plan, options.clone(), cancel, progress)?;
+    Ok(params.deep)
 }
 
 /// Renders `scene`. Each strip goes through `prepare` on the worker that computed it (in

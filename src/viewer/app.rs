@@ -329,10 +329,9 @@ impl ViewerApp {
             self.scene = Some(scene);
             return;
         }
-        // Deep views: every pass would compute its own reference orbit (which dominates
-        // there), so they render once; the previous image stays in place meanwhile.
-        let deep = matches!(scene.engine().map(|p| p.kind), Ok(crate::scene::EngineKind::Perturb { .. }));
-        let passes = if scene.width * scene.height > 64 * 64 && !deep { vec![8, 2, 1] } else { vec![1] };
+        // Deep views too: the passes share one reference orbit and BLA tables (the worker
+        // keeps them between jobs while the centre stays).
+        let passes = if scene.width * scene.height > 64 * 64 { vec![8, 2, 1] } else { vec![1] };
         self.job = self.worker.submit(Job { scene: scene.clone(), nav: self.nav.clone(), passes });
         self.progress = (0, scene.height as u64);
         self.scene = Some(scene);

@@ -13,6 +13,8 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::field::{ChannelSet, Planes};
+use crate::num::{Decimal, FloatExp};
+use crate::orbit::Perturbation;
 use crate::palette::color::linear_to_srgb8;
 use crate::render::{self, Options, RenderError};
 use crate::scene::Scene;
@@ -89,6 +91,8 @@ pub struct Worker {
     inline: bool,
     /// Renders started (passes), for tests and the status bar.
     pub renders: Arc<AtomicU64>,
+    /// The deep engine kept between jobs.
+    deep: Arc<DeepCache>,
 }
 
 impl Worker {
@@ -99,6 +103,8 @@ impl Worker {
         let cancel = Arc::new(Mutex::new(Arc::new(AtomicBool::new(false))));
         let renders = Arc::new(AtomicU64::new(0));
         let (tx, flag, count) = (report_tx.clone(), cancel.clone(), renders.clone());
+        let deep = Arc::new(DeepCache::default());
+        let kept = deep.clone();
         std::thread::Builder::new()
             .name("deepfield-render".into())
             .spawn(move || {
@@ -108,14 +114,14 @@ impl Worker {
                         job = newer;
                     }
                     let cancel = flag.lock().unwrap_or_else(|e| e.into_inner()).clone();
-                    run_job(job.0, &job.1, &cancel, &count, &|r| {
+                    run_job(job.0, &job.1, &cancel, &count, &kept, &|r| {
                         let _ = tx.send(r);
                         wake();
                     });
                 }
             })
             .expect("spawn the render thread");
-        Self { jobs: Some(jobs), reports, report_tx, cancel, next_id: 0, pending: None, inline: false, renders }
+        Self { jobs: Some(jobs), reports, report_tx, cancel, next_id: 0, pending: None, inline: false, renders, deep }
     }
 
     /// A worker that renders only when [`Worker::poll`] is called, on the caller's thread.
@@ -130,6 +136,7 @@ impl Worker {
             pending: None,
             inline: true,
             renders: Arc::new(AtomicU64::new(0)),
+            deep: Arc::new(DeepCache::default()),
         }
     }
 
@@ -164,7 +171,7 @@ impl Worker {
         {
             let cancel = Arc::new(AtomicBool::new(false));
             let tx = self.report_tx.clone();
-            run_job(id, &job, &cancel, &self.renders, &|r| {
+            run_job(id, &job, &cancel, &self.renders, &self.deep, &|r| {
                 let _ = tx.send(r);
             });
         }
@@ -172,8 +179,74 @@ impl Worker {
     }
 }
 
-fn run_job(id: u64, job: &Job, cancel: &AtomicBool, renders: &AtomicU64, report: &(dyn Fn(Report) + Sync)) {
+/// The deep engine kept from the last job: its key (what besides the centre, extent and
+/// spacing decides it), the reference point, and the engine.
+pub type DeepCache = Mutex<Option<(String, [Decimal; 2], Arc<Perturbation>)>>;
+
+/// How far, in views, a deep engine reaches: one built for a view serves pans of up to a
+/// view's size either way and zooms out by up to this factor (its BLA tables are built for
+/// the larger offsets, a little slower per sample than a view's own).
+const DEEP_REACH: f64 = 3.0;
+
+/// What decides a deep engine besides its reference point, extent and spacing (which
+/// [`Perturbation::with_origin`] and [`Perturbation::with_spacing`] check): formula,
+/// iteration limit, escape radius, BLA tolerance and the quantities computed.
+fn deep_key(scene: &Scene) -> String {
+    format!("{:?} {} {} {:?} {:?}", scene.family, scene.max_iter, scene.escape_radius, scene.bla, scene.channels)
+}
+
+/// `a - b` in plane units, exact up to the final rounding to `FloatExp`.
+fn difference(a: &[Decimal; 2], b: &[Decimal; 2]) -> [FloatExp; 2] {
+    std::array::from_fn(|k| {
+        let d = a[k].to_rational() - b[k].to_rational();
+        crate::orbit::bigfloat::to_floatexp(&malachite_float::Float::from_rational_prec(d, 64).0)
+    })
+}
+
+/// The deep engine for `scene` (None for views that do not perturb): the cached one, moved
+/// to this view's centre, when it still serves (same key, the view inside its reach,
+/// precision enough); else a new one centred here, which is then cached.
+fn deep_engine(
+    scene: &Scene,
+    cache: &DeepCache,
+    cancel: &AtomicBool,
+) -> Result<Option<Arc<Perturbation>>, RenderError> {
+    let key = deep_key(scene);
+    let cached = cache.lock().unwrap_or_else(|e| e.into_inner()).clone().filter(|(k, _, _)| *k == key);
+    // An engine built for a much wider view would serve a deep zoom-in with short BLA
+    // steps: past a few reaches narrower, a new one is cheaper.
+    let view = scene.log10_radius + 0.5 * (1.0 + (scene.width as f64 / scene.height as f64).powi(2)).log10();
+    let moved = cached
+        .filter(|(_, _, d)| d.extent.log2() * std::f64::consts::LOG10_2 - view < (4.0 * DEEP_REACH).log10())
+        .and_then(|(_, at, d)| d.with_origin(difference(&scene.center, &at)).map(Arc::new));
+    let options = Options { deep: moved.clone(), deep_reach: Some(DEEP_REACH), ..Options::default() };
+    let Some(engine) = render::prepare_deep(scene, &options, cancel, &|_| {})? else { return Ok(None) };
+    let reused = moved.as_ref().is_some_and(|c| Arc::ptr_eq(&c.refs, &engine.refs));
+    if !reused {
+        *cache.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, scene.center.clone(), engine.clone()));
+    }
+    Ok(Some(engine))
+}
+
+fn run_job(
+    id: u64,
+    job: &Job,
+    cancel: &AtomicBool,
+    renders: &AtomicU64,
+    cache: &DeepCache,
+    report: &(dyn Fn(Report) + Sync),
+) {
     let start = Instant::now();
+    // Deep views: one reference orbit and one set of BLA tables, for the final pass's
+    // raster, serve every pass (a coarse pass covers the same extent at a larger spacing).
+    let deep = match deep_engine(&job.scene, cache, cancel) {
+        Ok(d) => d,
+        Err(RenderError::Cancelled) => return,
+        Err(e) => {
+            report(Report::Failed { id, message: e.to_string() });
+            return;
+        }
+    };
     for (k, &div) in job.passes.iter().enumerate() {
         if cancel.load(Ordering::Relaxed) {
             return;
@@ -186,7 +259,7 @@ fn run_job(id: u64, job: &Job, cancel: &AtomicBool, renders: &AtomicU64, report:
             scene.aa = 1;
         }
         renders.fetch_add(1, Ordering::Relaxed);
-        match render_pass(id, &scene, last, cancel, report) {
+        match render_pass(id, &scene, last, deep.clone(), cancel, report) {
             Ok((rgb8, planes, engine)) => report(Report::Pass(Box::new(Pass {
                 id,
                 nav: job.nav.clone(),
@@ -213,6 +286,7 @@ fn render_pass(
     id: u64,
     scene: &Scene,
     keep_planes: bool,
+    deep: Option<Arc<Perturbation>>,
     cancel: &AtomicBool,
     report: &(dyn Fn(Report) + Sync),
 ) -> Result<PassOutput, RenderError> {
@@ -229,7 +303,7 @@ fn render_pass(
     };
     let stats = render::render(
         scene,
-        Options { threads: 0, exr_channels: ChannelSet::default(), ..Options::default() },
+        Options { threads: 0, exr_channels: ChannelSet::default(), deep, ..Options::default() },
         cancel,
         &progress,
         &prepare,

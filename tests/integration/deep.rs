@@ -12,7 +12,11 @@ use std::sync::atomic::AtomicBool;
 
 use astro_float::BigFloat;
 use deepfield::field::{self, ChannelSet};
+use deepfield::num::{Decimal, FloatExp};
+use deepfield::orbit::bigfloat;
 use deepfield::render::{self, Options};
+use malachite_float::Float;
+use malachite_q::Rational;
 
 use super::accuracy::{Sample, judge, summary};
 use super::reference;
@@ -39,12 +43,15 @@ struct View {
     samples: u32,
     /// Extra `[render]` lines.
     render: &'static str,
+    /// Iterate against a reference computed for a view centred this far away (in radii,
+    /// x and y) and built to reach 3 views, moved here as the viewer moves it on a pan.
+    reference_from: Option<[f64; 2]>,
 }
 
 impl View {
     /// A Mandelbrot view with the engine chosen automatically and BLA at its default.
     fn mandelbrot(center: [&'static str; 2], radius: &'static str, max_iter: u32, samples: u32) -> View {
-        View { center, radius, julia: None, max_iter, engine: "auto", samples, render: "" }
+        View { center, radius, julia: None, max_iter, engine: "auto", samples, render: "", reference_from: None }
     }
 }
 
@@ -70,9 +77,27 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     let s = scene(&text);
     let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
-    let (params, _) =
-        render::prepare_field(&s, &plan, Options::with_channels(ChannelSet::default_exr()), &cancel, &|_| {})
-            .expect("prepared");
+    let mut options = Options::with_channels(ChannelSet::default_exr());
+    if let Some(shift) = v.reference_from {
+        // The other view's scene, its engine, and that engine moved to this view.
+        let radius = Decimal::parse(v.radius).unwrap().to_rational();
+        let other: [Decimal; 2] = std::array::from_fn(|k| {
+            let c = Decimal::parse(v.center[k]).unwrap().to_rational();
+            Decimal::from_rational(&(c + radius.clone() * Rational::try_from(shift[k]).unwrap()), 400)
+        });
+        let other_text = text.replacen(v.center[0], other[0].text(), 1).replacen(v.center[1], other[1].text(), 1);
+        let wide = Options { deep_reach: Some(3.0), ..options.clone() };
+        let engine = render::prepare_deep(&scene(&other_text), &wide, &cancel, &|_| {}).unwrap().expect("deep");
+        let origin: [FloatExp; 2] = std::array::from_fn(|k| {
+            let d = s.center[k].to_rational() - other[k].to_rational();
+            bigfloat::to_floatexp(&Float::from_rational_prec(d, 64).0)
+        });
+        options.deep = Some(std::sync::Arc::new(engine.with_origin(origin).expect("within reach")));
+    }
+    let (params, _) = render::prepare_field(&s, &plan, options, &cancel, &|_| {}).expect("prepared");
+    if let (Some(_), Some(d)) = (v.reference_from, &params.deep) {
+        assert_ne!(d.origin, [FloatExp::ZERO; 2], "the moved engine served the view");
+    }
     let planes = field::compute_strip(&params, 0..SIZE.1, &cancel).expect("computed").planes;
     let ln_r = params.orbit.escape_radius.ln();
     // Enough bits to place every pixel exactly and iterate it without loss.
@@ -139,6 +164,16 @@ fn zoom_1e300_and_1e320_past_the_f64_exponent_range() {
     let v = |radius| View::mandelbrot(LIIIINES, radius, 12500, 24);
     check("liiiines 1e300", v("2e-300"), "perturb-floatexp");
     check("liiiines 1e320", v("2e-320"), "perturb-floatexp");
+}
+
+/// A view iterated against the reference of a view centred elsewhere (as the viewer pans
+/// about an older reference): at 1e50 with f64 deltas and 1e320 with FloatExp deltas.
+#[test]
+fn against_a_reference_computed_for_a_view_elsewhere() {
+    let v = View { reference_from: Some([0.9, -0.6]), ..View::mandelbrot(MINIBROT, "2e-50", 10000, 40) };
+    check("minibrot 1e50, reference 1.1 radii away", v, "perturb-f64");
+    let v = View { reference_from: Some([-1.5, 0.4]), ..View::mandelbrot(LIIIINES, "2e-320", 12500, 24) };
+    check("liiiines 1e320, reference 1.6 radii away", v, "perturb-floatexp");
 }
 
 /// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
@@ -231,6 +266,7 @@ fn julia_sets_at_1e40_and_1e310() {
         engine: "auto",
         samples: 40,
         render: "",
+        reference_from: None,
     };
     check("julia 1e40", e40, "perturb-f64");
     let e310 = View {
@@ -244,6 +280,7 @@ fn julia_sets_at_1e40_and_1e310() {
         engine: "auto",
         samples: 24,
         render: "",
+        reference_from: None,
     };
     check("julia 1e310", e310, "perturb-floatexp");
 }
