@@ -76,6 +76,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             let m = compare::run(&scene, v, &pixels, args.sample_only, simd, &cancel).map_err(|e| match e {
                 compare::RunError::Cancelled => Failure::Cancelled,
                 compare::RunError::Gpu(e) => Failure::Runtime(anyhow!(e)),
+                compare::RunError::Engine(e) => Failure::Input(anyhow!(e)),
             })?;
             measured.push(m);
             if let Some(b) = &bar {

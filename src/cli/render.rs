@@ -199,7 +199,11 @@ fn report(
             text.push_str(&format!(
                 "reference   {} iterations{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
                 d.reference_iterations,
-                if d.reference_escaped { " (escaped)" } else { "" },
+                match (d.reference_escaped, d.reference_period) {
+                    (true, _) => " (escaped)".to_string(),
+                    (_, Some(p)) => format!(" (one period: the centre is a nucleus of period {p}; stored once, samples rebase through it)"),
+                    _ => String::new(),
+                },
                 d.reference_bits,
                 d.reference_seconds,
                 d.orbit_seconds,

@@ -71,6 +71,18 @@ pub enum RunError {
     /// The GPU failed.
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// The engine could not prepare the view.
+    #[error("{0}")]
+    Engine(String),
+}
+
+impl From<render::RenderError> for RunError {
+    fn from(e: render::RenderError) -> Self {
+        match e {
+            render::RenderError::Cancelled => RunError::Cancelled,
+            e => RunError::Engine(e.to_string()),
+        }
+    }
 }
 
 impl From<Cancelled> for RunError {
@@ -130,8 +142,10 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
             out.push(Variant { name: precision.name().into(), kind: VariantKind::Gpu(precision) });
         }
     }
-    if scene.max_iter > crate::scene::MAX_PERTURB_ITER {
-        // The perturbation engines refuse such limits (their reference is stored whole).
+    if scene.max_iter > crate::scene::MAX_PERTURB_ITER && !matches!(scene.family, crate::scene::FamilySpec::Mandelbrot)
+    {
+        // The perturbation engines refuse such limits for Julia sets (their references
+        // are stored whole); Mandelbrot views run if their reference is periodic.
         return out;
     }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);

@@ -91,6 +91,33 @@ pub struct DeepSpec {
     pub simd: SimdLevel,
 }
 
+/// The most reference iterations stored (16 bytes each, plus BLA tables: 2^25 take ~2-4
+/// GB). A Mandelbrot view centred on a nucleus stores one period whatever its iteration
+/// limit; any other view's limit must be within this.
+pub const MAX_STORED_ITERATIONS: u32 = 1 << 25;
+
+/// Why the shared work stopped.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PrepareError {
+    /// Cancelled by the user.
+    #[error("cancelled")]
+    Cancelled,
+    /// The iteration limit is past what is stored, and the reference is not periodic.
+    #[error(
+        "iteration.max = {max_iter} is more than the {MAX_STORED_ITERATIONS} reference iterations the engine stores (16 bytes each), and the reference orbit found no period within them (the view's centre is not a minibrot's nucleus); lower iteration.max, or centre the view on a nucleus (`deepfield find`)"
+    )]
+    NotPeriodic {
+        /// The scene's iteration limit.
+        max_iter: u32,
+    },
+}
+
+impl From<Cancelled> for PrepareError {
+    fn from(_: Cancelled) -> Self {
+        PrepareError::Cancelled
+    }
+}
+
 /// Progress of the shared work: (reference iterations done, of at most this many).
 pub type ReferenceProgress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
@@ -99,7 +126,7 @@ pub fn prepare(
     spec: &DeepSpec,
     progress: ReferenceProgress<'_>,
     cancel: &AtomicBool,
-) -> Result<Perturbation, Cancelled> {
+) -> Result<Perturbation, PrepareError> {
     let started = std::time::Instant::now();
     let bits = bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10);
     let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
@@ -113,7 +140,14 @@ pub fn prepare(
         progress(done[0].load(Ordering::Relaxed) + done[1].load(Ordering::Relaxed), total);
     };
     let run = |k: usize, start: &[Float; 2], c: &[Float; 2], share: bool| {
-        let steps = reference::Stepping { share, simd: spec.simd };
+        let steps = reference::Stepping {
+            share,
+            simd: spec.simd,
+            // A Mandelbrot reference from 0 that comes back within 2^-20 of a sample
+            // spacing (first order) of 0 is one period of a nucleus's orbit.
+            periodic_below: (spec.julia.is_none()).then(|| spec.spacing.mul_f64(2f64.powi(-20))),
+            store_limit: (spec.max_iter > MAX_STORED_ITERATIONS).then_some(MAX_STORED_ITERATIONS),
+        };
         Reference::compute(start, c, spec.max_iter, spec.escape_radius, bits, steps, &|n| report(k, n), cancel)
     };
     let mandelbrot = spec.julia.is_none();
@@ -127,6 +161,9 @@ pub fn prepare(
             vec![a?, b?]
         }
     };
+    if refs.iter().any(Reference::truncated) {
+        return Err(PrepareError::NotPeriodic { max_iter: spec.max_iter });
+    }
     progress(total, total);
     let orbit_seconds = started.elapsed().as_secs_f64();
     let dc_max = if mandelbrot { spec.spacing.mul_f64(spec.max_offset) } else { FloatExp::ZERO };

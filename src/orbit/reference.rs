@@ -31,6 +31,15 @@ pub struct Stepping {
     pub share: bool,
     /// Instruction set of the fixed-point squares.
     pub simd: SimdLevel,
+    /// Stop at the first n >= 1 where |Z_n| < `periodic_below` |dZ_n/dC| (a Mandelbrot
+    /// reference from 0): C is then a nucleus of period n to far below a sample's reach,
+    /// and the orbit from there is the orbit from 0 again. Samples continue through the
+    /// end of the stored period by the ordinary rebase (z = Z_n + δ becomes the delta
+    /// against Z_0 = 0), so one period serves any iteration limit.
+    pub periodic_below: Option<FloatExp>,
+    /// Store at most this many iterations (None: up to the limit); an orbit cut short here
+    /// is [`Reference::truncated`].
+    pub store_limit: Option<u32>,
 }
 
 /// An orbit Z_0 .. Z_last of z -> z^2 + C.
@@ -40,6 +49,8 @@ pub struct Reference {
     tiny: Vec<(u32, [FloatExp; 2])>,
     escaped: bool,
     bits: u64,
+    period: Option<u32>,
+    truncated: bool,
 }
 
 impl Reference {
@@ -62,10 +73,30 @@ impl Reference {
         progress: &dyn Fn(u32),
         cancel: &AtomicBool,
     ) -> Result<Reference, Cancelled> {
-        let mut out = Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits };
+        let mut out =
+            Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits, period: None, truncated: false };
         let r2 = escape_radius * escape_radius;
+        // dZ_n/dC, in FloatExp, for the period test.
+        let (mut prev, mut dz) = ([FloatExp::ZERO; 2], [FloatExp::ZERO; 2]);
         // Stores Z_n; true when the orbit ends there.
         let mut keep = |n: u32, fe: [FloatExp; 2]| -> Result<bool, Cancelled> {
+            if let Some(scale) = steps.periodic_below
+                && n >= 1
+            {
+                // dZ_n = 2 Z_(n-1) dZ_(n-1) + 1.
+                let t = [prev[0] * dz[0] - prev[1] * dz[1], prev[0] * dz[1] + prev[1] * dz[0]];
+                dz = [t[0].ldexp(1) + FloatExp::ONE, t[1].ldexp(1)];
+                prev = fe;
+                let size = fe[0].abs().max(fe[1].abs());
+                if size < scale * dz[0].abs().max(dz[1].abs()) {
+                    out.z.push([fe[0].to_f64(), fe[1].to_f64()]);
+                    if size.to_f64() < TINY && !size.is_zero() {
+                        out.tiny.push((n, fe));
+                    }
+                    out.period = Some(n);
+                    return Ok(true);
+                }
+            }
             let f = [fe[0].to_f64(), fe[1].to_f64()];
             if f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero()) {
                 out.tiny.push((n, fe));
@@ -76,6 +107,10 @@ impl Reference {
                 return Ok(true);
             }
             if n >= max_iter {
+                return Ok(true);
+            }
+            if steps.store_limit.is_some_and(|l| n >= l) {
+                out.truncated = true;
                 return Ok(true);
             }
             if n.is_multiple_of(REPORT_EVERY) {
@@ -117,6 +152,16 @@ impl Reference {
     /// True when the orbit escaped (at index `last`).
     pub fn escaped(&self) -> bool {
         self.escaped
+    }
+
+    /// The period found (see [`Stepping::periodic_below`]): the orbit stored is one period.
+    pub fn period(&self) -> Option<u32> {
+        self.period
+    }
+
+    /// True when the orbit was cut at [`Stepping::store_limit`] before its end.
+    pub fn truncated(&self) -> bool {
+        self.truncated
     }
 
     /// Precision it was computed with, in bits.
@@ -168,6 +213,26 @@ mod tests {
         assert!(!r.escaped());
         assert_eq!(r.get(1), [-2.0, 0.0]);
         assert_eq!(r.get(50), [2.0, 0.0]);
+    }
+
+    /// c = -1 is the period-2 nucleus (0, -1, 0, ...): with a period test the orbit stops
+    /// at Z_2 = 0; c = -1 + 1e-30 stops only with a test loose enough to let it through;
+    /// a store limit cuts an aperiodic orbit and says so.
+    #[test]
+    fn periods_and_store_limits() {
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let run = |c: [Float; 2], steps: Stepping| {
+            Reference::compute(&z0, &c, 1_000_000, 1024.0, 256, steps, &|_| {}, &AtomicBool::new(false)).unwrap()
+        };
+        let periodic = |t: f64| Stepping { periodic_below: Some(FloatExp::from(t)), ..Stepping::default() };
+        let r = run([Float::from(-1.0), Float::from(0.0)], periodic(1e-40));
+        assert_eq!((r.period(), r.last(), r.truncated()), (Some(2), 2, false));
+        let near =
+            bigfloat::from_decimal(&crate::num::Decimal::parse("-0.999999999999999999999999999999").unwrap(), 256);
+        // |Z_2| = |c^2 + c| ~ 1e-30 and |dZ_2/dc| = |2c + 1| ~ 1: caught at 1e-20, not at 1e-40.
+        assert_eq!(run([near.clone(), Float::from(0.0)], periodic(1e-20)).period(), Some(2));
+        let r = run([near, Float::from(0.0)], Stepping { store_limit: Some(1000), ..periodic(1e-40) });
+        assert_eq!((r.period(), r.last(), r.truncated()), (None, 1000, true));
     }
 
     #[test]

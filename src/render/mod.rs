@@ -46,6 +46,15 @@ pub enum RenderError {
     Threads(usize),
 }
 
+impl From<orbit::PrepareError> for RenderError {
+    fn from(e: orbit::PrepareError) -> Self {
+        match e {
+            orbit::PrepareError::Cancelled => RenderError::Cancelled,
+            e => RenderError::Engine(e.to_string()),
+        }
+    }
+}
+
 impl From<Cancelled> for RenderError {
     fn from(_: Cancelled) -> Self {
         RenderError::Cancelled
@@ -90,6 +99,9 @@ pub struct DeepStats {
     pub reference_iterations: u32,
     /// The primary reference escaped before the iteration limit.
     pub reference_escaped: bool,
+    /// The period of the primary reference when it is one period of a nucleus's orbit
+    /// (then only that period is stored, whatever the iteration limit).
+    pub reference_period: Option<u32>,
     /// Seconds spent on reference orbits and BLA tables.
     pub reference_seconds: f64,
     /// Of those, seconds the reference orbit(s) took.
@@ -213,7 +225,7 @@ pub fn prepare_field(
     options: Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
-) -> Result<(FieldParams, f64), Cancelled> {
+) -> Result<(FieldParams, f64), RenderError> {
     let start = Instant::now();
     let mut params = field_params(scene, options.exr_channels);
     params.orbit.simd = options.simd;
@@ -416,6 +428,7 @@ pub fn render<P: Send>(
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
             reference_escaped: d.reference_escaped(),
+            reference_period: d.refs[0].period(),
             reference_seconds,
             orbit_seconds: d.orbit_seconds,
             tables_seconds: d.tables_seconds,

@@ -121,9 +121,11 @@ pub struct EnginePlan {
 
 /// Sample spacings below 10^this put deltas too close to the f64 underflow for f64 deltas.
 pub const PERTURB_F64_MIN_LOG10_SPACING: f64 = -290.0;
-/// Longest reference orbit the perturbation engines accept: it is stored whole (16 bytes per
-/// iteration, plus 40 to 120 for the BLA tables), so 2^25 iterations already take ~2-4 GB.
-pub const MAX_PERTURB_ITER: u32 = 1 << 25;
+/// Largest iteration limit the perturbation engines take for Julia sets, and for Mandelbrot
+/// views whose reference orbit turns out not to be periodic (the whole orbit is stored, 16
+/// bytes per iteration plus its BLA tables). A Mandelbrot view centred on a nucleus stores
+/// one period and takes any limit.
+pub const MAX_PERTURB_ITER: u32 = crate::orbit::MAX_STORED_ITERATIONS;
 /// The same for Julia sets, whose rebased step is δ -> δ^2 with nothing added: δ^2 must
 /// stay a normal f64 for deltas down to the sample spacing.
 pub const PERTURB_F64_MIN_LOG10_SPACING_JULIA: f64 = -150.0;
@@ -254,9 +256,10 @@ impl Scene {
             EngineChoice::F64 | EngineChoice::Gpu | EngineChoice::GpuDf => false,
             EngineChoice::PerturbF64 | EngineChoice::PerturbFloatExp => true,
         };
-        if needs_perturbation && self.max_iter > MAX_PERTURB_ITER {
+        let mandelbrot = matches!(self.family, FamilySpec::Mandelbrot);
+        if needs_perturbation && self.max_iter > MAX_PERTURB_ITER && !mandelbrot {
             return Err(format!(
-                "iteration.max = {} is too many for the perturbation engine this view needs (zoom 1e{depth:.1}): it stores the whole reference orbit \
+                "iteration.max = {} is too many for the perturbation engine this Julia view needs (zoom 1e{depth:.1}): it stores the whole reference orbit \
                  (16 bytes per iteration plus its BLA tables), so at most {MAX_PERTURB_ITER} are accepted; lower iteration.max",
                 self.max_iter
             ));

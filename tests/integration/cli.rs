@@ -132,7 +132,18 @@ fn engines_forced_beyond_their_range_are_refused_with_a_reason() {
     rejects("too-deep-deltas", Some(deeper), &["--engine", "perturb-f64"], "f64 deltas underflow");
     rejects("bad-engine", Some("version = 1\n[render]\nengine = \"gmp\"\n"), &[], "scene.toml:3:10");
     rejects("bad-tolerance", Some("version = 1\n[render]\nbla_tolerance = 2.0\n"), &[], "scene.toml:3:17");
-    rejects("huge-reference", Some(deep), &["--max-iter", "4000000000"], "too many for the perturbation engine");
+    // A deep Julia view stores its whole references: limits past 2^25 are refused at once.
+    let julia = "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[view]\nzoom = \"1e14\"\n";
+    rejects("huge-reference", Some(julia), &["--max-iter", "4000000000"], "too many for the perturbation engine");
+}
+
+/// A deep Mandelbrot view with a limit past the 2^25 stored iterations renders only if its
+/// reference is one period of a nucleus; inside the main cardioid (an attracting fixed
+/// point, no period) the engine says so after storing 2^25 iterations (~0.5 GB, seconds).
+#[test]
+fn limits_past_the_stored_orbit_need_a_periodic_reference() {
+    let interior = "version = 1\n[view]\ncenter = [\"-0.1\", \"0.1\"]\nzoom = \"1e14\"\nwidth = 8\nheight = 6\n";
+    rejects("aperiodic", Some(interior), &["--max-iter", "40000000"], "found no period");
 }
 
 /// Deep views render with the perturbation engine the choice names, and the statistics
@@ -244,7 +255,8 @@ fn compare_at_depth_lists_the_engines_that_can_address_it() {
     let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let names: Vec<&str> = rows.as_array().unwrap().iter().map(|r| r["engine"].as_str().unwrap()).collect();
     assert_eq!(names, ["perturb-floatexp", "perturb-floatexp bla 1e-14", "perturb-floatexp bla 1e-6"]);
-    let o = deepfield(&[&args[..7], &["--max-iter", "4000000000"]].concat(), &dir);
+    let julia = ["compare", "--julia-c=-0.8,0.156", "--zoom", "1e320", "--size", "40x30", "--max-iter", "4000000000"];
+    let o = deepfield(&julia, &dir);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("no engine can address this view"), "{}", stderr(&o));
     for r in rows.as_array().unwrap().iter().take(2) {

@@ -176,6 +176,28 @@ fn against_a_reference_computed_for_a_view_elsewhere() {
     check("liiiines 1e320, reference 1.6 radii away", v, "perturb-floatexp");
 }
 
+/// A view centred on a period-2578 minibrot's nucleus (found by `locate` from the e1086
+/// location at zoom 1e60; size 4.3e-115), 1000 of its framing radii wide, with an iteration
+/// limit of 1e8: far past the 2^25 the engine stores, which works because the reference
+/// is one period of the nucleus's orbit and samples rebase through it.
+#[test]
+fn a_nucleus_centred_view_stores_one_period_for_any_iteration_limit() {
+    let e1086 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bench-e1086.toml")).unwrap();
+    let c = scene(&e1086).center;
+    let near = deepfield::locate::BigC::from_decimals(&c[0], &c[1], 300);
+    let m = deepfield::locate::search::minibrot_in_view(&near, FloatExp::exp10(-60.0).mul_f64(3.4), 100_000)
+        .expect("a minibrot");
+    assert_eq!(m.period, 2578);
+    let [re, im] = m.nucleus.to_decimals(3);
+    let radius = deepfield::locate::search::framing_radius(m.size).mul_f64(1000.0);
+    let l = radius.log2() * std::f64::consts::LOG10_2;
+    let radius = format!("{:.6}e{}", 10f64.powf(l - l.floor()), l.floor());
+    let leak = |t: String| -> &'static str { Box::leak(t.into_boxed_str()) };
+    let v = View::mandelbrot([leak(re.text().to_string()), leak(im.text().to_string())], leak(radius), 100_000_000, 24);
+    let (samples, engine, _) = measure_with_reference(&v);
+    assert_targets("nucleus of period 2578, 1e8 iterations", &samples, &engine, "perturb-f64", 24);
+}
+
 /// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
 /// in f64 after; the switch points are what this checks (a too-early switch to f64 once
 /// put N off by one on 5% of these pixels).
