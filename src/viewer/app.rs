@@ -114,6 +114,18 @@ pub struct ViewerApp {
     last_wheel: Option<Instant>,
     diff: Option<super::difference::Pending>,
     diff_shown: Option<(TextureHandle, u64, f64)>,
+    newton: NewtonState,
+}
+
+/// Newton zooming in progress and its settings.
+#[derive(Default)]
+struct NewtonState {
+    /// The search running on its own thread.
+    pending: Option<std::sync::mpsc::Receiver<Result<(Nav, String), String>>>,
+    /// Zoom by this factor towards what is found (1 or less: frame it).
+    factor: f64,
+    /// What the last search found (or why it found nothing).
+    note: Option<String>,
 }
 
 impl ViewerApp {
@@ -178,6 +190,7 @@ impl ViewerApp {
             last_wheel: None,
             diff: None,
             diff_shown: None,
+            newton: NewtonState::default(),
         };
         if app.file.layers.is_empty() {
             app.file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
@@ -479,6 +492,7 @@ impl eframe::App for ViewerApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.poll(&ctx);
+        self.poll_newton(&ctx);
         self.dropped_files(&ctx);
         self.keys(&ctx);
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
@@ -527,6 +541,25 @@ impl ViewerApp {
                 self.go(Nav::home());
             }
             ui.separator();
+            let minibrot = ui
+                .button("Minibrot")
+                .on_hover_text("N: Newton zoom to the minibrot under the pointer (here: the centre)");
+            if minibrot.clicked() {
+                self.start_newton(super::newton::Target::Minibrot, [0.0, 0.0]);
+            }
+            let point =
+                ui.button("Misiurewicz").on_hover_text("M: Newton zoom to the Misiurewicz point under the pointer");
+            if point.clicked() {
+                self.start_newton(super::newton::Target::Misiurewicz, [0.0, 0.0]);
+            }
+            let label = ui.label("step");
+            ui.add(egui::DragValue::new(&mut self.newton.factor).range(0.0..=1e6).speed(0.5).max_decimals(1))
+                .labelled_by(label.id)
+                .on_hover_text("zoom by this factor towards what is found; 0: frame it at once");
+            if self.newton.pending.is_some() {
+                ui.spinner();
+            }
+            ui.separator();
             ui.label("Show:");
             for (m, name) in [
                 (ViewMode::Cpu, "CPU"),
@@ -554,6 +587,10 @@ impl ViewerApp {
             ui.label(format!("max iter {}", self.file.iteration.max.get_ref()));
             ui.separator();
             ui.label(format!("engine {}", if self.engine.is_empty() { "-" } else { &self.engine }));
+            if let Some(note) = &self.newton.note {
+                ui.separator();
+                ui.label(note);
+            }
             ui.separator();
             let (done, total) = self.progress;
             if done < total {
@@ -840,9 +877,67 @@ impl ViewerApp {
         Ok(())
     }
 
+    /// Starts a Newton zoom search from pixel `at` (from the image centre, y down).
+    fn start_newton(&mut self, target: super::newton::Target, at: [f64; 2]) {
+        if self.file.formula.kind.get_ref() != "mandelbrot" {
+            self.newton.note = Some("Newton zoom searches the Mandelbrot set's parameter plane".into());
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (nav, h, factor) = (self.nav.clone(), self.size_px[1].max(1) as f64, self.newton.factor);
+        std::thread::spawn(move || {
+            let _ = tx.send(super::newton::newton_zoom(&nav, at, h, target, factor));
+        });
+        self.newton.pending = Some(rx);
+        self.newton.note = None;
+    }
+
+    /// Goes to the view a finished Newton search found.
+    fn poll_newton(&mut self, ctx: &egui::Context) {
+        let Some(rx) = &self.newton.pending else { return };
+        match rx.try_recv() {
+            Ok(result) => {
+                self.newton.pending = None;
+                match result {
+                    Ok((nav, line)) => {
+                        self.newton.note = Some(line);
+                        self.go(nav);
+                    }
+                    Err(e) => self.newton.note = Some(e),
+                }
+            }
+            Err(std::sync::mpsc::TryRecvError::Empty) => {
+                ctx.request_repaint_after(std::time::Duration::from_millis(50))
+            }
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => self.newton.pending = None,
+        }
+    }
+
+    /// Newton zooming is being searched.
+    pub fn newton_pending(&self) -> bool {
+        self.newton.pending.is_some()
+    }
+
+    /// What the last Newton zoom found, or why it found nothing.
+    pub fn newton_note(&self) -> Option<&str> {
+        self.newton.note.as_deref()
+    }
+
     fn keys(&mut self, ctx: &egui::Context) {
         if ctx.egui_wants_keyboard_input() {
             return;
+        }
+        let (newton_minibrot, newton_point, pointer) =
+            ctx.input(|i| (i.key_pressed(Key::N), i.key_pressed(Key::M), i.pointer.hover_pos()));
+        if newton_minibrot || newton_point {
+            let ppp = ctx.pixels_per_point();
+            let r = self.image_rect;
+            let at = pointer
+                .filter(|p| r.contains(*p))
+                .map_or([0.0, 0.0], |p| [((p.x - r.center().x) * ppp) as f64, ((p.y - r.center().y) * ppp) as f64]);
+            let target =
+                if newton_minibrot { super::newton::Target::Minibrot } else { super::newton::Target::Misiurewicz };
+            self.start_newton(target, at);
         }
         let h = self.size_px[1].max(1) as f64;
         let step = h * 0.1;

@@ -3,6 +3,7 @@
 //!
 //! - [`nav`]: the view as exact decimal centre and zoom, pans, zooms about a point, box zoom,
 //!   history (pure, tested);
+//! - [`newton`]: Newton zooming to the minibrot or Misiurewicz point near a pixel;
 //! - [`worker`]: progressive rendering on a background thread, cancelled by newer views;
 //! - [`app`]: the window: image, panels, input, recolouring, Julia preview, GPU modes;
 //! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export;
@@ -14,6 +15,7 @@ pub mod app;
 pub mod difference;
 pub mod export;
 pub mod nav;
+pub mod newton;
 pub mod palette_editor;
 pub mod worker;
 

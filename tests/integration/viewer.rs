@@ -339,3 +339,35 @@ fn deep_views_show_the_image_render_draws() {
     image_matches_render("e50", &e50);
     image_matches_render("e321", &shipped("liiiines.toml", |t| t));
 }
+
+/// Newton zooming: N with the pointer near the airplane goes to its nucleus (period 3,
+/// -1.7548776662466927..., published), framed at its size; Back returns.
+#[test]
+fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
+    let dir = scratch("viewer-newton");
+    let scene = "version = 1\n[view]\ncenter = [\"-1.7\", \"0\"]\nzoom = \"10\"\n[iteration]\nmax = 300\n";
+    let mut h = harness(&dir, scene);
+    let start = h.state().nav.clone();
+    let r = h.state().image_rect();
+    let [_, height] = h.state().image_size_px();
+    // -1.755 is 0.055 left of the centre: 0.055 / (0.4 / height) pixels.
+    let at = r.center() + Vec2::new(-(0.055 / (0.4 / height as f64)) as f32, 0.0);
+    h.hover_at(at);
+    h.run_steps(1);
+    h.key_press(egui::Key::N);
+    for _ in 0..200 {
+        h.run_steps(1);
+        if !h.state().newton_pending() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    settle(&mut h);
+    let nav = h.state().nav.clone();
+    assert!(h.state().newton_note().is_some_and(|n| n.contains("period 3")), "{:?}", h.state().newton_note());
+    assert!(nav.center[0].starts_with("-1.754877666246692760049508896358"), "{:?}", nav.center);
+    assert!((nav.log10_zoom - 48f64.log10()).abs() < 0.15, "zoom 1e{}", nav.log10_zoom);
+    h.key_press(egui::Key::Backspace);
+    settle(&mut h);
+    assert_eq!(h.state().nav, start);
+}
