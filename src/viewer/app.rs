@@ -64,13 +64,26 @@ pub struct Counters {
     pub julia_previews: u64,
 }
 
-/// State saved between runs.
+/// State saved between runs. Every field has a default, so a session saved by another
+/// version (with fields added or gone) still opens: what it lacks takes the default.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 struct Saved {
     scene: String,
     nav: Nav,
     export_path: String,
     scene_path: String,
+}
+
+impl Default for Saved {
+    fn default() -> Self {
+        Saved {
+            scene: "version = 1\n".into(),
+            nav: Nav::home(),
+            export_path: "deepfield-export.png".into(),
+            scene_path: "scene.toml".into(),
+        }
+    }
 }
 
 /// The application.
@@ -1240,5 +1253,19 @@ fn fmt_zoom(log10: f64) -> String {
     } else {
         let e = log10.floor();
         format!("{:.3}e{}", 10f64.powf(log10 - e), e)
+    }
+}
+
+#[cfg(test)]
+mod saved_tests {
+    use super::*;
+
+    /// A session saved with fields this version lacks, and without fields it has, opens.
+    #[test]
+    fn saved_sessions_survive_added_and_removed_fields() {
+        let old = r#"{"scene": "version = 1\n", "nav": {"center": ["-1", "0"], "log10_zoom": 2.0}, "retired": 3}"#;
+        let s: Saved = serde_json::from_str(old).expect("opens");
+        assert_eq!(s.nav.center, ["-1", "0"]);
+        assert_eq!(s.export_path, Saved::default().export_path);
     }
 }
