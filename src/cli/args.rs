@@ -37,6 +37,26 @@ pub enum Command {
     /// Join the work units of `render --tile K/N` into the whole PNG (streamed, one row in
     /// memory at a time).
     Assemble(AssembleArgs),
+    /// Compute a deep view's reference orbit(s) once and write them to a file that
+    /// `render --reference` reads (work units, frames of a zoom: no recomputing).
+    Reference(Box<ReferenceArgs>),
+}
+
+/// `deepfield reference`.
+#[derive(Debug, Args)]
+pub struct ReferenceArgs {
+    /// The scene and flags that override it.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The reference file to write.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Vector instruction set (the orbit's bits do not depend on it).
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// `deepfield assemble`.
@@ -213,6 +233,10 @@ pub struct RenderArgs {
     /// `deepfield assemble` joins with the others into the whole image, byte for byte.
     #[arg(long, value_name = "K/N", value_parser = parse_tile, conflicts_with = "exr")]
     pub tile: Option<(u32, u32)>,
+    /// Read the reference orbit(s) from FILE (written by `deepfield reference`) instead of
+    /// computing them; refused, with the reason, when the file does not serve the scene.
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
     /// Worker threads (default: one per core). Output does not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,

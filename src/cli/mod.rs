@@ -11,6 +11,7 @@ mod compare;
 mod find;
 mod palettes;
 mod recolor;
+mod reference;
 mod render;
 mod scene;
 mod sheet;
@@ -76,6 +77,7 @@ pub fn main() -> ExitCode {
         args::Command::Palettes(p) => palettes::run(p),
         args::Command::View(v) => view::run(v),
         args::Command::Find(f) => find::run(*f),
+        args::Command::Reference(r) => reference::run(*r),
         args::Command::Assemble(a) => {
             deepfield::io::assemble_png(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
         }

@@ -70,6 +70,10 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         None => (None, None),
     };
 
+    let references = match &args.reference {
+        Some(path) => Some(std::sync::Arc::new(super::reference::read(path)?)),
+        None => None,
+    };
     let bar = bar(args.quiet, rows.as_ref().map_or(scene.height, |r| r.end - r.start) as u64);
     let progress = |p: render::Progress| show(&bar, p);
     let aa = scene.aa as usize;
@@ -85,8 +89,14 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let result = {
         let png = &mut png;
         let exr_writer = &mut exr_writer;
-        let options =
-            Options { threads: args.threads.unwrap_or(0) as usize, exr_channels, simd, rows, ..Options::default() };
+        let options = Options {
+            threads: args.threads.unwrap_or(0) as usize,
+            exr_channels,
+            simd,
+            rows,
+            references: references.clone(),
+            ..Options::default()
+        };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, (bytes, chunks)| {
             png.as_mut().expect("open until finished").write_encoded(&bytes).map_err(|e| e.to_string())?;
             if let (Some(w), Some(c)) = (exr_writer.as_mut(), chunks) {

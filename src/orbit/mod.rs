@@ -12,6 +12,7 @@ pub mod fixed;
 pub mod mpfr;
 pub mod perturb;
 pub mod reference;
+pub mod saved;
 pub mod square;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -89,6 +90,9 @@ pub struct DeepSpec {
     /// The instruction set the reference orbit's squares run with (the same bits on every
     /// one).
     pub simd: SimdLevel,
+    /// Reference orbits computed earlier for this view (a reference file, see [`saved`]);
+    /// None computes them.
+    pub references: Option<std::sync::Arc<Vec<Reference>>>,
 }
 
 /// The most reference iterations stored (16 bytes each, plus BLA tables: 2^25 take ~2-4
@@ -121,14 +125,32 @@ impl From<Cancelled> for PrepareError {
 /// Progress of the shared work: (reference iterations done, of at most this many).
 pub type ReferenceProgress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
-/// Computes the reference orbit(s) and BLA tables for a scene.
-pub fn prepare(
+/// The precision of a view's reference orbits: 96 bits below its sample spacing.
+pub fn reference_bits(spec: &DeepSpec) -> u64 {
+    bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10)
+}
+
+/// How the references of a view are stepped (see [`reference::Stepping`]): a Mandelbrot
+/// reference from 0 that comes back within 2^-20 of a sample spacing (first order) of 0 is
+/// one period of a nucleus's orbit; past [`MAX_STORED_ITERATIONS`] only periodic ones are
+/// kept.
+fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
+    reference::Stepping {
+        share,
+        simd: spec.simd,
+        periodic_below: (spec.julia.is_none()).then(|| spec.spacing.mul_f64(2f64.powi(-20))),
+        store_limit: (spec.max_iter > MAX_STORED_ITERATIONS).then_some(MAX_STORED_ITERATIONS),
+    }
+}
+
+/// Computes the reference orbit(s) of a view: the centre's orbit (Mandelbrot), or for a
+/// Julia set the centre's and 0's (samples rebase onto the latter).
+pub fn references(
     spec: &DeepSpec,
     progress: ReferenceProgress<'_>,
     cancel: &AtomicBool,
-) -> Result<Perturbation, PrepareError> {
-    let started = std::time::Instant::now();
-    let bits = bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10);
+) -> Result<Vec<Reference>, PrepareError> {
+    let bits = reference_bits(spec);
     let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
     let zero = [Float::from(0u32), Float::from(0u32)];
     let center = big(&spec.center);
@@ -140,17 +162,9 @@ pub fn prepare(
         progress(done[0].load(Ordering::Relaxed) + done[1].load(Ordering::Relaxed), total);
     };
     let run = |k: usize, start: &[Float; 2], c: &[Float; 2], share: bool| {
-        let steps = reference::Stepping {
-            share,
-            simd: spec.simd,
-            // A Mandelbrot reference from 0 that comes back within 2^-20 of a sample
-            // spacing (first order) of 0 is one period of a nucleus's orbit.
-            periodic_below: (spec.julia.is_none()).then(|| spec.spacing.mul_f64(2f64.powi(-20))),
-            store_limit: (spec.max_iter > MAX_STORED_ITERATIONS).then_some(MAX_STORED_ITERATIONS),
-        };
+        let steps = stepping(spec, share);
         Reference::compute(start, c, spec.max_iter, spec.escape_radius, bits, steps, &|n| report(k, n), cancel)
     };
-    let mandelbrot = spec.julia.is_none();
     let refs = match &spec.julia {
         // One orbit: it may share its steps with a helper thread.
         None => vec![run(0, &zero, &center, true)?],
@@ -165,6 +179,22 @@ pub fn prepare(
         return Err(PrepareError::NotPeriodic { max_iter: spec.max_iter });
     }
     progress(total, total);
+    Ok(refs)
+}
+
+/// Computes the reference orbit(s) (unless `spec.references` brings them) and the BLA
+/// tables for a scene.
+pub fn prepare(
+    spec: &DeepSpec,
+    progress: ReferenceProgress<'_>,
+    cancel: &AtomicBool,
+) -> Result<Perturbation, PrepareError> {
+    let started = std::time::Instant::now();
+    let refs = match &spec.references {
+        Some(r) => r.clone(),
+        None => std::sync::Arc::new(references(spec, progress, cancel)?),
+    };
+    let mandelbrot = spec.julia.is_none();
     let orbit_seconds = started.elapsed().as_secs_f64();
     let dc_max = if mandelbrot { spec.spacing.mul_f64(spec.max_offset) } else { FloatExp::ZERO };
     let mut bla_fe = [None, None];
@@ -189,7 +219,7 @@ pub fn prepare(
     }
     let single_d2 = perturb::single_step_threshold(&bla_f64);
     Ok(Perturbation {
-        refs: std::sync::Arc::new(refs),
+        refs,
         bla_fe: std::sync::Arc::new(bla_fe),
         bla_f64: std::sync::Arc::new(bla_f64),
         extent: spec.spacing.mul_f64(spec.max_offset),

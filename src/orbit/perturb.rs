@@ -965,6 +965,7 @@ mod tests {
                 bla: Some(eps),
                 numbers: Numbers::FloatExp,
                 simd: SimdLevel::detect(),
+                references: None,
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let skip = p.skip.expect("the view has common steps");
@@ -1025,6 +1026,7 @@ mod tests {
                 bla,
                 numbers,
                 simd: SimdLevel::detect(),
+                references: None,
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let offsets: Vec<[f64; 2]> = (0..h)

@@ -42,6 +42,9 @@ pub struct Stepping {
     pub store_limit: Option<u32>,
 }
 
+/// A stored value too small for f64: its index and value.
+pub type Tiny = (u32, [FloatExp; 2]);
+
 /// An orbit Z_0 .. Z_last of z -> z^2 + C.
 #[derive(Debug, Clone)]
 pub struct Reference {
@@ -152,6 +155,16 @@ impl Reference {
     /// True when the orbit escaped (at index `last`).
     pub fn escaped(&self) -> bool {
         self.escaped
+    }
+
+    /// The stored values: Z_n as f64, and those too small for f64 with their exponents.
+    pub fn parts(&self) -> (&[[f64; 2]], &[Tiny]) {
+        (&self.z, &self.tiny)
+    }
+
+    /// An orbit from stored parts (a reference file's); `z` must not be empty.
+    pub fn from_parts(z: Vec<[f64; 2]>, tiny: Vec<Tiny>, escaped: bool, bits: u64, period: Option<u32>) -> Reference {
+        Reference { z, tiny, escaped, bits, period, truncated: false }
     }
 
     /// The period found (see [`Stepping::periodic_below`]): the orbit stored is one period.

@@ -176,6 +176,9 @@ pub struct Options {
     /// A deep engine computed here is built for offsets this many times the raster's own
     /// (None: 1), so that later rasters panned or zoomed out by up to that much reuse it.
     pub deep_reach: Option<f64>,
+    /// Reference orbits read from a file (`render --reference`), used instead of computing
+    /// them when they serve the view.
+    pub references: Option<Arc<orbit::saved::SavedReferences>>,
 }
 
 impl Options {
@@ -216,9 +219,35 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
     FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
 }
 
+/// What the deep engine needs to know about `scene` under `plan` (None unless the plan
+/// perturbs), with the field parameters it is derived from.
+pub fn deep_spec(scene: &Scene, plan: &EnginePlan, options: &Options) -> (FieldParams, Option<DeepSpec>) {
+    let mut params = field_params(scene, options.exr_channels);
+    params.orbit.simd = options.simd;
+    let EngineKind::Perturb { numbers, bla } = plan.kind else { return (params, None) };
+    let spec = DeepSpec {
+        center: scene.center.clone(),
+        julia: match &scene.family {
+            FamilySpec::Mandelbrot => None,
+            FamilySpec::Julia { c } => Some(c.clone()),
+        },
+        spacing: scene.scale.spacing(params.grid.height),
+        max_offset: params.grid.max_offset() * options.deep_reach.unwrap_or(1.0).max(1.0),
+        max_iter: scene.max_iter,
+        escape_radius: scene.escape_radius,
+        derivative: params.needs.de,
+        bla,
+        numbers,
+        simd: params.orbit.simd,
+        references: None,
+    };
+    (params, Some(spec))
+}
+
 /// The field parameters for `plan`, with the deep engine's reference orbits and BLA tables
-/// computed (once, shared by every strip) when the plan perturbs. Returns the seconds
-/// the shared work took.
+/// computed (once, shared by every strip) when the plan perturbs; the orbits come from
+/// `options.references` when given (refused, with the reason, if they do not serve the
+/// view). Returns the seconds the shared work took.
 pub fn prepare_field(
     scene: &Scene,
     plan: &EnginePlan,
@@ -227,24 +256,12 @@ pub fn prepare_field(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(FieldParams, f64), RenderError> {
     let start = Instant::now();
-    let mut params = field_params(scene, options.exr_channels);
-    params.orbit.simd = options.simd;
-    if let EngineKind::Perturb { numbers, bla } = plan.kind {
-        let spec = DeepSpec {
-            center: scene.center.clone(),
-            julia: match &scene.family {
-                FamilySpec::Mandelbrot => None,
-                FamilySpec::Julia { c } => Some(c.clone()),
-            },
-            spacing: scene.scale.spacing(params.grid.height),
-            max_offset: params.grid.max_offset() * options.deep_reach.unwrap_or(1.0).max(1.0),
-            max_iter: scene.max_iter,
-            escape_radius: scene.escape_radius,
-            derivative: params.needs.de,
-            bla,
-            numbers,
-            simd: params.orbit.simd,
-        };
+    let (mut params, spec) = deep_spec(scene, plan, &options);
+    if let Some(mut spec) = spec {
+        if let Some(saved) = &options.references {
+            saved.serves(&spec).map_err(|e| RenderError::Engine(e.to_string()))?;
+            spec.references = Some(saved.refs.clone());
+        }
         let shared = options.deep.as_ref().filter(|d| {
             (d.max_iter, d.escape2, d.derivative, d.mandelbrot)
                 == (spec.max_iter, spec.escape_radius * spec.escape_radius, spec.derivative, spec.julia.is_none())
@@ -255,6 +272,11 @@ pub fn prepare_field(
             let report = |done, total| progress(Progress::Reference { done, total });
             params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
         }
+    } else if options.references.is_some() {
+        return Err(RenderError::Engine(format!(
+            "the scene runs the {} engine, which uses no reference orbit; leave out the reference file",
+            plan.name
+        )));
     }
     Ok((params, start.elapsed().as_secs_f64()))
 }

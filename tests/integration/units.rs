@@ -86,3 +86,55 @@ fn incomplete_repeated_or_mixed_units_are_refused() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("0 <= K < N"));
 }
+
+/// Reference files: computed once, read by a render and by every work unit, the bytes are
+/// those of computing in place (Mandelbrot at 1e321 and a Julia set at 1e310, two orbits);
+/// a file for another view, a damaged file, and a file given to a shallow scene are refused.
+#[test]
+fn reference_files_serve_renders_and_units_byte_for_byte() {
+    let mut dirs = Vec::new();
+    for (name, scene) in [("liiiines.toml", "48x36"), ("julia-deep-e310.toml", "40x30")] {
+        let dir = scratch(&format!("units-reference-{name}"));
+        let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap();
+        std::fs::write(dir.join("scene.toml"), &text).unwrap();
+        let size = ["--size", scene];
+        ok(deepfield(&[&["reference", "scene.toml", "-o", "scene.dfr"][..], &size].concat(), &dir));
+        ok(deepfield(&[&["render", "scene.toml", "-o", "computed.png"][..], &size].concat(), &dir));
+        ok(deepfield(
+            &[&["render", "scene.toml", "--reference", "scene.dfr", "-o", "read.png"][..], &size].concat(),
+            &dir,
+        ));
+        let same = |a: &str, b: &str| std::fs::read(dir.join(a)).unwrap() == std::fs::read(dir.join(b)).unwrap();
+        assert!(same("computed.png", "read.png"), "{name}: the render from the file differs");
+        for k in 0..3 {
+            let (tile, out) = (format!("{k}/3"), format!("unit-{k}.png"));
+            let args = ["render", "scene.toml", "--reference", "scene.dfr", "--tile", &tile, "-o", &out];
+            ok(deepfield(&[&args[..], &size].concat(), &dir));
+        }
+        ok(deepfield(&["assemble", "unit-0.png", "unit-1.png", "unit-2.png", "-o", "assembled.png"], &dir));
+        assert!(same("computed.png", "assembled.png"), "{name}: units from the file differ");
+        dirs.push(dir);
+    }
+    let dir = &dirs[0];
+    let refused = |args: &[&str], needle: &str| {
+        let o = deepfield(args, dir);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "expected `{needle}`: {err}");
+    };
+    refused(
+        &["render", "scene.toml", "--reference", "scene.dfr", "--max-iter", "12000", "-o", "x.png"],
+        "its max_iter is 12500, the scene's 12000",
+    );
+    refused(&["render", "scene.toml", "--reference", "scene.dfr", "--zoom", "1e330", "-o", "x.png"], "bits");
+    let mut bytes = std::fs::read(dir.join("scene.dfr")).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 1;
+    std::fs::write(dir.join("damaged.dfr"), &bytes).unwrap();
+    refused(&["render", "scene.toml", "--reference", "damaged.dfr", "-o", "x.png"], "checksum");
+    std::fs::write(dir.join("cut.dfr"), &bytes[..mid]).unwrap();
+    refused(&["render", "scene.toml", "--reference", "cut.dfr", "-o", "x.png"], "not a deepfield reference file");
+    refused(&["render", "--reference", "scene.dfr", "-o", "x.png"], "uses no reference orbit");
+    refused(&["reference", "-o", "x.dfr"], "nothing to write");
+    assert!(!dir.join("x.png").exists() && !dir.join("x.dfr").exists());
+}

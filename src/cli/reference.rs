@@ -1,0 +1,54 @@
+//! `deepfield reference`: a deep view's reference orbits computed once and written to a file;
+//! and reading such a file for `render --reference`.
+
+use std::path::Path;
+
+use anyhow::anyhow;
+use deepfield::orbit::saved::{SavedReferences, key_of};
+use deepfield::render::{self, Options};
+
+use super::Failure;
+use super::args::ReferenceArgs;
+
+/// Runs `deepfield reference`.
+pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
+    let cancel = super::render::install_ctrlc();
+    let scene = super::scene::load(&args.scene)?;
+    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let simd = super::simd_level(args.simd.as_deref())?;
+    let options = Options { simd, ..Options::default() };
+    let (_, spec) = render::deep_spec(&scene, &plan, &options);
+    let Some(spec) = spec else {
+        return Err(Failure::Input(anyhow!(
+            "the scene runs the {} engine, which uses no reference orbit: there is nothing to write",
+            plan.name
+        )));
+    };
+    // Opened first: an unwritable path fails before the work.
+    let (file, mut w) = deepfield::io::AtomicFile::create(&args.output).map_err(Failure::input)?;
+    let bar = super::render::bar(args.quiet, spec.max_iter as u64);
+    let progress = |done: u64, _total: u64| {
+        if let Some(b) = &bar {
+            b.set_position(done);
+        }
+    };
+    let refs = deepfield::orbit::references(&spec, &progress, &cancel).map_err(|e| match e {
+        deepfield::orbit::PrepareError::Cancelled => Failure::Cancelled,
+        e => Failure::Input(anyhow!(e)),
+    })?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let saved = SavedReferences { key: key_of(&spec), refs: std::sync::Arc::new(refs) };
+    use std::io::Write as _;
+    w.write_all(&saved.encode()).map_err(|e| Failure::Runtime(e.into()))?;
+    let path = file.dest().display().to_string();
+    drop(w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{path}: {}", e.error())))?);
+    file.commit_written().map_err(|e| Failure::Runtime(e.into()))
+}
+
+/// Reads a reference file (bad input, with the path, when it is not one).
+pub fn read(path: &Path) -> Result<SavedReferences, Failure> {
+    let bytes = std::fs::read(path).map_err(|e| Failure::Input(anyhow!("{}: {e}", path.display())))?;
+    SavedReferences::decode(&bytes).map_err(|e| Failure::Input(anyhow!("{}: {e}", path.display())))
+}
