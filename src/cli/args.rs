@@ -40,6 +40,50 @@ pub enum Command {
     /// Compute a deep view's reference orbit(s) once and write them to a file that
     /// `render --reference` reads (work units, frames of a zoom: no recomputing).
     Reference(Box<ReferenceArgs>),
+    /// Write a zoom-out sequence of EXR keyframes (00000.exr outermost .. the scene's view),
+    /// each a factor shallower than the next, from the deepest frame's one reference orbit.
+    Zoom(Box<ZoomArgs>),
+}
+
+/// `deepfield zoom`.
+#[derive(Debug, Args)]
+pub struct ZoomArgs {
+    /// The deepest view and flags that override it.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Number of keyframes.
+    #[arg(long, value_name = "N", conflicts_with = "to_zoom")]
+    pub frames: Option<u32>,
+    /// Or: keyframes out to this zoom (the outermost is at most this deep).
+    #[arg(long, value_name = "Z")]
+    pub to_zoom: Option<String>,
+    /// Zoom factor between keyframes (a decimal, taken exactly).
+    #[arg(long, value_name = "F", default_value = "2", value_parser = parse_decimal)]
+    pub factor: String,
+    /// Only keyframes A..B (0-based, B excluded): one work unit of the sequence.
+    #[arg(long, value_name = "A..B", value_parser = parse_units)]
+    pub units: Option<(u32, u32)>,
+    /// Read the deepest frame's reference orbit(s) from FILE instead of computing them.
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
+    /// Folder for the keyframes (created if missing).
+    #[arg(short, long, value_name = "DIR")]
+    pub output: PathBuf,
+    /// Vector instruction set (output does not depend on it).
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
+    /// Print the time of the reference and of the frames.
+    #[arg(long)]
+    pub stats: bool,
+    /// No line per keyframe.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_units(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not A..B (keyframe indices, B excluded), like 0..25");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    Ok((a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?))
 }
 
 /// `deepfield reference`.

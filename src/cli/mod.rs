@@ -16,6 +16,7 @@ mod render;
 mod scene;
 mod sheet;
 mod view;
+mod zoom;
 
 use std::process::ExitCode;
 
@@ -78,6 +79,7 @@ pub fn main() -> ExitCode {
         args::Command::View(v) => view::run(v),
         args::Command::Find(f) => find::run(*f),
         args::Command::Reference(r) => reference::run(*r),
+        args::Command::Zoom(z) => zoom::run(*z),
         args::Command::Assemble(a) => {
             deepfield::io::assemble_png(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
         }

@@ -12,11 +12,19 @@ use super::args::SceneArgs;
 
 /// Loads the scene named by `args` (or the default one) and applies the flags.
 pub fn load(args: &SceneArgs) -> Result<Scene, Failure> {
+    load_edited(args, |_| {})
+}
+
+/// [`load`], with `edit` applied after the flags (a keyframe's zoom, say).
+pub fn load_edited(args: &SceneArgs, edit: impl FnOnce(&mut SceneFile)) -> Result<Scene, Failure> {
     let (origin, text, base_dir) = match &args.path {
         None => ("command line".to_string(), "version = 1\n".to_string(), PathBuf::from(".")),
         Some(path) => read_source(path)?,
     };
-    load_text(&origin, &text, &base_dir, |file| apply_flags(file, args))
+    load_text(&origin, &text, &base_dir, |file| {
+        apply_flags(file, args);
+        edit(file);
+    })
 }
 
 /// Parses scene text, lets `edit` change the raw scene, and validates it.

@@ -46,12 +46,25 @@ struct View {
     /// Iterate against a reference computed for a view centred this far away (in radii,
     /// x and y) and built to reach 3 views, moved here as the viewer moves it on a pan.
     reference_from: Option<[f64; 2]>,
+    /// Iterate against the reference orbits of the same centre at this deeper radius (a
+    /// zoom-out keyframe reading the deepest frame's orbits).
+    reference_radius: Option<&'static str>,
 }
 
 impl View {
     /// A Mandelbrot view with the engine chosen automatically and BLA at its default.
     fn mandelbrot(center: [&'static str; 2], radius: &'static str, max_iter: u32, samples: u32) -> View {
-        View { center, radius, julia: None, max_iter, engine: "auto", samples, render: "", reference_from: None }
+        View {
+            center,
+            radius,
+            julia: None,
+            max_iter,
+            engine: "auto",
+            samples,
+            render: "",
+            reference_from: None,
+            reference_radius: None,
+        }
     }
 }
 
@@ -93,6 +106,17 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
             bigfloat::to_floatexp(&Float::from_rational_prec(d, 64).0)
         });
         options.deep = Some(std::sync::Arc::new(engine.with_origin(origin).expect("within reach")));
+    }
+    if let Some(radius) = v.reference_radius {
+        let deeper = scene(&text.replacen(&format!("radius = \"{}\"", v.radius), &format!("radius = \"{radius}\""), 1));
+        let plan = deeper.engine().unwrap();
+        let spec = render::deep_spec(&deeper, &plan, &options).1.expect("deep");
+        let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).unwrap();
+        let key = deepfield::orbit::saved::key_of(&spec);
+        options.references = Some(std::sync::Arc::new(deepfield::orbit::saved::SavedReferences {
+            key,
+            refs: std::sync::Arc::new(refs),
+        }));
     }
     let (params, _) = render::prepare_field(&s, &plan, options, &cancel, &|_| {}).expect("prepared");
     if let (Some(_), Some(d)) = (v.reference_from, &params.deep) {
@@ -198,6 +222,16 @@ fn a_nucleus_centred_view_stores_one_period_for_any_iteration_limit() {
     assert_targets("nucleus of period 2578, 1e8 iterations", &samples, &engine, "perturb-f64", 24);
 }
 
+/// Views served by the reference orbits of a deeper view of the same centre (as zoom-out
+/// keyframes are): 1e300 from 1e320's, and 1e20 from 1e50's.
+#[test]
+fn against_the_reference_of_a_deeper_view_of_the_same_centre() {
+    let v = View { reference_radius: Some("2e-320"), ..View::mandelbrot(LIIIINES, "2e-300", 12500, 24) };
+    check("liiiines 1e300 from 1e320's reference", v, "perturb-floatexp");
+    let v = View { reference_radius: Some("2e-50"), ..View::mandelbrot(MINIBROT, "2e-20", 10000, 30) };
+    check("minibrot 1e20 from 1e50's reference", v, "perturb-f64");
+}
+
 /// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
 /// in f64 after; the switch points are what this checks (a too-early switch to f64 once
 /// put N off by one on 5% of these pixels).
@@ -289,6 +323,7 @@ fn julia_sets_at_1e40_and_1e310() {
         samples: 40,
         render: "",
         reference_from: None,
+        reference_radius: None,
     };
     check("julia 1e40", e40, "perturb-f64");
     let e310 = View {
@@ -303,6 +338,7 @@ fn julia_sets_at_1e40_and_1e310() {
         samples: 24,
         render: "",
         reference_from: None,
+        reference_radius: None,
     };
     check("julia 1e310", e310, "perturb-floatexp");
 }

@@ -138,3 +138,42 @@ fn reference_files_serve_renders_and_units_byte_for_byte() {
     refused(&["reference", "-o", "x.dfr"], "nothing to write");
     assert!(!dir.join("x.png").exists() && !dir.join("x.dfr").exists());
 }
+
+/// A zoom-out sequence: keyframes from the outermost (direct f64 at zoom 3e6) to the
+/// scene's own view (1e321), every perturbing one from the deepest frame's reference
+/// orbits: the deepest keyframe is `render --exr` byte for byte, a shallower one is
+/// `render --exr --reference` of its zoom byte for byte, and `--units` renders a subset.
+#[test]
+fn zoom_sequences_share_the_deepest_reference() {
+    let dir = scratch("units-zoom");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/liiiines.toml")).unwrap();
+    std::fs::write(dir.join("scene.toml"), &text).unwrap();
+    let size = ["--size", "32x24"];
+    let zoom = ["zoom", "scene.toml", "--frames", "8", "--factor", "1e45", "-o", "frames", "--stats", "-q"];
+    let o = ok(deepfield(&[&zoom[..], &size].concat(), &dir));
+    let stats = String::from_utf8_lossy(&o.stdout);
+    assert!(stats.contains("keyframes   8 of 8") && stats.contains("once"), "{stats}");
+    let names: Vec<String> = (0..8).map(|k| format!("frames/{k:05}.exr")).collect();
+    for n in &names {
+        assert!(dir.join(n).is_file(), "{n} missing");
+    }
+    ok(deepfield(&[&["render", "scene.toml", "--exr", "deep.exr", "-o", "deep.png"][..], &size].concat(), &dir));
+    let same = |a: &str, b: &str| std::fs::read(dir.join(a)).unwrap() == std::fs::read(dir.join(b)).unwrap();
+    assert!(same("frames/00007.exr", "deep.exr"), "the deepest keyframe differs from render --exr");
+    // Keyframe 5 is two factors out: zoom 3.16254e321 / 1e90.
+    ok(deepfield(&[&["reference", "scene.toml", "-o", "deep.dfr"][..], &size].concat(), &dir));
+    let z5 = format!("316254{}", "0".repeat(226));
+    let render5 =
+        ["render", "scene.toml", "--zoom", &z5, "--reference", "deep.dfr", "--exr", "five.exr", "-o", "five.png"];
+    ok(deepfield(&[&render5[..], &size].concat(), &dir));
+    assert!(same("frames/00005.exr", "five.exr"), "keyframe 5 differs from render --reference at its zoom");
+    let unit = ["zoom", "scene.toml", "--frames", "8", "--factor", "1e45", "--units", "2..4", "-o", "unit", "-q"];
+    ok(deepfield(&[&unit[..], &size].concat(), &dir));
+    let mut written: Vec<String> = std::fs::read_dir(dir.join("unit"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(written, ["00002.exr", "00003.exr"]);
+    assert!(same("unit/00003.exr", "frames/00003.exr"));
+}

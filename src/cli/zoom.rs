@@ -1,0 +1,160 @@
+//! `deepfield zoom`: a zoom-out sequence of keyframes, each a fixed factor shallower than
+//! the next, as EXR raw data (Kalles Fraktaler / Fraktaler-3 channels) for a zoom video
+//! assembler, all from the one reference orbit of the deepest frame.
+//!
+//! Keyframe k of N is `DIR/NNNNN.exr` (five digits), the view at zoom Z / factor^(N-1-k):
+//! index 0 is the outermost, N-1 the scene's own view, so depth grows with the index.
+//! Every frame that perturbs reads the deepest frame's reference orbits (computed once, or
+//! read from `--reference`): a shallower frame needs fewer bits and the same centre, so
+//! they serve it; frames shallow enough for direct f64 iteration need none. `--units A..B`
+//! renders only those keyframes: a work unit of the sequence for a job array.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::anyhow;
+use deepfield::field::ChannelSet;
+use deepfield::io::{ExrLayout, ExrWriter};
+use deepfield::num::Decimal;
+use deepfield::orbit::saved::{SavedReferences, key_of};
+use deepfield::render::{self, Options, RenderError};
+use deepfield::scene::Scene;
+use deepfield::scene::raw::cli;
+use malachite_q::Rational;
+
+use super::Failure;
+use super::args::ZoomArgs;
+
+/// Runs `deepfield zoom`.
+pub fn run(args: ZoomArgs) -> Result<(), Failure> {
+    let cancel = super::render::install_ctrlc();
+    let simd = super::simd_level(args.simd.as_deref())?;
+    let deepest = super::scene::load(&args.scene)?;
+    let factor = Decimal::parse(&args.factor).map_err(Failure::input)?;
+    if factor.is_negative() || factor.log10_abs() <= 0.0 || factor.log10_abs() > 1e6 {
+        return Err(Failure::Input(anyhow!("--factor must be above 1, got {factor}")));
+    }
+    let log10_zoom = 2f64.log10() - deepest.log10_radius;
+    let frames = match (args.frames, &args.to_zoom) {
+        (Some(n), _) => n,
+        (None, Some(z)) => {
+            let z = Decimal::parse(z).map_err(Failure::input)?;
+            if z.is_zero() || z.is_negative() || z.log10_abs() > log10_zoom {
+                return Err(Failure::Input(anyhow!(
+                    "--to-zoom {z} must be positive and no deeper than the scene's zoom"
+                )));
+            }
+            ((log10_zoom - z.log10_abs()) / factor.log10_abs()).ceil() as u32 + 1
+        }
+        (None, None) => return Err(Failure::Input(anyhow!("give --frames N or --to-zoom Z"))),
+    };
+    if frames == 0 || frames > 100_000 {
+        return Err(Failure::Input(anyhow!("{frames} keyframes: give between 1 and 100000")));
+    }
+    let units = match args.units {
+        Some((a, b)) if a < b && b <= frames => a..b,
+        Some((a, b)) => {
+            return Err(Failure::Input(anyhow!("--units {a}..{b}: keyframes are 0..{frames}, and A must be below B")));
+        }
+        None => 0..frames,
+    };
+    let dir = &args.output;
+    std::fs::create_dir_all(dir).map_err(|e| Failure::Input(anyhow!("{}: {e}", dir.display())))?;
+    let start = Instant::now();
+    // The deepest frame's reference orbits, shared by every frame that perturbs.
+    let plan = deepest.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let options = Options { simd, ..Options::default() };
+    let references = match (&args.reference, render::deep_spec(&deepest, &plan, &options).1) {
+        (Some(path), _) => Some(Arc::new(super::reference::read(path)?)),
+        (None, Some(spec)) => {
+            let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).map_err(|e| match e {
+                deepfield::orbit::PrepareError::Cancelled => Failure::Cancelled,
+                e => Failure::Input(anyhow!(e)),
+            })?;
+            Some(Arc::new(SavedReferences { key: key_of(&spec), refs: Arc::new(refs) }))
+        }
+        (None, None) => None,
+    };
+    let reference_seconds = start.elapsed().as_secs_f64();
+    let mut frame_seconds = 0.0;
+    for k in units.clone() {
+        let steps_out = frames - 1 - k;
+        let zoom = shallower(&deepest, &factor, steps_out);
+        // The deepest keyframe is the scene as given (its zoom written as it was).
+        let scene = if steps_out == 0 {
+            deepest.clone()
+        } else {
+            super::scene::load_edited(&args.scene, |file| {
+                file.view.zoom = Some(cli(zoom.clone()));
+                file.view.radius = None;
+            })?
+        };
+        let path = dir.join(format!("{k:05}.exr"));
+        let t = Instant::now();
+        write_frame(&scene, &path, simd, references.clone(), &cancel)?;
+        frame_seconds += t.elapsed().as_secs_f64();
+        if !args.quiet {
+            eprintln!("keyframe {k} of {frames}: zoom {zoom} ({:.2} s)", t.elapsed().as_secs_f64());
+        }
+    }
+    if args.stats {
+        let total = start.elapsed().as_secs_f64();
+        use std::io::Write as _;
+        let text = format!(
+            "keyframes   {} of {frames} (factor {})\nreference   {reference_seconds:.3} s, once\nframes      {frame_seconds:.3} s\nwall time   {total:.3} s\n",
+            units.len(),
+            factor
+        );
+        std::io::stdout().lock().write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
+    }
+    Ok(())
+}
+
+/// The zoom `steps` factors shallower than the scene's, as exact decimal text.
+fn shallower(scene: &Scene, factor: &Decimal, steps: u32) -> String {
+    let zoom = match &scene.scale {
+        deepfield::orbit::Scale::Zoom(z) => z.to_rational(),
+        deepfield::orbit::Scale::Radius(r) => Rational::from(2u32) / r.to_rational(),
+    };
+    let f = factor.to_rational();
+    let mut z = zoom;
+    for _ in 0..steps {
+        z /= &f;
+    }
+    // Digits enough for any zoom of at most 1e6 steps of a factor above 1.
+    Decimal::from_rational(&z, 40).text().to_string()
+}
+
+/// Renders one keyframe's raw data to `path` (EXR, the scene's channels).
+fn write_frame(
+    scene: &Scene,
+    path: &Path,
+    simd: deepfield::simd_level::SimdLevel,
+    references: Option<Arc<SavedReferences>>,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<(), Failure> {
+    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let perturbs = matches!(plan.kind, deepfield::scene::EngineKind::Perturb { .. });
+    let channels = if scene.channels == ChannelSet::default() { ChannelSet::default_exr() } else { scene.channels };
+    let layout = ExrLayout::new(channels, &scene.traps);
+    let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
+    let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
+    let (mut writer, enc) = ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine).map_err(Failure::input)?;
+    let aa = scene.aa as usize;
+    let prepare =
+        |strip: &render::RenderedStrip| enc.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref());
+    let options = Options {
+        exr_channels: channels,
+        simd,
+        references: if perturbs { references } else { None },
+        ..Options::default()
+    };
+    let result = render::render(scene, options, cancel, &|_| {}, &prepare, |_, chunks| writer.write(chunks));
+    match result {
+        Ok(_) => writer.finish().map_err(|e| Failure::Runtime(e.into())),
+        Err(RenderError::Cancelled) => Err(Failure::Cancelled),
+        Err(RenderError::Engine(e)) => Err(Failure::Input(anyhow!(e))),
+        Err(e) => Err(Failure::Runtime(anyhow!(e))),
+    }
+}
