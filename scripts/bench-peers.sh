@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# deepfield beside rust-fractal-core, side by side in one run: each benchmark location is
+# rendered by both programs in turn, ROUNDS times (alternating, since a shared machine's
+# speed drifts), whole process wall time, and the fastest and median of each are printed.
+#
+# rust-fractal-core is not built here: build it yourself (its README; it wants its own
+# `target-cpu=native`) and give its checkout folder, where `target/release/main` and
+# `benchmarks/` are, and a settings file there with `image_width = 800` and
+# `image_height = 600` (its `default.toml` edited; the `output/` folder must exist).
+#
+#   scripts/bench-peers.sh ~/src/rust-fractal-core default.toml 5
+set -euo pipefail
+if [ $# -lt 2 ]; then
+    echo "usage: $0 RFC_DIR RFC_SETTINGS [ROUNDS] [DEEPFIELD]" >&2
+    exit 2
+fi
+rfc_dir=$(cd "$1" && pwd) settings=$2 rounds=${3:-3}
+here=$(cd "$(dirname "$0")/.." && pwd)
+df=${4:-$here/target/release/deepfield}
+[ -x "$df" ] || (cd "$here" && cargo build --release --locked)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+# deepfield scene : rust-fractal-core benchmark file (the same location, 800x600).
+pairs="bench-e14:1e14 bench-e50:1e50 bench-e113:5e113 bench-e227:5e227 bench-e533:4e533 bench-e1086:1e1086"
+echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'); deepfield SIMD: $("$df" render "$here/scenes/bench-e14.toml" --size 8x6 -o "$out/s.png" --stats -q | awk '/^simd/ {$1=""; print substr($0, 2)}')"
+printf '%-12s %22s %22s %8s\n' location "deepfield (fast/med)" "rust-fractal-core" ratio
+for pair in $pairs; do
+    scene=${pair%%:*} bench=${pair##*:}
+    for _ in $(seq "$rounds"); do
+        s=$(date +%s.%N)
+        "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" -q
+        e=$(date +%s.%N)
+        echo "d $(echo "$e - $s" | bc -l)"
+        s=$(date +%s.%N)
+        (cd "$rfc_dir" && ./target/release/main "benchmarks/$bench.toml" -o "$settings" > /dev/null 2>&1)
+        e=$(date +%s.%N)
+        echo "r $(echo "$e - $s" | bc -l)"
+    done | sort -k1,1 -k2,2n | awk -v name="$scene" '
+        {t[$1 "," (++n[$1])] = $2}
+        END {
+            df = t["d,1"]; dm = t["d," int((n["d"] + 1) / 2)]
+            rf = t["r,1"]; rm = t["r," int((n["r"] + 1) / 2)]
+            printf "%-12s %10.2f /%7.2f s %10.2f /%7.2f s %8.2f\n", name, df, dm, rf, rm, dm / rm
+        }'
+done
+echo "ratio: deepfield median / rust-fractal-core median (below 1: deepfield faster)"
