@@ -6,6 +6,7 @@
 //! around it all ([`scene`], [`render`], [`io`]); [`gpu`] runs the 2D paths on a GPU through
 //! wgpu. The command line lives in the binary.
 
+pub mod cancel;
 pub mod coloring;
 pub mod compare;
 pub mod compose;

@@ -25,37 +25,8 @@ use crate::orbit::{Counters, Perturbation};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 
-/// N of a sample that never escaped within the iteration limit.
-pub const INTERIOR: u32 = u32::MAX;
-
-/// The work was cancelled before it finished.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("cancelled")]
-pub struct Cancelled;
-
-/// What one orbit ended with.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Orbit {
-    /// Escape index, or [`INTERIOR`].
-    pub n: u32,
-    /// z_n (zero for interior orbits).
-    pub z: [f64; 2],
-    /// dz_n when the derivative was tracked (zero otherwise and for interior orbits).
-    pub dz: [f64; 2],
-}
-
-impl Orbit {
-    /// The record of an orbit that never escaped.
-    pub fn interior() -> Self {
-        Self { n: INTERIOR, z: [0.0; 2], dz: [0.0; 2] }
-    }
-
-    /// Iterations a loop started at index `start` performed to reach this end.
-    pub fn iterations_from(&self, start: u32, max_iter: u32) -> u64 {
-        let end = if self.n == INTERIOR { max_iter } else { self.n };
-        end.saturating_sub(start) as u64
-    }
-}
+pub use crate::cancel::Cancelled;
+pub use crate::formula::end::{INTERIOR, Orbit};
 
 /// Parameters of the orbit loop itself.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -199,7 +170,7 @@ fn fill_ifs(traps: &[Trap], points: &[[f64; 2]], planes: &mut Planes) {
     for (trap, plane) in traps.iter().zip(planes.traps.iter_mut()) {
         if let (Trap::Ifs(p), TrapPlane::Density(d)) = (trap, plane) {
             for (v, pt) in d.iter_mut().zip(points) {
-                *v = crate::gpu::ifs::density(p, pt[0] as f32, pt[1] as f32);
+                *v = crate::trap::ifs::density(p, pt[0] as f32, pt[1] as f32);
             }
         }
     }

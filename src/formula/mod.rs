@@ -7,6 +7,8 @@
 //! more accurate, and on the machines we target they move work from the saturated add
 //! pipes to the multiply pipes.
 
+pub mod end;
+
 /// Which family of maps z -> z^2 + c is iterated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Family {

@@ -25,7 +25,7 @@ pub use bla::BlaTable;
 pub use perturb::{Counters, Numbers, Perturbation, Skip};
 pub use reference::Reference;
 
-use crate::field::Cancelled;
+use crate::cancel::Cancelled;
 use crate::num::{Decimal, FloatExp};
 use crate::simd_level::SimdLevel;
 

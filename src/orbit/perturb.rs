@@ -26,7 +26,7 @@ mod lanes;
 
 use super::bla::{BlaTable, Step};
 use super::reference::Reference;
-use crate::field::Orbit;
+use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
@@ -1042,7 +1042,7 @@ mod tests {
                 p.orbits(&offsets, &mut many, &mut c_many, simd);
                 for k in 0..offsets.len() {
                     assert_eq!(bits(&many[k]), bits(&one[k]), "{radius} {simd} derivative {derivative}: sample {k}");
-                    escaped += (one[k].n != crate::field::INTERIOR) as u32;
+                    escaped += (one[k].n != crate::formula::end::INTERIOR) as u32;
                 }
                 assert_eq!(c_many.iterations, c_one.iterations, "{radius} {simd}: iteration counts");
                 let steps = |c: &Counters| c.steps + c.bla_steps;

@@ -13,7 +13,7 @@ use malachite_float::Float;
 
 use super::bigfloat::{self, BigComplex};
 use super::fixed::FixedOrbit;
-use crate::field::Cancelled;
+use crate::cancel::Cancelled;
 use crate::num::FloatExp;
 use crate::simd_level::SimdLevel;
 

@@ -194,7 +194,7 @@ pub(super) fn layer(
             }
         }
         "ifs" => {
-            let d = crate::gpu::ifs::IfsParams::default();
+            let d = crate::trap::ifs::IfsParams::default();
             let fold = match &l.fold_offset {
                 Some(f) if f.get_ref().iter().all(|v| v.is_finite() && v.abs() <= 100.0) => {
                     f.get_ref().map(|v| v as f32)
@@ -202,7 +202,7 @@ pub(super) fn layer(
                 Some(f) => return cx.err(f.span(), "fold_offset must be three numbers in [-100, 100]"),
                 None => d.offset,
             };
-            let params = crate::gpu::ifs::IfsParams {
+            let params = crate::trap::ifs::IfsParams {
                 offset: fold,
                 z: num(&l.slice, d.z as f64, -100.0, 100.0, "slice")? as f32,
                 iterations: match &l.iterations {

@@ -8,6 +8,7 @@
 
 mod bitmap;
 mod geometric;
+pub mod ifs;
 pub mod stripe;
 
 pub use bitmap::{Bitmap, BitmapTrap, Frame};
@@ -26,7 +27,7 @@ pub enum Trap {
     /// The minimal IFS density field at the sample's point: not an orbit statistic (it
     /// observes nothing), kept in the trap list so that its plane travels with the others
     /// (EXR channel, recolouring).
-    Ifs(crate::gpu::ifs::IfsParams),
+    Ifs(ifs::IfsParams),
 }
 
 impl Trap {

@@ -43,7 +43,7 @@
 use pulp::Simd;
 
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
-use crate::field::Orbit;
+use crate::formula::end::Orbit;
 use crate::simd_level::SimdLevel;
 
 /// Most lanes any instruction set has (AVX-512: 8 f64 lanes).

@@ -1,0 +1,8 @@
+//! Cancellation: the error of work stopped before it finished (Ctrl-C, a newer view in the
+//! viewer). Its own module, below everything that can be cancelled, so the deep engine and
+//! the per-sample planes share it without depending on each other.
+
+/// The work was cancelled before it finished.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("cancelled")]
+pub struct Cancelled;
