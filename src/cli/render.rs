@@ -111,7 +111,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let stats = match result {
         Ok(s) => s,
         Err(RenderError::Cancelled) => return Err(Failure::Cancelled),
-        Err(RenderError::Engine(e)) => return Err(Failure::Input(anyhow!(e))),
+        Err(e) if e.is_bad_input() => return Err(Failure::Input(anyhow!(e))),
         Err(e) => return Err(Failure::Runtime(anyhow!(e))),
     };
     png.take().expect("still open").finish().map_err(|e| Failure::Runtime(e.into()))?;

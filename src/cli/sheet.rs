@@ -104,7 +104,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     match result {
         Ok(_) => {}
         Err(RenderError::Cancelled) => return Err(Failure::Cancelled),
-        Err(RenderError::Engine(e)) => return Err(Failure::Input(anyhow!(e))),
+        Err(e) if e.is_bad_input() => return Err(Failure::Input(anyhow!(e))),
         Err(e) => return Err(Failure::Runtime(anyhow!(e))),
     }
     let planes = planes.into_inner().unwrap_or_else(|e| e.into_inner());

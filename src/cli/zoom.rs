@@ -154,7 +154,7 @@ fn write_frame(
     match result {
         Ok(_) => writer.finish().map_err(|e| Failure::Runtime(e.into())),
         Err(RenderError::Cancelled) => Err(Failure::Cancelled),
-        Err(RenderError::Engine(e)) => Err(Failure::Input(anyhow!(e))),
+        Err(e) if e.is_bad_input() => Err(Failure::Input(anyhow!(e))),
         Err(e) => Err(Failure::Runtime(anyhow!(e))),
     }
 }

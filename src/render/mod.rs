@@ -26,7 +26,7 @@ use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Pla
 use crate::formula::Family;
 use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec, Perturbation};
-use crate::scene::{EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::scene::{EngineError, EngineKind, EnginePlan, FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
 
 /// Why a render did not complete.
@@ -35,10 +35,33 @@ pub enum RenderError {
     /// Cancelled by the user.
     #[error("cancelled")]
     Cancelled,
-    /// No engine can address the view.
-    #[error("{0}")]
-    Engine(String),
-    /// The sink (an output writer) failed.
+    /// No engine (or not the forced one) can address the view.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// The deep engine could not prepare the view (an aperiodic orbit past the stored
+    /// limit).
+    #[error(transparent)]
+    Prepare(orbit::PrepareError),
+    /// A reference file does not serve the view.
+    #[error(transparent)]
+    Reference(#[from] orbit::saved::SavedError),
+    /// A reference file was given to a view that needs none.
+    #[error("the scene runs the {0} engine, which uses no reference orbit; leave out the reference file")]
+    NoReferenceNeeded(&'static str),
+    /// The rows asked for are not the image's.
+    #[error("rows {start}..{end} are not within the image's {height} rows")]
+    Rows {
+        /// First row asked for.
+        start: u32,
+        /// One past the last.
+        end: u32,
+        /// The image's height.
+        height: u32,
+    },
+    /// The GPU failed or is missing.
+    #[error(transparent)]
+    Gpu(#[from] gpu::GpuError),
+    /// The sink (the caller's output writer) failed, with its message.
     #[error("{0}")]
     Sink(String),
     /// The thread pool could not be built.
@@ -46,11 +69,27 @@ pub enum RenderError {
     Threads(usize),
 }
 
+impl RenderError {
+    /// True for errors in what was asked (the scene, the engine forced, a reference file,
+    /// the rows), as opposed to failures while working.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            RenderError::Engine(_)
+                | RenderError::Prepare(_)
+                | RenderError::Reference(_)
+                | RenderError::NoReferenceNeeded(_)
+                | RenderError::Rows { .. }
+                | RenderError::Gpu(_)
+        )
+    }
+}
+
 impl From<orbit::PrepareError> for RenderError {
     fn from(e: orbit::PrepareError) -> Self {
         match e {
             orbit::PrepareError::Cancelled => RenderError::Cancelled,
-            e => RenderError::Engine(e.to_string()),
+            e => RenderError::Prepare(e),
         }
     }
 }
@@ -259,7 +298,7 @@ pub fn prepare_field(
     let (mut params, spec) = deep_spec(scene, plan, &options);
     if let Some(mut spec) = spec {
         if let Some(saved) = &options.references {
-            saved.serves(&spec).map_err(|e| RenderError::Engine(e.to_string()))?;
+            saved.serves(&spec)?;
             spec.references = Some(saved.refs.clone());
         }
         let shared = options.deep.as_ref().filter(|d| {
@@ -273,10 +312,7 @@ pub fn prepare_field(
             params.deep = Some(Arc::new(orbit::prepare(&spec, &report, cancel)?));
         }
     } else if options.references.is_some() {
-        return Err(RenderError::Engine(format!(
-            "the scene runs the {} engine, which uses no reference orbit; leave out the reference file",
-            plan.name
-        )));
+        return Err(RenderError::NoReferenceNeeded(plan.name));
     }
     Ok((params, start.elapsed().as_secs_f64()))
 }
@@ -292,7 +328,7 @@ pub fn prepare_deep(
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Option<Arc<Perturbation>>, RenderError> {
-    let plan = scene.engine().map_err(RenderError::Engine)?;
+    let plan = scene.engine()?;
     if !matches!(plan.kind, EngineKind::Perturb { .. }) {
         return Ok(None);
     }
@@ -312,12 +348,10 @@ pub fn render<P: Send>(
     mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
-    let plan = scene.engine().map_err(RenderError::Engine)?;
+    let plan = scene.engine()?;
     // The GPU engines iterate on the process-wide device; its absence is an engine error.
     let gpu = match plan.kind {
-        EngineKind::Gpu(precision) => {
-            Some((gpu::GpuContext::shared().map_err(|e| RenderError::Engine(e.to_string()))?, precision))
-        }
+        EngineKind::Gpu(precision) => Some((gpu::GpuContext::shared()?, precision)),
         _ => None,
     };
     let (params, reference_seconds) = prepare_field(scene, &plan, options.clone(), cancel, progress)?;
@@ -330,10 +364,7 @@ pub fn render<P: Send>(
     let rows_per = strip_rows(scene);
     let band = options.rows.clone().unwrap_or(0..scene.height);
     if band.start >= band.end || band.end > scene.height {
-        return Err(RenderError::Engine(format!(
-            "rows {}..{} are not within the image's {} rows",
-            band.start, band.end, scene.height
-        )));
+        return Err(RenderError::Rows { start: band.start, end: band.end, height: scene.height });
     }
     let strips: Vec<(u32, u32)> =
         band.clone().step_by(rows_per as usize).map(|r| (r, rows_per.min(band.end - r))).collect();
@@ -354,8 +385,7 @@ pub fn render<P: Send>(
                 if cancel.load(Ordering::Relaxed) {
                     return Err(RenderError::Cancelled);
                 }
-                let planes = gpu::field::compute_planes(ctx, &params, *precision, sample_rows.clone())
-                    .map_err(|e| RenderError::Engine(e.to_string()))?;
+                let planes = gpu::field::compute_planes(ctx, &params, *precision, sample_rows.clone())?;
                 let its = gpu::field::estimated_iterations(&params, sample_rows, &planes);
                 iterations.fetch_add(its, Ordering::Relaxed);
                 planes

@@ -121,6 +121,85 @@ pub struct EnginePlan {
 
 /// Sample spacings below 10^this put deltas too close to the f64 underflow for f64 deltas.
 pub const PERTURB_F64_MIN_LOG10_SPACING: f64 = -290.0;
+/// Why no engine (or not the forced one) can address a scene's view.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EngineError {
+    /// A deep Julia view stores its whole references: its iteration limit is capped.
+    #[error(
+        "iteration.max = {max_iter} is too many for the perturbation engine this Julia view needs (zoom 1e{log10_zoom:.1}): it stores the whole reference orbit (16 bytes per iteration plus its BLA tables), so at most {MAX_PERTURB_ITER} are accepted; lower iteration.max"
+    )]
+    JuliaIterations {
+        /// The scene's limit.
+        max_iter: u32,
+        /// log10 of the zoom.
+        log10_zoom: f64,
+    },
+    /// `--engine f64` on a view too deep for it.
+    #[error(
+        "the view is too deep for the f64 engine: at zoom 1e{log10_zoom:.1} a sample spans only {ulps:.3e} f64 ulps of the coordinates (at least {F64_MIN_ULPS_PER_PIXEL} are needed); use --engine auto, perturb-f64 or perturb-floatexp"
+    )]
+    F64TooDeep {
+        /// log10 of the zoom.
+        log10_zoom: f64,
+        /// f64 ulps per sample.
+        ulps: f64,
+    },
+    /// `--engine perturb-f64` where f64 deltas underflow.
+    #[error(
+        "the view is too deep for perturbation with f64 deltas: the sample spacing 1e{log10_spacing:.1} is below 1e{min_log10_spacing}, where f64 deltas underflow; use --engine auto or perturb-floatexp"
+    )]
+    DeltasUnderflow {
+        /// log10 of the sample spacing.
+        log10_spacing: f64,
+        /// The smallest spacing f64 deltas take.
+        min_log10_spacing: f64,
+    },
+    /// A GPU engine cannot draw the scene's traps.
+    #[error("--engine {engine}: {reason}; use --engine auto")]
+    GpuTraps {
+        /// The engine's name.
+        engine: &'static str,
+        /// What the GPU paths lack.
+        reason: String,
+    },
+    /// A GPU engine's escape radius limit.
+    #[error(
+        "--engine {engine}: iteration.escape_radius = {escape_radius:e} is above the GPU's limit of 2^60 (|z|^2 must stay finite in f32)"
+    )]
+    GpuEscapeRadius {
+        /// The engine's name.
+        engine: &'static str,
+        /// The scene's escape radius.
+        escape_radius: f64,
+    },
+    /// A GPU engine on a view past the f64 range.
+    #[error(
+        "--engine {engine}: the view is too deep for direct iteration (zoom 1e{log10_zoom:.1} is past the f64 range); use --engine auto"
+    )]
+    GpuPastF64 {
+        /// The engine's name.
+        engine: &'static str,
+        /// log10 of the zoom.
+        log10_zoom: f64,
+    },
+    /// A GPU engine on a view deeper than its precision resolves.
+    #[error(
+        "--engine {engine}: the view is too deep for {precision}: at zoom 1e{log10_zoom:.1} neighbouring samples are {ulps:.2} rounding units apart (at least 1 is needed); use {better}"
+    )]
+    GpuPrecision {
+        /// The engine's name.
+        engine: &'static str,
+        /// The precision's description.
+        precision: &'static str,
+        /// log10 of the zoom.
+        log10_zoom: f64,
+        /// Rounding units per sample.
+        ulps: f64,
+        /// What to use instead.
+        better: &'static str,
+    },
+}
+
 /// Largest iteration limit the perturbation engines take for Julia sets, and for Mandelbrot
 /// views whose reference orbit turns out not to be periodic (the whole orbit is stored, 16
 /// bytes per iteration plus its BLA tables). A Mandelbrot view centred on a nucleus stores
@@ -229,12 +308,12 @@ impl Scene {
     }
 
     /// Chooses the engine for this view (or checks the forced one), and says why.
-    pub fn engine(&self) -> Result<EnginePlan, String> {
+    pub fn engine(&self) -> Result<EnginePlan, EngineError> {
         self.engine_for(self.engine)
     }
 
     /// Like [`Scene::engine`] for a given choice.
-    pub fn engine_for(&self, choice: EngineChoice) -> Result<EnginePlan, String> {
+    pub fn engine_for(&self, choice: EngineChoice) -> Result<EnginePlan, EngineError> {
         let ulps = self.ulps_per_sample();
         let depth = -self.log10_radius + 2f64.log10();
         let spacing = self.log10_spacing();
@@ -258,11 +337,7 @@ impl Scene {
         };
         let mandelbrot = matches!(self.family, FamilySpec::Mandelbrot);
         if needs_perturbation && self.max_iter > MAX_PERTURB_ITER && !mandelbrot {
-            return Err(format!(
-                "iteration.max = {} is too many for the perturbation engine this Julia view needs (zoom 1e{depth:.1}): it stores the whole reference orbit \
-                 (16 bytes per iteration plus its BLA tables), so at most {MAX_PERTURB_ITER} are accepted; lower iteration.max",
-                self.max_iter
-            ));
+            return Err(EngineError::JuliaIterations { max_iter: self.max_iter, log10_zoom: depth });
         }
         match choice {
             EngineChoice::Auto if f64_ok => Ok(EnginePlan {
@@ -291,17 +366,13 @@ impl Scene {
                 kind: EngineKind::Direct,
                 reason: format!("forced; a sample spans {ulps:.3e} f64 ulps"),
             }),
-            EngineChoice::F64 => Err(format!(
-                "the view is too deep for the f64 engine: at zoom 1e{depth:.1} a sample spans only {ulps:.3e} f64 ulps of the coordinates \
-                 (at least {F64_MIN_ULPS_PER_PIXEL} are needed); use --engine auto, perturb-f64 or perturb-floatexp"
-            )),
+            EngineChoice::F64 => Err(EngineError::F64TooDeep { log10_zoom: depth, ulps }),
             EngineChoice::PerturbF64 if deltas_ok => {
                 Ok(EnginePlan { name: "perturb-f64", kind: perturb(Numbers::F64), reason: format!("forced{bla_note}") })
             }
-            EngineChoice::PerturbF64 => Err(format!(
-                "the view is too deep for perturbation with f64 deltas: the sample spacing 1e{spacing:.1} is below 1e{min_spacing}, \
-                 where f64 deltas underflow; use --engine auto or perturb-floatexp"
-            )),
+            EngineChoice::PerturbF64 => {
+                Err(EngineError::DeltasUnderflow { log10_spacing: spacing, min_log10_spacing: min_spacing })
+            }
             EngineChoice::PerturbFloatExp => Ok(EnginePlan {
                 name: "perturb-floatexp",
                 kind: perturb(Numbers::FloatExp),
@@ -315,22 +386,17 @@ impl Scene {
     /// The GPU engine in `precision`, or why it cannot address the scene: traps other than
     /// one bitmap trap, the stripe average, an escape radius past 2^60, a view past the f64
     /// range, or a view deeper than the precision resolves ([`Precision::exhausted`]).
-    fn gpu_plan(&self, precision: Precision) -> Result<EnginePlan, String> {
+    fn gpu_plan(&self, precision: Precision) -> Result<EnginePlan, EngineError> {
         let name = precision.name();
         crate::gpu::field::supported_trap(&self.traps)
-            .map_err(|e| format!("--engine {name}: {e}; use --engine auto"))?;
+            .map_err(|e| EngineError::GpuTraps { engine: name, reason: e.to_string() })?;
         if self.escape_radius > crate::gpu::MAX_ESCAPE_RADIUS {
-            return Err(format!(
-                "--engine {name}: iteration.escape_radius = {:e} is above the GPU's limit of 2^60 (|z|^2 must stay finite in f32)",
-                self.escape_radius
-            ));
+            return Err(EngineError::GpuEscapeRadius { engine: name, escape_radius: self.escape_radius });
         }
         let depth = -self.log10_radius + 2f64.log10();
         let spacing = 2.0 * self.radius / (self.height * self.aa) as f64;
         if !(self.radius.is_normal() && spacing.is_normal()) {
-            return Err(format!(
-                "--engine {name}: the view is too deep for direct iteration (zoom 1e{depth:.1} is past the f64 range); use --engine auto"
-            ));
+            return Err(EngineError::GpuPastF64 { engine: name, log10_zoom: depth });
         }
         let center = self.center_f64();
         let ulps = precision.ulps_per_sample(spacing, center);
@@ -339,11 +405,13 @@ impl Scene {
                 Precision::F32 => "--engine gpu-df, f64 or auto",
                 Precision::DoubleFloat => "--engine auto",
             };
-            return Err(format!(
-                "--engine {name}: the view is too deep for {}: at zoom 1e{depth:.1} neighbouring samples are {ulps:.2} rounding units apart \
-                 (at least 1 is needed); use {better}",
-                precision.describe()
-            ));
+            return Err(EngineError::GpuPrecision {
+                engine: name,
+                precision: precision.describe(),
+                log10_zoom: depth,
+                ulps,
+                better,
+            });
         }
         Ok(EnginePlan {
             name,
