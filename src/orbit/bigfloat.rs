@@ -3,7 +3,7 @@
 //!
 //! The engine uses malachite-float (pure Rust, no m4 or GMP at build time). It was chosen by
 //! measurement among the pure-Rust crates: `cargo run --release --example reference_speed`
-//! prints nanoseconds per reference iteration at 1000 and 10000 bits (README). The tests
+//! prints nanoseconds per reference iteration at 1000 and 10000 bits (docs/engine-notes.md). The tests
 //! use a different implementation (astro-float) for their ground truth, so a bug here
 //! cannot hide in both.
 

@@ -21,7 +21,7 @@
 //! default ε = 1e-14 a sample drifting away from the reference at depth leaves them at
 //! |z| ~ 1e-14 and takes single steps for the thousands of iterations its delta needs to grow
 //! to |Z|. The second-order terms are valid to |z| ~ sqrt(ε |Z|) ~ 1e-7 for short runs, which
-//! covers most of that drift (bench-e50: see the README's Performance section).
+//! covers most of that drift (bench-e50: see docs/engine-notes.md).
 //!
 //! Merging pairs level by level gives a binary tree: level k holds steps of 2^k iterations
 //! starting at origin + i 2^k, so at any index the loop tries the longest aligned step

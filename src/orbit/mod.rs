@@ -30,7 +30,7 @@ use crate::num::{Decimal, FloatExp};
 use crate::simd_level::SimdLevel;
 
 /// The default BLA tolerance ε (relative size of the dropped nonlinear term per step).
-/// Chosen with `deepfield compare` on 4000 pixels of bench-e50 (README): at 1e-12 the NF
+/// Chosen with `deepfield compare` on 4000 pixels of bench-e50 (docs/engine-notes.md): at 1e-12 the NF
 /// error's 99th percentile was 1.1e-3 and seven pixels in 4000 had a wrong N; at 1e-14 it is
 /// 7.6e-5, inside the 1e-4 target, with as few wrong N as without BLA, for ~10% more time.
 pub const DEFAULT_BLA_TOLERANCE: f64 = 1e-14;

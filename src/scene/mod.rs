@@ -41,7 +41,7 @@ pub const MAX_AA: i64 = 16;
 pub const MAX_SAMPLES: u64 = 1 << 36;
 /// The f64 engine needs the pixel spacing to be at least this many ulps of the largest
 /// coordinate magnitude the orbits meet. Measured (`cargo run --release --example f64_loss`,
-/// table in the README): at ~3700 ulps per pixel (zoom 1e10, 480 rows) the median NF error
+/// table in docs/engine-notes.md): at ~3700 ulps per pixel (zoom 1e10, 480 rows) the median NF error
 /// is 7e-6; at ~370 (zoom 1e11) it is 1.5e-3 and a quarter of N values are wrong.
 pub const F64_MIN_ULPS_PER_PIXEL: f64 = 1024.0;
 
