@@ -59,8 +59,36 @@ impl RawData {
     }
 }
 
+/// The most a compressed EXR can expand: deflate (ZIP) reaches ~1032:1, the other
+/// compressions less, so a file claiming more decoded bytes than this many times its size
+/// is lying about its size (found by fuzzing: a 300-byte header claimed gigabytes).
+const MAX_EXPANSION: u64 = 1100;
+
+/// Refuses, before anything is allocated, a file whose header claims more decoded data than
+/// its bytes can hold.
+fn check_decoded_size(path: &Path) -> Result<(), IoError> {
+    let file_len = std::fs::metadata(path).map_err(|e| IoError::new(path, e))?.len();
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::new(path, e))?;
+    let mut claimed: u64 = 0;
+    for h in meta.headers.iter() {
+        let pixels = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
+        let per_pixel: u64 = h.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u64).sum();
+        claimed = claimed.saturating_add(pixels.saturating_mul(per_pixel));
+    }
+    if claimed > file_len.saturating_mul(MAX_EXPANSION) {
+        return Err(IoError::new(
+            path,
+            format!(
+                "its header claims {claimed} bytes of pixel data, more than its {file_len} bytes can hold: the file is damaged"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Reads every plane of `path`, cut into strips of `strip_rows` rows (at least 1).
 pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoError> {
+    check_decoded_size(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

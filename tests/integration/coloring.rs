@@ -350,3 +350,16 @@ fn masks_confine_a_layer() {
     }
     assert!(outside > 100 && changed > 100, "{outside} outside, {changed} changed inside");
 }
+
+/// An EXR whose 1.6 KB claim gigabytes of pixels (found by fuzzing the EXR reader: it
+/// exhausted memory) is refused before anything is allocated, with the path and why.
+#[test]
+fn exr_headers_claiming_more_than_the_file_holds_are_refused() {
+    let dir = scratch("coloring-exr-claims");
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fuzz/exr-claims-gigabytes.exr");
+    let Err(e) = deepfield::io::read_exr_planes(&fixture, 16) else { panic!("a lying header was read") };
+    assert!(e.to_string().contains("more than its"), "{e}");
+    let o = deepfield(&["recolor", fixture.to_str().unwrap(), "-o", "x.png"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!dir.join("x.png").exists());
+}

@@ -113,6 +113,10 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
         if matches!(w.last(), Some((_, "L" | "U" | "B"))) && matches!(w.len(), 5 | 9) {
             w.pop();
         }
+        if w.is_empty() {
+            // Only a `;label` (found by fuzzing: it once indexed an empty line).
+            continue;
+        }
         let slice = match w.len() {
             4 => Slice { z0: z(ctx, w[0])?, c0: word_color(ctx, w[1])?, z1: z(ctx, w[2])?, c1: word_color(ctx, w[3])? },
             8 => Slice {
@@ -352,6 +356,13 @@ mod tests {
         // A quarter: hue 60, yellow.
         let c = p.at(0.25).map(color::linear_to_srgb);
         assert!(c[0] > 0.99 && c[1] > 0.99 && c[2] < 0.01, "{c:?}");
+    }
+
+    /// A line holding only a label has no fields: skipped, not indexed (a fuzzer's find).
+    #[test]
+    fn label_only_lines_are_skipped() {
+        let p = import_text(Format::Cpt, "x.cpt", "0 red 1 blue\n ;just a label\n1 blue 2 red\n").unwrap();
+        assert_eq!(p.len(), 1);
     }
 
     #[test]
