@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer targets in fuzz/ (cargo-fuzz) for SECONDS each (default 600): scene
 # TOML, .kfr, every palette importer, the PNG scene chunk, the EXR reader behind recolor,
-# and reference files. Seeds come from fuzz/corpus/TARGET (small, in the repository);
+# reference files, and the work units `assemble` reads. Seeds come from fuzz/corpus/TARGET (small, in the repository);
 # the growing corpus lives in fuzz/work/ and crashes in fuzz/artifacts/ (both ignored by
 # git). cargo-fuzz needs nightly compiler flags: on a stable toolchain they are enabled
 # with RUSTC_BOOTSTRAP=1, as here. Every crash found becomes a regression test.
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene kfr palette png_scene exr reference_file)
+[ ${#targets[@]} -gt 0 ] || targets=(scene kfr palette png_scene exr reference_file assemble)
 command -v cargo-fuzz > /dev/null || cargo install cargo-fuzz --locked
 export RUSTC_BOOTSTRAP=1
 for t in "${targets[@]}"; do
