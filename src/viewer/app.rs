@@ -711,7 +711,22 @@ impl ViewerApp {
             }
             // Number fields, not sliders: a scene's value shows as it is, however large
             // (bench-e1086's density is 5000), and drags scale with the value.
-            for (key, value) in [("density", &mut l.density), ("offset", &mut l.offset), ("k", &mut l.k)] {
+            let numbers = [
+                ("density", &mut l.density),
+                ("offset", &mut l.offset),
+                ("k", &mut l.k),
+                ("width", &mut l.width),
+                ("height", &mut l.height),
+                ("strength", &mut l.strength),
+                ("frequency", &mut l.frequency),
+                ("angle", &mut l.angle),
+                ("radius", &mut l.radius),
+                ("size", &mut l.size),
+                ("threshold", &mut l.threshold),
+                ("slice", &mut l.slice),
+                ("decay", &mut l.decay),
+            ];
+            for (key, value) in numbers {
                 if let Some(v) = value {
                     let mut x = *v.get_ref();
                     let speed = (x.abs() * 0.01).max(1e-3);
@@ -726,6 +741,53 @@ impl ViewerApp {
                         *v = cli(x);
                         changed = true;
                     }
+                }
+            }
+            let integers = [
+                ("frames", &mut l.frames),
+                ("frame", &mut l.frame),
+                ("frame_width", &mut l.frame_width),
+                ("iterations", &mut l.iterations),
+            ];
+            for (key, value) in integers {
+                if let Some(v) = value {
+                    let mut x = *v.get_ref();
+                    let edited = ui
+                        .horizontal(|ui| {
+                            let r = ui.add(egui::DragValue::new(&mut x).speed(0.2));
+                            let label = ui.label(key);
+                            r.labelled_by(label.id).changed()
+                        })
+                        .inner;
+                    if edited {
+                        *v = cli(x);
+                        changed = true;
+                    }
+                }
+            }
+            // Words (style, shape, colours as "#rrggbb"): edited as text, checked by the
+            // scene's validation when the field loses focus.
+            for (key, value) in [
+                ("style", &mut l.style),
+                ("shape", &mut l.shape),
+                ("interior", &mut l.interior),
+                ("color", &mut l.color),
+            ] {
+                if let Some(v) = value {
+                    let mut text = v.get_ref().clone();
+                    let (edited, done) = ui
+                        .horizontal(|ui| {
+                            let r = ui.add(egui::TextEdit::singleline(&mut text).desired_width(90.0));
+                            let label = ui.label(key);
+                            let r = r.labelled_by(label.id);
+                            (r.changed(), r.lost_focus())
+                        })
+                        .inner;
+                    // The text is kept as typed; the view renders once editing ends.
+                    if edited {
+                        *v = cli(text);
+                    }
+                    changed |= done;
                 }
             }
             if crate::scene::LAYER_KINDS

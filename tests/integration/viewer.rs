@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use deepfield::viewer::{ViewMode, ViewerApp, ViewerOptions};
 use eframe::egui::{self, Event, Modifiers, MouseWheelUnit, PointerButton, Pos2, Vec2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::{Harness, SnapshotOptions};
 
 use super::util::scratch;
@@ -370,4 +370,17 @@ fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
     assert_eq!(h.state().nav, start);
+}
+
+/// Layer numbers show the scene's own values, however large (a density of 5000 once showed
+/// as 10, the end of a slider's range), and words show as text.
+#[test]
+fn layer_controls_show_the_scene_values() {
+    let dir = scratch("viewer-layer-values");
+    let scene = "version = 1\n[iteration]\nmax = 200\n[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ndensity = 5000\n[[layer]]\nkind = \"distance\"\nstyle = \"log\"\ndensity = 0.125\nblend = \"multiply\"\n";
+    let h = harness(&dir, scene);
+    let values: Vec<f64> = h.get_all_by_label("density").filter_map(|n| n.accesskit_node().numeric_value()).collect();
+    // The layers' two, then the palette editor's own density.
+    assert_eq!(values[..2], [5000.0, 0.125]);
+    assert_eq!(h.get_by_label("style").value().as_deref(), Some("log"));
 }
