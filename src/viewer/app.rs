@@ -730,14 +730,7 @@ impl ViewerApp {
                 if let Some(v) = value {
                     let mut x = *v.get_ref();
                     let speed = (x.abs() * 0.01).max(1e-3);
-                    let edited = ui
-                        .horizontal(|ui| {
-                            let r = ui.add(egui::DragValue::new(&mut x).speed(speed).max_decimals(6));
-                            let label = ui.label(key);
-                            r.labelled_by(label.id).changed()
-                        })
-                        .inner;
-                    if edited && x.is_finite() && (key != "density" || x > 0.0) {
+                    if number_field(ui, key, &mut x, speed) && x.is_finite() && (key != "density" || x > 0.0) {
                         *v = cli(x);
                         changed = true;
                     }
@@ -752,14 +745,7 @@ impl ViewerApp {
             for (key, value) in integers {
                 if let Some(v) = value {
                     let mut x = *v.get_ref();
-                    let edited = ui
-                        .horizontal(|ui| {
-                            let r = ui.add(egui::DragValue::new(&mut x).speed(0.2));
-                            let label = ui.label(key);
-                            r.labelled_by(label.id).changed()
-                        })
-                        .inner;
-                    if edited {
+                    if number_field(ui, key, &mut x, 0.2) {
                         *v = cli(x);
                         changed = true;
                     }
@@ -1316,6 +1302,16 @@ fn fmt_zoom(log10: f64) -> String {
         let e = log10.floor();
         format!("{:.3}e{}", 10f64.powf(log10 - e), e)
     }
+}
+
+/// A labelled number field (drag or type); true when the value changed.
+fn number_field<N: egui::emath::Numeric>(ui: &mut egui::Ui, key: &str, x: &mut N, speed: f64) -> bool {
+    ui.horizontal(|ui| {
+        let r = ui.add(egui::DragValue::new(x).speed(speed).max_decimals(6));
+        let label = ui.label(key);
+        r.labelled_by(label.id).changed()
+    })
+    .inner
 }
 
 #[cfg(test)]
