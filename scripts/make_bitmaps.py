@@ -9,7 +9,7 @@ Outputs (paths relative to the repository root, which is found from this file):
   Opaque (alpha 255) inside the star, with a radial gradient from pale yellow at the
   centre to deep orange at the tips; fully transparent (0, 0, 0, 0) outside, including
   a transparent border, because the trap clamps texture coordinates to the edge texels.
-- scenes/bitmaps/sprites.png: 192x48 sprite sheet for the animated bitmap trap (the seeds'
+- scenes/bitmaps/sprites.png: 192x48 sprite sheet for the animated bitmap trap (Inigo Quilez's
   variant): 4 frames of 48x48 side by side, a five-pointed star turning by 18 degrees a
   frame and shifting from gold to rose; transparent outside the star.
 - tests/fixtures/trap.png: 16x16 test fixture; the left 8 columns are opaque red

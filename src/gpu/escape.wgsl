@@ -1,7 +1,7 @@
 // Escape-time iteration of z -> z^2 + c, one invocation per sample, in f32 or in
-// double-float, with the per-sample quantities of DESIGN.md (N, NF, T, DEX/DEY) and the
-// bitmap orbit trap. Ported from the seeds' GLSL (Inigo Quilez's bitmap trap and distance
-// rendering), with their slips fixed: the Mandelbrot derivative adds 1 (not (1, 1)), the
+// double-float, with the per-sample quantities of docs/design.md (N, NF, T, DEX/DEY) and the
+// bitmap orbit trap. Written after GLSL versions of Inigo Quilez's "Bitmap Orbit Traps" and "Distance
+// Rendering for Fractals", with their slips fixed: the Mandelbrot derivative adds 1 (not (1, 1)), the
 // Julia derivative adds nothing, escape is |z| > R with the scene's R (not 2), and the
 // distance is measured in pixels. The semantics follow src/field (scalar kernel):
 //

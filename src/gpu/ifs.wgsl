@@ -1,9 +1,9 @@
-// The seeds' minimal IFS density field (variant 5, "Minimal IFS Field"): iterate
+// The minimal IFS density field, a shader idiom (the "kali" fold): iterate
 // p -> |p| / (p . p) + offset and accumulate exp(-strength |mag - prev|^2.3) with weights
 // exp(-i / decay); the density is max(0, 5 accum / total weight - 0.7). Here it is a 2D
 // layer: the plane point (x, y) becomes p = (x scale, y scale, z), a slice of the 3D field.
 //
-// The seed's slips are fixed: p . p is bounded below (a zero point no longer divides by
+// The slips of the GLSL idiom are fixed: p . p is bounded below (a zero point no longer divides by
 // zero), and pow() only ever sees a positive argument (pow(0, y) and pow of huge values
 // are undefined or infinite in WGSL, which implementations may assume never happen). Its
 // random jitter of `strength` from iTime is the plain `strength` parameter. The same

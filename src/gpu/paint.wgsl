@@ -1,7 +1,7 @@
 // Draws the escape-time image straight into a render target (the egui frame): one
 // fragment per physical pixel runs the same orbit code as the compute shader
 // (escape.wgsl), colours it by smooth iteration through a palette table, optionally
-// multiplies the seeds' soft distance shading over it, and encodes for the target.
+// multiplies Inigo Quilez's soft distance shading over it, and encodes for the target.
 
 @group(0) @binding(3) var<storage, read> palette: array<vec4<f32>>;
 
@@ -51,7 +51,7 @@ fn colour(e: Escape) -> vec4<f32> {
     let c = palette_at(pos);
     var rgb = c.rgb * c.a;
     if (P.flags & FLAG_DISTANCE_SHADE) != 0u {
-        // The seeds' soft distance colouring, clamp((k d)^0.2, 0, 1) with d in pixels, read
+        // Inigo Quilez's soft distance colouring, clamp((k d)^0.2, 0, 1) with d in pixels, read
         // as an sRGB grey level (as the CPU's distance layer without a palette) and
         // multiplied over the palette colour in linear light.
         let d = length(distance_vector(e.z, e.dz));

@@ -26,7 +26,7 @@ const FLAG_DERIVATIVE: u32 = 1u;
 const FLAG_TRAP: u32 = 2u;
 const FLAG_DISTANCE_SHADE: u32 = 4u;
 
-// The point of sample (i, j) as (x_hi, x_lo, y_hi, y_lo): the DESIGN.md convention
+// The point of sample (i, j) as (x_hi, x_lo, y_hi, y_lo): the docs/design.md convention
 // x = cx + spacing (i + 0.5 - W/2), y = cy - spacing (j + 0.5 - H/2). The offsets are
 // exact halves in f32 (W, H < 2^22); the product and the sum are double-float.
 fn sample_point(i: u32, j: u32) -> vec4<f32> {

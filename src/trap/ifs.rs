@@ -21,7 +21,7 @@ pub const MAX_STEP: f32 = 1e4;
 /// Parameters of the IFS field.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IfsParams {
-    /// Added after each fold (the seed's tunable vec3(-0.5, -0.4, -1.5)).
+    /// Added after each fold (the GLSL idiom's tunable vec3(-0.5, -0.4, -1.5)).
     pub offset: [f32; 3],
     /// The slice of the 3D field shown.
     pub z: f32,
