@@ -197,6 +197,22 @@ mod tests {
         assert!(e.to_string().contains("scalar"), "{e}");
     }
 
+    /// The levels the tests loop over are the ones the CPU really has: on an x86-64 CPU with
+    /// AVX2, FMA and BMI2 the AVX2 paths are among them (so they are held to the scalar bits
+    /// here, not silently skipped), and AVX-512 exactly when the CPU has it.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn usable_levels_follow_the_cpu_features() {
+        let usable = SimdLevel::usable();
+        assert_eq!(usable[0], SimdLevel::Scalar);
+        use std::arch::is_x86_feature_detected as has;
+        // pulp's x86-64-v3 set: AVX2, FMA, BMI1/2, LZCNT, POPCNT and the SSE levels below.
+        let avx2 = has!("avx2") && has!("fma") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt");
+        assert_eq!(usable.contains(&SimdLevel::Avx2), avx2, "{usable:?}");
+        let avx512 = has!("avx512f") && has!("avx512bw") && has!("avx512dq") && has!("avx512vl") && has!("avx512cd");
+        assert_eq!(usable.contains(&SimdLevel::Avx512), avx512, "{usable:?}");
+    }
+
     #[test]
     fn every_spelling_parses() {
         for c in CHOICES {

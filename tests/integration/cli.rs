@@ -290,6 +290,33 @@ fn same_bytes_whatever_the_thread_count() {
     same_bytes("cli-determinism-deep", &format!("{deep}{layers}"));
 }
 
+/// Every instruction set this CPU has (`--simd`, scalar included) renders the same PNG
+/// bytes, shallow (the direct kernels, with a geometric trap on the vectorised trap path)
+/// and deep (the perturbation lanes); `--stats` names the level used.
+#[test]
+fn same_bytes_on_every_simd_level_this_cpu_has() {
+    let layers = "[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"distance\"\nblend = \"multiply\"\n";
+    let trap = "[[layer]]\nkind = \"trap\"\nshape = \"circle\"\nradius = 0.5\nblend = \"screen\"\n";
+    let deep = "version = 1\n[view]\ncenter = [\"-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925\", \"1.3717805209060941414572912854135e-211\"]\nzoom = \"1e120\"\nwidth = 61\nheight = 37\n[iteration]\nmax = 5000\n";
+    let levels = deepfield::simd_level::SimdLevel::usable();
+    for (name, scene) in [("shallow", format!("{SMALL}{layers}{trap}")), ("deep", format!("{deep}{layers}"))] {
+        let dir = scratch(&format!("cli-simd-{name}"));
+        write(&dir, "scene.toml", &scene);
+        let mut pngs = Vec::new();
+        for level in &levels {
+            let png = format!("{}.png", level.name());
+            let o = deepfield(&["render", "scene.toml", "--simd", level.name(), "--stats", "-o", &png], &dir);
+            assert!(o.status.success(), "{}", stderr(&o));
+            let stats = String::from_utf8_lossy(&o.stdout);
+            assert!(stats.contains(level.describe()), "{name} {}: {stats}", level.name());
+            pngs.push((level.name(), std::fs::read(dir.join(png)).unwrap()));
+        }
+        for (level, bytes) in &pngs[1..] {
+            assert!(*bytes == pngs[0].1, "{name}: --simd {level} differs from scalar");
+        }
+    }
+}
+
 fn same_bytes(name: &str, scene: &str) {
     let dir = scratch(name);
     write(&dir, "scene.toml", scene);
