@@ -3,7 +3,7 @@
 
 use anyhow::anyhow;
 use deepfield::locate::{BigC, search};
-use deepfield::num::{Decimal, FloatExp};
+use deepfield::num::{Decimal, FloatExp, scientific};
 use deepfield::scene::FamilySpec;
 use deepfield::scene::raw::cli;
 
@@ -31,9 +31,7 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
     // view needs plus a margin.
     let aspect = scene.width as f64 / scene.height as f64;
     let log10_disc = scene.log10_radius + 0.5 * (1.0 + aspect * aspect).log10();
-    let bits = ((-scene.log10_radius).max(0.0) * std::f64::consts::LOG2_10) as u64 + 96;
-    let center = BigC::from_decimals(&scene.center[0], &scene.center[1], bits.max(128));
-    let disc = FloatExp::exp10(log10_disc);
+    let (center, disc) = search::disc(&scene.center, log10_disc);
     let mut file = scene.file.clone();
     let header = if args.misiurewicz {
         let m = search::misiurewicz_in_view(&center, disc, args.max_preperiod, args.max_period.unwrap_or(64))
@@ -47,17 +45,17 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
         let m = search::minibrot_in_view(&center, disc, args.max_period.unwrap_or(100_000))
             .map_err(|e| Failure::Runtime(e.into()))?;
         file.view.center = cli(decimals(&m.nucleus));
-        let log10_radius = search::framing_radius(m.size).log2() * std::f64::consts::LOG10_2;
-        file.view.zoom = Some(cli(zoom_text(2f64.log10() - log10_radius)));
+        file.view.zoom = Some(cli(scientific(search::framing_log10_zoom(m.size), 6)));
         file.view.radius = None;
-        let iterations = (m.period as u64 * ITERATIONS_PER_PERIOD).min(deepfield::scene::MAX_PERTURB_ITER as u64);
+        // The scene is centred on the nucleus, so its reference is one period: any limit serves.
+        let iterations = (m.period as u64 * ITERATIONS_PER_PERIOD).min(deepfield::scene::MAX_ITER_LIMIT);
         if (*file.iteration.max.get_ref() as u64) < iterations {
             file.iteration.max = cli(iterations as i64);
         }
         format!(
-            "# deepfield find: minibrot of period {}, size {:.3e}, turned {:.1} degrees; framed at 2.2 sizes\n",
+            "# deepfield find: minibrot of period {}, size {}, turned {:.1} degrees; framed at 2.2 sizes\n",
             m.period,
-            Sci(m.size),
+            sci(m.size, 3),
             m.angle.to_degrees()
         )
     };
@@ -76,20 +74,7 @@ fn decimals(p: &BigC) -> [String; 2] {
     p.to_decimals(3).map(|d: Decimal| d.text().to_string())
 }
 
-/// A zoom given as its decimal logarithm, as scene text (`m.mmmmmmeN`).
-fn zoom_text(log10_zoom: f64) -> String {
-    let e = log10_zoom.floor();
-    format!("{:.6}e{e}", 10f64.powf(log10_zoom - e))
-}
-
-/// A FloatExp in scientific notation at any exponent.
-struct Sci(FloatExp);
-
-impl std::fmt::LowerExp for Sci {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let l = self.0.log2() * std::f64::consts::LOG10_2;
-        let e = l.floor();
-        let digits = f.precision().unwrap_or(3);
-        write!(f, "{:.digits$}e{e}", 10f64.powf(l - e))
-    }
+/// A positive FloatExp in scientific notation at any exponent.
+fn sci(x: FloatExp, digits: usize) -> String {
+    scientific(x.log2() * std::f64::consts::LOG10_2, digits)
 }

@@ -118,9 +118,10 @@ impl Rng {
     }
 }
 
-/// Bits that place a point exactly at zoom 10^log10_zoom, with a margin.
+/// Bits that place a point exactly at zoom 10^log10_zoom, with a margin (what a view's
+/// reference orbit gets).
 fn bits_for(log10_zoom: f64) -> u64 {
-    (log10_zoom.max(0.0) * std::f64::consts::LOG2_10) as u64 + 96
+    crate::orbit::bigfloat::precision_for(-log10_zoom)
 }
 
 /// A point at distance `dist` from `p` in direction `angle`, at `p`'s precision.
@@ -178,7 +179,7 @@ fn descend(rng: &mut Rng, log10_zoom: f64, max_period: u32) -> Option<Minibrot> 
     let mut radius = FloatExp::from(rng.uniform(1e-5, 1e-3));
     let mut found: Option<Minibrot> = None;
     for _ in 0..40 {
-        let bits = ((-radius.log2()).max(0.0) as u64 + 96).max(128);
+        let bits = bits_for(-radius.log2() * std::f64::consts::LOG10_2);
         let here = point.with_bits(bits);
         // A step that finds nothing ends the descent where it is: the deepest minibrot so
         // far still makes a view nobody tuned to, only shallower than asked.
@@ -226,11 +227,8 @@ fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max
     if let Some([cr, ci]) = julia {
         let _ = writeln!(t, "[formula]\nkind = \"julia\"\nc = [\"{cr}\", \"{ci}\"]");
     }
-    let (m, e) = (radius.mantissa(), radius.exponent());
-    // radius = m 2^e, written in decimal: 10^(e log10 2) m.
-    let l10 = e as f64 * std::f64::consts::LOG10_2 + m.abs().log10();
-    let (exp10, mant10) = (l10.floor(), 10f64.powf(l10 - l10.floor()));
-    let _ = writeln!(t, "[view]\ncenter = [\"{re}\", \"{im}\"]\nradius = \"{mant10:.9}e{exp10}\"");
+    let radius = crate::num::scientific(radius.log2() * std::f64::consts::LOG10_2, 9);
+    let _ = writeln!(t, "[view]\ncenter = [\"{re}\", \"{im}\"]\nradius = \"{radius}\"");
     let _ = writeln!(t, "width = {}\nheight = {}\n[iteration]\nmax = {max_iter}", spec.width, spec.height);
     t
 }

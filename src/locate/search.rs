@@ -10,7 +10,7 @@
 //! k + p (the simplest first), and the first whose Newton root lies in the view and whose
 //! orbit really has preperiod k and period p wins.
 
-use crate::num::FloatExp;
+use crate::num::{Decimal, FloatExp};
 
 use super::big::BigC;
 use super::nucleus::{self, Minibrot};
@@ -64,6 +64,18 @@ const MAX_NEWTON_TRIES: usize = 24;
 /// ±1.15 along the imaginary one, so 2.2 sizes either way hold it at any orientation.
 pub fn framing_radius(size: FloatExp) -> FloatExp {
     size.mul_f64(2.2)
+}
+
+/// The zoom (as log10; the image height spans 4 / zoom) that frames a minibrot of `size`.
+pub fn framing_log10_zoom(size: FloatExp) -> f64 {
+    2f64.log10() - framing_radius(size).log2() * std::f64::consts::LOG10_2
+}
+
+/// A disc to search, from its centre as decimals and its radius as a decimal logarithm:
+/// the centre in big floats at the precision a view of that radius needs, and the radius.
+pub fn disc(center: &[Decimal; 2], log10_radius: f64) -> (BigC, FloatExp) {
+    let bits = crate::orbit::bigfloat::precision_for(log10_radius);
+    (BigC::from_decimals(&center[0], &center[1], bits), FloatExp::exp10(log10_radius))
 }
 
 /// The lowest-period minibrot whose nucleus lies in the disc of `radius` about `center`

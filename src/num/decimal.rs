@@ -138,6 +138,14 @@ impl Decimal {
     }
 }
 
+/// A positive number given by its decimal logarithm, as text `m.mmme±N` with `digits`
+/// digits after the point: depths, zooms and sizes far outside the f64 range (zoom 1e1086
+/// is `1.000000e1086`).
+pub fn scientific(log10: f64, digits: usize) -> String {
+    let e = log10.floor();
+    format!("{:.digits$}e{e}", 10f64.powf(log10 - e))
+}
+
 impl fmt::Display for Decimal {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.text)

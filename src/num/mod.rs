@@ -11,6 +11,6 @@ pub mod fastmath;
 mod floatexp;
 pub mod real;
 
-pub use decimal::{Decimal, DecimalError};
+pub use decimal::{Decimal, DecimalError, scientific};
 pub use floatexp::FloatExp;
 pub use real::Real;

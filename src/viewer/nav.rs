@@ -52,9 +52,7 @@ impl Nav {
 
     /// The zoom as a decimal string for a scene file.
     pub fn zoom_text(&self) -> String {
-        let e = self.log10_zoom.floor();
-        let m = 10f64.powf(self.log10_zoom - e);
-        format!("{m:.6}e{e}")
+        crate::num::scientific(self.log10_zoom, 6)
     }
 
     /// Moves the centre by (dx, dy) pixels of an image `height` pixels high (x right, y down

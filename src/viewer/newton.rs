@@ -9,7 +9,7 @@
 //! by the factor (4 when none is set: the structure there looks alike at every depth).
 
 use crate::locate::{BigC, search};
-use crate::num::{Decimal, FloatExp};
+use crate::num::Decimal;
 
 use super::nav::Nav;
 
@@ -31,15 +31,13 @@ const MAX_PERIOD: u32 = 100_000;
 pub fn newton_zoom(nav: &Nav, at: [f64; 2], height: f64, target: Target, factor: f64) -> Result<(Nav, String), String> {
     let here = nav.pan(at[0], at[1], height);
     let log10_disc = nav.log10_spacing(height) + (height / 4.0).log10();
-    let disc = FloatExp::exp10(log10_disc);
-    let bits = ((-log10_disc).max(0.0) * std::f64::consts::LOG2_10) as u64 + 96;
     let decimal = |t: &String| Decimal::parse(t).map_err(|e| e.to_string());
-    let c = BigC::from_decimals(&decimal(&here.center[0])?, &decimal(&here.center[1])?, bits.max(128));
+    let (c, disc) = search::disc(&[decimal(&here.center[0])?, decimal(&here.center[1])?], log10_disc);
     let text = |p: &BigC| p.to_decimals(3).map(|d| d.text().to_string());
     match target {
         Target::Minibrot => {
             let m = search::minibrot_in_view(&c, disc, MAX_PERIOD).map_err(|e| e.to_string())?;
-            let framing = 2f64.log10() - search::framing_radius(m.size).log2() * std::f64::consts::LOG10_2;
+            let framing = search::framing_log10_zoom(m.size);
             let log10_zoom = if factor > 1.0 { (nav.log10_zoom + factor.log10()).min(framing) } else { framing };
             let size = m.size.log2() * std::f64::consts::LOG10_2;
             let line = format!("minibrot of period {}, size 1e{size:.1}", m.period);

@@ -215,7 +215,7 @@ fn a_nucleus_centred_view_stores_one_period_for_any_iteration_limit() {
     let [re, im] = m.nucleus.to_decimals(3);
     let radius = deepfield::locate::search::framing_radius(m.size).mul_f64(1000.0);
     let l = radius.log2() * std::f64::consts::LOG10_2;
-    let radius = format!("{:.6}e{}", 10f64.powf(l - l.floor()), l.floor());
+    let radius = deepfield::num::scientific(l, 6);
     let leak = |t: String| -> &'static str { Box::leak(t.into_boxed_str()) };
     let v = View::mandelbrot([leak(re.text().to_string()), leak(im.text().to_string())], leak(radius), 100_000_000, 24);
     let (samples, engine, _) = measure_with_reference(&v);
