@@ -33,6 +33,18 @@ pub enum Failure {
     Cancelled,
 }
 
+impl From<deepfield::render::RenderError> for Failure {
+    /// Cancelled stays cancelled; a bad scene, engine, reference file or rows are bad
+    /// input (exit 2); anything else failed while working.
+    fn from(e: deepfield::render::RenderError) -> Self {
+        match e {
+            deepfield::render::RenderError::Cancelled => Failure::Cancelled,
+            e if e.is_bad_input() => Failure::Input(e.into()),
+            e => Failure::Runtime(e.into()),
+        }
+    }
+}
+
 impl Failure {
     fn input(e: impl Into<anyhow::Error>) -> Self {
         Failure::Input(e.into())
@@ -42,11 +54,19 @@ impl Failure {
 /// Writes `text` into an atomic file opened earlier (so that an unwritable path failed
 /// before any work) and puts the file in place.
 fn commit_text(
-    (file, mut w): (deepfield::io::AtomicFile, std::io::BufWriter<std::fs::File>),
+    opened: (deepfield::io::AtomicFile, std::io::BufWriter<std::fs::File>),
     text: &str,
 ) -> Result<(), Failure> {
+    commit_bytes(opened, text.as_bytes())
+}
+
+/// [`commit_text`] for bytes.
+fn commit_bytes(
+    (file, mut w): (deepfield::io::AtomicFile, std::io::BufWriter<std::fs::File>),
+    bytes: &[u8],
+) -> Result<(), Failure> {
     use std::io::Write as _;
-    w.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
+    w.write_all(bytes).map_err(|e| Failure::Runtime(e.into()))?;
     let path = file.dest().display().to_string();
     drop(w.into_inner().map_err(|e| Failure::Runtime(anyhow::anyhow!("{path}: {}", e.error())))?);
     file.commit_written().map_err(|e| Failure::Runtime(e.into()))

@@ -25,7 +25,7 @@ pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
         )));
     };
     // Opened first: an unwritable path fails before the work.
-    let (file, mut w) = deepfield::io::AtomicFile::create(&args.output).map_err(Failure::input)?;
+    let opened = deepfield::io::AtomicFile::create(&args.output).map_err(Failure::input)?;
     let bar = super::render::bar(args.quiet, spec.max_iter as u64);
     let progress = |done: u64, _total: u64| {
         if let Some(b) = &bar {
@@ -40,11 +40,7 @@ pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
         b.finish_and_clear();
     }
     let saved = SavedReferences { key: key_of(&spec), refs: std::sync::Arc::new(refs) };
-    use std::io::Write as _;
-    w.write_all(&saved.encode()).map_err(|e| Failure::Runtime(e.into()))?;
-    let path = file.dest().display().to_string();
-    drop(w.into_inner().map_err(|e| Failure::Runtime(anyhow!("{path}: {}", e.error())))?);
-    file.commit_written().map_err(|e| Failure::Runtime(e.into()))
+    super::commit_bytes(opened, &saved.encode())
 }
 
 /// Reads a reference file (bad input, with the path, when it is not one).

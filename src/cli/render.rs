@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::anyhow;
 use deepfield::field::ChannelSet;
 use deepfield::io::{self, ExrLayout, ExrWriter, PngEncoder, PngWriter};
-use deepfield::render::{self, Options, RenderError, Stats};
+use deepfield::render::{self, Options, Stats};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::Failure;
@@ -57,12 +57,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     .map_err(Failure::input)?;
     let png_enc = PngEncoder::new(scene.png_bits);
     let exr = match &args.exr {
-        Some(path) => {
-            let layout = ExrLayout::new(exr_channels, &scene.traps);
-            let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
-            let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
-            Some(ExrWriter::create(path, w, h, layout, &toml, &engine).map_err(Failure::input)?)
-        }
+        Some(path) => Some(open_exr(&scene, &plan, simd, path)?),
         None => None,
     };
     let (mut exr_writer, exr_enc) = match exr {
@@ -108,17 +103,26 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let stats = match result {
-        Ok(s) => s,
-        Err(RenderError::Cancelled) => return Err(Failure::Cancelled),
-        Err(e) if e.is_bad_input() => return Err(Failure::Input(anyhow!(e))),
-        Err(e) => return Err(Failure::Runtime(anyhow!(e))),
-    };
+    let stats = result?;
     png.take().expect("still open").finish().map_err(|e| Failure::Runtime(e.into()))?;
     if let Some(w) = exr_writer.take() {
         w.finish().map_err(|e| Failure::Runtime(e.into()))?;
     }
     report(&args, &stats, stats_file)
+}
+
+/// Opens the EXR of `scene`'s raw data (its channels, every sample) at `path`, the engine
+/// and SIMD level in the header's comments.
+pub fn open_exr(
+    scene: &deepfield::scene::Scene,
+    plan: &deepfield::scene::EnginePlan,
+    simd: deepfield::simd_level::SimdLevel,
+    path: &Path,
+) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
+    let layout = ExrLayout::new(scene.channels, &scene.traps);
+    let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
+    let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
+    ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine).map_err(Failure::input)
 }
 
 /// Refuses runs whose outputs would collide with each other or overwrite the input scene.

@@ -13,7 +13,7 @@ use deepfield::compose::sheet::{self, Cell, Overlays};
 use deepfield::compose::{Layer, Stack};
 use deepfield::field::ChannelSet;
 use deepfield::io;
-use deepfield::render::{self, Options, RenderError};
+use deepfield::render::{self, Options};
 use deepfield::scene::presets::{PRESETS, preset, preset_names};
 use deepfield::scene::raw::LayerRaw;
 use deepfield::scene::{FamilySpec, Scene};
@@ -101,12 +101,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    match result {
-        Ok(_) => {}
-        Err(RenderError::Cancelled) => return Err(Failure::Cancelled),
-        Err(e) if e.is_bad_input() => return Err(Failure::Input(anyhow!(e))),
-        Err(e) => return Err(Failure::Runtime(anyhow!(e))),
-    }
+    result?;
     let planes = planes.into_inner().unwrap_or_else(|e| e.into_inner());
 
     let mut images = Vec::with_capacity(cells.len());

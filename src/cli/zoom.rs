@@ -14,13 +14,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::anyhow;
-use deepfield::field::ChannelSet;
-use deepfield::io::{ExrLayout, ExrWriter};
 use deepfield::num::Decimal;
 use deepfield::orbit::saved::{SavedReferences, key_of};
-use deepfield::render::{self, Options, RenderError};
+use deepfield::render::{self, Options};
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
+use malachite_base::num::arithmetic::traits::Pow;
 use malachite_q::Rational;
 
 use super::Failure;
@@ -117,11 +116,7 @@ fn shallower(scene: &Scene, factor: &Decimal, steps: u32) -> String {
         deepfield::orbit::Scale::Zoom(z) => z.to_rational(),
         deepfield::orbit::Scale::Radius(r) => Rational::from(2u32) / r.to_rational(),
     };
-    let f = factor.to_rational();
-    let mut z = zoom;
-    for _ in 0..steps {
-        z /= &f;
-    }
+    let z = zoom / factor.to_rational().pow(steps as u64);
     // Digits enough for any zoom of at most 1e6 steps of a factor above 1.
     Decimal::from_rational(&z, 40).text().to_string()
 }
@@ -136,25 +131,17 @@ fn write_frame(
 ) -> Result<(), Failure> {
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let perturbs = matches!(plan.kind, deepfield::scene::EngineKind::Perturb { .. });
-    let channels = if scene.channels == ChannelSet::default() { ChannelSet::default_exr() } else { scene.channels };
-    let layout = ExrLayout::new(channels, &scene.traps);
-    let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
-    let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
-    let (mut writer, enc) = ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine).map_err(Failure::input)?;
+    let (mut writer, enc) = super::render::open_exr(scene, &plan, simd, path)?;
     let aa = scene.aa as usize;
     let prepare =
         |strip: &render::RenderedStrip| enc.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref());
     let options = Options {
-        exr_channels: channels,
+        exr_channels: scene.channels,
         simd,
         references: if perturbs { references } else { None },
         ..Options::default()
     };
     let result = render::render(scene, options, cancel, &|_| {}, &prepare, |_, chunks| writer.write(chunks));
-    match result {
-        Ok(_) => writer.finish().map_err(|e| Failure::Runtime(e.into())),
-        Err(RenderError::Cancelled) => Err(Failure::Cancelled),
-        Err(e) if e.is_bad_input() => Err(Failure::Input(anyhow!(e))),
-        Err(e) => Err(Failure::Runtime(anyhow!(e))),
-    }
+    result?;
+    writer.finish().map_err(|e| Failure::Runtime(e.into()))
 }

@@ -736,6 +736,12 @@ mod tests {
         check_with(family, center, radius, max_iter, derivative, 1024.0);
     }
 
+    /// The sample points of a `width` x `height` grid over the view.
+    fn grid_points(center: [f64; 2], radius: f64, width: u32, height: u32) -> Vec<[f64; 2]> {
+        let grid = SampleGrid { center, radius, width, height };
+        (0..height).flat_map(|j| (0..width).map(move |i| grid.point(i, j))).collect()
+    }
+
     /// Every instruction set this CPU runs (scalar included) against the scalar kernel.
     fn check_with(family: Family, center: [f64; 2], radius: f64, max_iter: u32, derivative: bool, escape_radius: f64) {
         for simd in SimdLevel::usable() {
@@ -752,8 +758,7 @@ mod tests {
         escape_radius: f64,
         simd: SimdLevel,
     ) {
-        let grid = SampleGrid { center, radius, width: 67, height: 31 };
-        let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
+        let points = grid_points(center, radius, 67, 31);
         let params = OrbitParams { family, max_iter, escape_radius, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let its = iterate(&params, &points, &mut out, true, &AtomicBool::new(false)).unwrap();
@@ -799,8 +804,7 @@ mod tests {
         shape: Shape,
         simd: SimdLevel,
     ) {
-        let grid = SampleGrid { center, radius, width: 53, height: 29 };
-        let points: Vec<_> = (0..grid.height).flat_map(|j| (0..grid.width).map(move |i| grid.point(i, j))).collect();
+        let points = grid_points(center, radius, 53, 29);
         let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let mut dist = vec![0.0; points.len()];

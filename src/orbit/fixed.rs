@@ -93,13 +93,8 @@ impl Work {
 
 /// a + b (mod 2^(64 n)).
 fn add(a: &[u64], b: &[u64], out: &mut [u64]) {
-    let mut carry = false;
-    for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
-        let (s, c1) = x.overflowing_add(y);
-        let (s, c2) = s.overflowing_add(carry as u64);
-        *o = s;
-        carry = c1 | c2;
-    }
+    out.copy_from_slice(a);
+    add_assign(out, b);
 }
 
 /// a -= b (mod 2^(64 n)).

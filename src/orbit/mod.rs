@@ -130,6 +130,12 @@ pub fn reference_bits(spec: &DeepSpec) -> u64 {
     bigfloat::precision_for(spec.spacing.log2() / std::f64::consts::LOG2_10)
 }
 
+/// The period test's threshold of a view (see [`reference::Stepping::periodic_below`]):
+/// 2^-20 of a sample spacing, for Mandelbrot references from 0; None for Julia sets.
+pub fn periodic_below(spec: &DeepSpec) -> Option<FloatExp> {
+    spec.julia.is_none().then(|| spec.spacing.mul_f64(2f64.powi(-20)))
+}
+
 /// How the references of a view are stepped (see [`reference::Stepping`]): a Mandelbrot
 /// reference from 0 that comes back within 2^-20 of a sample spacing (first order) of 0 is
 /// one period of a nucleus's orbit; past [`MAX_STORED_ITERATIONS`] only periodic ones are
@@ -138,7 +144,7 @@ fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
     reference::Stepping {
         share,
         simd: spec.simd,
-        periodic_below: (spec.julia.is_none()).then(|| spec.spacing.mul_f64(2f64.powi(-20))),
+        periodic_below: periodic_below(spec),
         store_limit: (spec.max_iter > MAX_STORED_ITERATIONS).then_some(MAX_STORED_ITERATIONS),
     }
 }

@@ -83,6 +83,7 @@ impl Reference {
         let (mut prev, mut dz) = ([FloatExp::ZERO; 2], [FloatExp::ZERO; 2]);
         // Stores Z_n; true when the orbit ends there.
         let mut keep = |n: u32, fe: [FloatExp; 2]| -> Result<bool, Cancelled> {
+            let mut periodic = false;
             if let Some(scale) = steps.periodic_below
                 && n >= 1
             {
@@ -90,21 +91,17 @@ impl Reference {
                 let t = [prev[0] * dz[0] - prev[1] * dz[1], prev[0] * dz[1] + prev[1] * dz[0]];
                 dz = [t[0].ldexp(1) + FloatExp::ONE, t[1].ldexp(1)];
                 prev = fe;
-                let size = fe[0].abs().max(fe[1].abs());
-                if size < scale * dz[0].abs().max(dz[1].abs()) {
-                    out.z.push([fe[0].to_f64(), fe[1].to_f64()]);
-                    if size.to_f64() < TINY && !size.is_zero() {
-                        out.tiny.push((n, fe));
-                    }
-                    out.period = Some(n);
-                    return Ok(true);
-                }
+                periodic = fe[0].abs().max(fe[1].abs()) < scale * dz[0].abs().max(dz[1].abs());
             }
             let f = [fe[0].to_f64(), fe[1].to_f64()];
             if f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero()) {
                 out.tiny.push((n, fe));
             }
             out.z.push(f);
+            if periodic {
+                out.period = Some(n);
+                return Ok(true);
+            }
             if f[0] * f[0] + f[1] * f[1] > r2 {
                 out.escaped = true;
                 return Ok(true);

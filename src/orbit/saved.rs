@@ -60,8 +60,8 @@ pub struct SavedReferences {
 /// The key of a view's references.
 pub fn key_of(spec: &DeepSpec) -> String {
     let julia = spec.julia.as_ref().map_or("none".to_string(), |c| format!("{} {}", c[0], c[1]));
-    let periodic = spec.julia.is_none().then(|| spec.spacing.mul_f64(2f64.powi(-20)));
-    let periodic = periodic.map_or("none".to_string(), |t| format!("{} {}", t.mantissa(), t.exponent()));
+    let periodic =
+        super::periodic_below(spec).map_or("none".to_string(), |t| format!("{} {}", t.mantissa(), t.exponent()));
     format!(
         "center = {} {}\njulia = {julia}\nmax_iter = {}\nescape_radius = {}\nbits = {}\nperiodic_below = {periodic}\n",
         spec.center[0],
