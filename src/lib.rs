@@ -4,7 +4,8 @@
 //! ([`num`], [`formula`]), raw per-sample data above them ([`field`], [`trap`]), colour on top
 //! of raw data ([`palette`], [`coloring`], [`compose`]), and scenes, rendering and files
 //! around it all ([`scene`], [`render`], [`io`]); [`gpu`] runs the 2D paths on a GPU through
-//! wgpu. The command line lives in the binary.
+//! wgpu. The command line lives in the binary. The viewer and the GPU device code are cargo
+//! features (`viewer`, `gpu`), on by default; see [`gpu`] for what a headless build keeps.
 
 pub mod cancel;
 pub mod coloring;
@@ -23,4 +24,5 @@ pub mod scene;
 pub mod simd_level;
 pub mod source;
 pub mod trap;
+#[cfg(feature = "viewer")]
 pub mod viewer;

@@ -301,7 +301,7 @@ fn ifs_plane_is_the_density_at_each_point() {
     for j in 0..54 {
         for i in 0..72 {
             let pt = params.grid.point(i, j);
-            assert_eq!(d[(j * 72 + i) as usize], deepfield::gpu::ifs::density(p, pt[0] as f32, pt[1] as f32));
+            assert_eq!(d[(j * 72 + i) as usize], deepfield::trap::ifs::density(p, pt[0] as f32, pt[1] as f32));
         }
     }
     assert!(d.iter().any(|&v| v > 0.05), "the field is not empty here");

@@ -7,9 +7,11 @@ mod coloring;
 mod deep;
 mod fuzz;
 mod golden;
+#[cfg(feature = "gpu")]
 mod gpu;
 mod import;
 mod reference;
 mod units;
 mod util;
+#[cfg(feature = "viewer")]
 mod viewer;
