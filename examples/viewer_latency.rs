@@ -59,7 +59,8 @@ fn main() {
     for k in 0..5 {
         run(&format!("run {k}"), &scene);
     }
-    let mut nav = Nav { center: scene.center.clone().map(|d| d.text().to_string()), log10_zoom: 0.0 };
+    let mut nav =
+        Nav { center: scene.center.clone().map(|d| d.text().to_string()), log10_zoom: 0.0, transform: scene.transform };
     nav.log10_zoom = 2f64.log10() - scene.log10_radius;
     for step in ["pan", "pan", "zoom", "pan", "zoom"] {
         nav = match step {

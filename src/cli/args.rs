@@ -325,6 +325,13 @@ pub struct SceneArgs {
     /// Image size in pixels, WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
+    /// Turn the picture counter-clockwise by DEG degrees (view.rotate).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub rotate: Option<f64>,
+    /// Stretch the view: the plane is covered 2^AMOUNT times faster along ANGLE degrees than
+    /// across it (view.stretch_amount, view.stretch_angle; ANGLE defaults to 0).
+    #[arg(long, value_name = "AMOUNT[@ANGLE]", value_parser = parse_stretch, allow_hyphen_values = true)]
+    pub stretch: Option<(f64, f64)>,
     /// Maximum iterations (1 ..= 4294967294).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=u32::MAX as u64 - 1))]
     pub max_iter: Option<u64>,
@@ -429,6 +436,14 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(bad());
     }
     Ok((w, h))
+}
+
+fn parse_stretch(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("`{s}` is not AMOUNT or AMOUNT@ANGLE (log2 of the stretch factor, and degrees)");
+    let (amount, angle) = s.split_once('@').unwrap_or((s, "0"));
+    let amount: f64 = amount.trim().parse().map_err(|_| bad())?;
+    let angle: f64 = angle.trim().parse().map_err(|_| bad())?;
+    Ok((amount, angle))
 }
 
 fn parse_escape(s: &str) -> Result<f64, String> {

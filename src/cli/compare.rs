@@ -92,7 +92,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         let rows = variants
             .iter()
             .zip(&measured)
-            .map(|(v, m)| compare::score(&v.name, m, &truths, scene.escape_radius))
+            .map(|(v, m)| compare::score(&v.name, m, &truths, scene.escape_radius, scene.transform))
             .collect();
         let names: Vec<&str> = variants.iter().map(|v| v.name.as_str()).collect();
         let csv =

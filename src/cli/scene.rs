@@ -134,6 +134,13 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
         file.view.width = cli(w as i64);
         file.view.height = cli(h as i64);
     }
+    if let Some(r) = a.rotate {
+        file.view.rotate = Some(cli(r));
+    }
+    if let Some((amount, angle)) = a.stretch {
+        file.view.stretch_amount = Some(cli(amount));
+        file.view.stretch_angle = Some(cli(angle));
+    }
     if let Some(n) = a.max_iter {
         file.iteration.max = cli(n as i64);
     }

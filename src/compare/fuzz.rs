@@ -107,8 +107,11 @@ pub fn check(
     let mut truth = truths(scene, &sampled, cancel, &|_| {})?;
     let suspect = suspects(&measured, &truth, scene.escape_radius);
     mark_ill_conditioned(scene, &sampled, &mut truth, &suspect, cancel)?;
-    let rows: Vec<Row> =
-        variants.iter().zip(&measured).map(|(v, m)| score(&v.name, m, &truth, scene.escape_radius)).collect();
+    let rows: Vec<Row> = variants
+        .iter()
+        .zip(&measured)
+        .map(|(v, m)| score(&v.name, m, &truth, scene.escape_radius, scene.transform))
+        .collect();
     for r in &rows {
         let mut fail = |what: &str, value: f64, limit: f64| {
             // NaN fails too.

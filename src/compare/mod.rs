@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 pub use truth::Truth;
 
-use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes};
+use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes, Transform};
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::orbit::{self, Numbers, bigfloat};
 use crate::render::{self, Options, Progress};
@@ -213,13 +213,15 @@ impl<'a> TruthGrid<'a> {
     fn truth(&self, (i, j): (u32, u32), shift: [f64; 2]) -> Truth {
         let (cols, rows) = (self.scene.width * self.scene.aa, self.scene.height * self.scene.aa);
         let bits = self.bits;
-        // Offsets are exact halves and the shift a separate term: all exact in a Float.
+        // The sample's offset is what the engines use (exact halves, or the f64 the view's
+        // rotation and stretch map them to) and the shift a separate term: all exact in a Float.
         let offset = |o: f64, s: f64| {
             let a = Float::from(o).mul_prec_ref_ref(&self.spacing, bits).0;
             a.add_prec(Float::from(s).mul_prec_ref_ref(&self.spacing, bits).0, bits).0
         };
-        let ox = offset((2.0 * i as f64 + 1.0 - cols as f64) * 0.5, shift[0]);
-        let oy = offset(-(2.0 * j as f64 + 1.0 - rows as f64) * 0.5, shift[1]);
+        let o = self.scene.transform.apply(crate::field::image_offset(cols, rows, i, j));
+        let ox = offset(o[0], shift[0]);
+        let oy = offset(o[1], shift[1]);
         let p = [self.center[0].add_prec_ref_ref(&ox, bits).0, self.center[1].add_prec_ref_ref(&oy, bits).0];
         let s = self.scene;
         truth::orbit(&p, self.julia.as_ref(), s.max_iter, s.escape_radius, &self.spacing, bits)
@@ -465,7 +467,7 @@ pub fn pixel_csv(
 }
 
 /// Scores a variant's values against the truth.
-pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64) -> Row {
+pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64, transform: Transform) -> Row {
     let ln_r = escape_radius.ln();
     let (mut compared, mut mismatched, mut excused, mut nf_excused) = (0usize, 0usize, 0usize, 0usize);
     let (mut nf, mut de) = (Vec::new(), Vec::new());
@@ -497,7 +499,9 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
         let w = wx.hypot(wy);
         if d_true.is_finite() && d_true > 0.0 && w > 0.0 {
-            let err = (dx as f64 - d_true * wx / w).hypot(dy as f64 - d_true * wy / w) / d_true;
+            // The engines report the vector in image terms: the view's transform undone.
+            let [tx, ty] = transform.gradient_to_image([d_true * wx / w, d_true * wy / w]);
+            let err = (dx as f64 - tx).hypot(dy as f64 - ty) / d_true;
             de.push(if err.is_finite() { err } else { f64::INFINITY });
         }
     }
@@ -542,7 +546,7 @@ mod tests {
         let nf = true_nf(&truths[3], 2f64.ln()) as f32;
         let values = vec![(11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (10, nf, 0.0, 0.0)];
         let m = Measured { values, iterations: 40, seconds: 1.0 };
-        let row = score("x", &m, &truths, 2.0);
+        let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!((row.compared, row.ill_conditioned), (2, 1), "{row:?}");
         assert_eq!(row.n_mismatch_fraction, 0.5, "{row:?}");
         assert_eq!(suspects(std::slice::from_ref(&m), &truths, 2.0), vec![0, 1]);
@@ -551,7 +555,7 @@ mod tests {
         truths[0].nf_ill_conditioned = true;
         let values = vec![(10, 0.3, 0.0, 0.0), (10, 0.3, 0.0, 0.0)];
         let m = Measured { values, iterations: 20, seconds: 1.0 };
-        let row = score("x", &m, &truths, 2.0);
+        let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!(row.nf_ill_conditioned, 1, "{row:?}");
         assert_eq!(suspects(&[m], &truths, 2.0), vec![0, 1]);
     }

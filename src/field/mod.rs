@@ -13,12 +13,14 @@ pub mod quantities;
 pub mod scalar;
 pub mod simd;
 pub mod single;
+pub mod transform;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-pub use grid::SampleGrid;
+pub use grid::{SampleGrid, image_offset};
 pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
+pub use transform::Transform;
 
 use crate::formula::Family;
 use crate::orbit::{Counters, Perturbation};
@@ -101,8 +103,27 @@ pub struct Strip {
     pub counters: Counters,
 }
 
-/// Computes sample rows `rows` of the grid.
+/// Computes sample rows `rows` of the grid. Distance vectors come out in image terms (the
+/// view's rotation and stretch undone, [`Transform::gradient_to_image`]).
 pub fn compute_strip(
+    params: &FieldParams,
+    rows: std::ops::Range<u32>,
+    cancel: &AtomicBool,
+) -> Result<Strip, Cancelled> {
+    let mut strip = compute_plane_strip(params, rows, cancel)?;
+    let t = params.grid.transform;
+    if params.needs.de && !t.is_identity() {
+        let planes = &mut strip.planes;
+        for (x, y) in planes.dex.iter_mut().zip(planes.dey.iter_mut()) {
+            let g = t.gradient_to_image([*x as f64, *y as f64]);
+            [*x, *y] = [g[0] as f32, g[1] as f32];
+        }
+    }
+    Ok(strip)
+}
+
+/// [`compute_strip`] with distance vectors in plane terms.
+fn compute_plane_strip(
     params: &FieldParams,
     rows: std::ops::Range<u32>,
     cancel: &AtomicBool,

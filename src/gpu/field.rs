@@ -11,11 +11,17 @@
 
 use std::ops::Range;
 
+#[cfg(feature = "gpu")]
+use super::MAX_ESCAPE_RADIUS;
+#[cfg(feature = "gpu")]
 use super::runner::{self, Job};
+#[cfg(feature = "gpu")]
 use super::shaders;
 use super::uniforms::{self, Uniforms};
-use super::{GpuContext, GpuError, MAX_ESCAPE_RADIUS, Precision};
-use crate::field::{FieldParams, Planes, TrapPlane};
+use super::{GpuContext, GpuError, Precision};
+#[cfg(feature = "gpu")]
+use crate::field::TrapPlane;
+use crate::field::{FieldParams, Planes};
 use crate::formula::Family;
 use crate::trap::{BitmapTrap, Trap};
 
@@ -44,8 +50,12 @@ pub fn supported_trap(traps: &[Trap]) -> Result<Option<&BitmapTrap>, GpuError> {
 
 /// Checks what the uniforms cannot carry: grid size, escape radius, coordinates in the
 /// f32 range.
+#[cfg(feature = "gpu")]
 fn check(params: &FieldParams) -> Result<(), GpuError> {
     let g = &params.grid;
+    if !g.transform.is_identity() {
+        return Err(GpuError::Unsupported("the GPU paths do not rotate or stretch the view".into()));
+    }
     if g.width > MAX_GRID_SIDE || g.height > MAX_GRID_SIDE {
         return Err(GpuError::Unsupported(format!(
             "a {}x{} sample grid is larger than the GPU's {MAX_GRID_SIDE} samples per side",
@@ -124,6 +134,7 @@ pub fn field_uniforms(params: &FieldParams, trap: Option<&BitmapTrap>) -> Unifor
 
 /// Computes sample rows `rows` of `params.grid` on the GPU in `precision`, returning planes
 /// shaped as [`crate::field::compute_strip`]'s (`Planes::new(width, rows, &params.needs)`).
+#[cfg(feature = "gpu")]
 pub fn compute_planes(
     ctx: &GpuContext,
     params: &FieldParams,
@@ -180,6 +191,17 @@ pub fn compute_planes(
         }
     })?;
     Ok(planes)
+}
+
+/// Without the `gpu` feature no [`GpuContext`] exists, so this is never called.
+#[cfg(not(feature = "gpu"))]
+pub fn compute_planes(
+    ctx: &GpuContext,
+    _params: &FieldParams,
+    _precision: Precision,
+    _rows: Range<u32>,
+) -> Result<Planes, GpuError> {
+    match *ctx {}
 }
 
 /// Iterations the orbit loops performed on sample rows `rows`, estimated from N: an

@@ -27,6 +27,21 @@ pub enum PaletteError {
     /// The file is not a valid palette.
     #[error(transparent)]
     Invalid(#[from] SourceError),
+    /// Another program's palette file that could not be imported.
+    #[error(transparent)]
+    Import(#[from] super::import::ImportError),
+    /// An imported file holds several palettes (a `.ugr` collection): which one is meant?
+    #[error(
+        "{path} holds {count} palettes ({names}); a scene names one palette: convert them with `deepfield palettes import {path} -o DIR` and name one file"
+    )]
+    Several {
+        /// The file.
+        path: String,
+        /// How many it holds.
+        count: usize,
+        /// Their names, comma-separated.
+        names: String,
+    },
 }
 
 macro_rules! builtin {
@@ -78,7 +93,10 @@ pub fn builtin(name: &str) -> Option<Palette> {
 }
 
 /// A built-in palette by name, or a palette file by path (relative paths are resolved
-/// against `base`, the folder of the scene that names it).
+/// against `base`, the folder of the scene that names it). A path whose extension names
+/// another program's format ([`super::import::Format::from_path`]: `.ggr`, `.cpt`, `.map`,
+/// `.ugr`, `.kfp`, `.kfr`) is imported as `deepfield palettes import` would, so a scene
+/// converted from a Kalles Fraktaler location can name the location file as its palette.
 pub fn load(name_or_path: &str, base: Option<&Path>) -> Result<Palette, PaletteError> {
     if let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
         return Ok(parse(&format!("palettes/{name}.toml"), text)?);
@@ -90,6 +108,17 @@ pub fn load(name_or_path: &str, base: Option<&Path>) -> Result<Palette, PaletteE
     };
     if !path.exists() {
         return Err(PaletteError::Unknown { name: name_or_path.to_string() });
+    }
+    if super::import::Format::from_path(&path).is_some() {
+        let mut found = super::import::import_file(&path)?;
+        return match found.len() {
+            1 => Ok(found.remove(0)),
+            count => Err(PaletteError::Several {
+                path: path.display().to_string(),
+                count,
+                names: found.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "),
+            }),
+        };
     }
     let text = std::fs::read_to_string(&path)
         .map_err(|e| PaletteError::Io { path: path.display().to_string(), reason: e.to_string() })?;

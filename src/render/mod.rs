@@ -254,6 +254,7 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
         radius: scene.radius_f64(),
         width: scene.width * scene.aa,
         height: scene.height * scene.aa,
+        transform: scene.transform,
     };
     FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
 }

@@ -27,18 +27,34 @@
 //! What is checked, because deepfield cannot draw it and silently dropping it would give a
 //! different picture: `FractalType` must be 0 (Mandelbrot) and `Power` 2; `UseHybridFormula`
 //! must be 0; `SeedR`/`SeedI` must be 0 (KF's seed is the starting z_0 of a Mandelbrot-family
-//! orbit, not a Julia parameter); `RotateAngle`, `Rotate` and `StretchAmount` must be 0 (no
-//! rotation or skew); an old-style `Ratio` must be 360 (square pixels).
+//! orbit, not a Julia parameter).
+//!
+//! The view's rotation and stretch are the scene's own keys, with KF 2.15's meaning
+//! (`field::transform`): `RotateAngle`, `StretchAngle`, `StretchAmount` become `[view]
+//! rotate`, `stretch_angle`, `stretch_amount` as written. Files from before KF 2.14 carry
+//! `Rotate` (degrees) and `Ratio` (360 for square pixels) instead; they convert as KF's own
+//! compatibility code read them: a stretch by sqrt(360 / Ratio) at angle `Rotate`, turned
+//! back by `Rotate` (rotate = −Rotate, stretch_angle = Rotate, stretch_amount =
+//! log2(360 / Ratio) / 2).
 //!
 //! KF has no Julia mode (its formulas iterate from `SeedR + i SeedI` with `c` the pixel), so a
 //! `.kfr` always converts to a Mandelbrot scene.
 //!
-//! What is ignored: everything else: colouring (`Colors`, `IterDiv`, `ColorMethod`,
-//! `Differences`, `ColorOffset`, `MultiColors`, `Slopes*`, `Texture*`, `GLSL`, ...), smoothing
-//! and bailout choices (deepfield's escape radius is its own), `Period`, `real`/`imag`/
-//! `FactorAR`/`FactorAI` (formula parameters; Fraktaler-3's `.kfr` import ignores them too),
-//! `Version`, and any key this module does not know. The converted scene has no `[[layer]]`,
-//! so it gets deepfield's default colouring.
+//! Colours come with the location, near enough to open looking as its author saved it: a
+//! `Colors` line becomes one `smooth` layer whose `palette` is the `.kfr` file itself (its
+//! file name, resolved in its own folder: the palette importer reads `Colors` and
+//! `ColorOffset` as for a `.kfp`, see `palette::import`), at `density = 1 / (1024 IterDiv)`
+//! (KF spreads its keys over a table of 1024 entries indexed by iterations / `IterDiv`),
+//! with `ColorMethod` 0, 1, 2, 3, 9 as the transfers `linear`, `sqrt`, `cbrt`, `log`,
+//! `log-log`, and `InteriorColor` (B,G,R bytes like the keys) as the layer's `interior`.
+//! KF's other colour methods (distance, stretched, atan, fourth root) fall back to `linear`,
+//! and the generated text says so.
+//!
+//! What is ignored: the rest of KF's colouring (`Differences`, `MultiColors`, `Slopes*`,
+//! `Texture*`, `Flat`, `GLSL`, ...), smoothing and bailout choices (deepfield's escape radius
+//! is its own), `Period`, `real`/`imag`/`FactorAR`/`FactorAI` (formula parameters;
+//! Fraktaler-3's `.kfr` import ignores them too), `Version`, and any key this module does not
+//! know. A file without `Colors` gets deepfield's default colouring.
 //!
 //! Two differences remain (the first is stated in the generated text): without
 //! `ImagPointsUp: 1` (KF 2.15.4 and later) KF draws the imaginary axis pointing down, so
@@ -71,6 +87,7 @@ const KNOWN: &[&str] = &[
     "SeedI",
     "RotateAngle",
     "Rotate",
+    "StretchAngle",
     "StretchAmount",
     "Ratio",
     "ImagPointsUp",
@@ -78,6 +95,10 @@ const KNOWN: &[&str] = &[
     "TargetHeight",
     "ImageWidth",
     "ImageHeight",
+    "Colors",
+    "IterDiv",
+    "ColorMethod",
+    "InteriorColor",
 ];
 
 /// One `Key: value` line.
@@ -220,7 +241,9 @@ impl<'a> Kfr<'a> {
 /// `origin` names the file in errors and in the generated header comment. Errors carry the
 /// line and column of the offending value (or the end of the text for a missing key) and say
 /// what was expected. The result parses as a `version = 1` scene: a Mandelbrot view with the
-/// centre and zoom copied digit for digit, `[iteration] max` from `Iterations`, and no layers.
+/// centre and zoom copied digit for digit, `[iteration] max` from `Iterations`, and, when
+/// the file has `Colors`, a `smooth` layer coloured by the file itself (the last component
+/// of `origin` names it, so `origin` is the file's path; see the module documentation).
 pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
     let kfr = Kfr::parse(origin, text)?;
 
@@ -239,25 +262,7 @@ pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
         "starts every orbit at a non-zero z_0 (KF's seed is not a Julia parameter; deepfield's Mandelbrot starts at 0)";
     kfr.must_be_zero("SeedR", seed_why)?;
     kfr.must_be_zero("SeedI", seed_why)?;
-    let rotate_why = "rotates the view; deepfield has no rotation, so this location cannot be converted";
-    kfr.must_be_zero("RotateAngle", rotate_why)?;
-    kfr.must_be_zero("Rotate", rotate_why)?;
-    kfr.must_be_zero(
-        "StretchAmount",
-        "stretches the view; deepfield has no skew, so this location cannot be converted",
-    )?;
-    if let Some(e) = kfr.get("Ratio") {
-        let d = Decimal::parse(e.value).map_err(|err| kfr.error_at(e.value_at, format!("`Ratio`: {err}")))?;
-        if (d.to_f64() - 360.0).abs() > 1e-6 {
-            return Err(kfr.error_at(
-                e.value_at,
-                format!(
-                    "`Ratio: {}` stretches the view (360 is square pixels); deepfield has no skew; expected 360",
-                    e.value
-                ),
-            ));
-        }
-    }
+    let transform = view_transform(&kfr)?;
     let imag_up = kfr.integer("ImagPointsUp", 0, 1, "1 when the imaginary axis points up")? == Some(1);
 
     let side = |target: &str, image: &str, default: u64| -> Result<u64, SourceError> {
@@ -279,16 +284,130 @@ pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
              # deepfield's points up, so this image is KF's mirrored top to bottom.\n",
         );
     }
-    out.push_str("# KF's colouring (Colors, IterDiv, ColorMethod, ...) is not converted: add [[layer]] tables.\n");
+    let layer = colour_layer(&kfr, &name)?;
+    if layer.is_none() {
+        out.push_str("# The file has no `Colors`: deepfield's default colouring.\n");
+    }
     out.push_str("version = 1\n\n[formula]\nkind = \"mandelbrot\"\n\n[view]\n");
     // Decimal texts hold only digits, signs, '.', 'e' and 'E': safe inside TOML strings.
     out.push_str(&format!("center = [\"{}\", \"{}\"]\n", re.text(), im.text()));
     out.push_str(&format!("zoom = \"{}\"\n", zoom.text()));
     out.push_str(&format!("width = {width}\nheight = {height}\n"));
+    for (key, value) in ["rotate", "stretch_angle", "stretch_amount"].iter().zip(transform) {
+        if value != 0.0 {
+            out.push_str(&format!("{key} = {value:?}\n"));
+        }
+    }
     if let Some(n) = max_iter {
         out.push_str(&format!("\n[iteration]\nmax = {n}\n"));
     }
+    if let Some(layer) = layer {
+        out.push_str(&layer);
+    }
     Ok(out)
+}
+
+/// `[rotate, stretch_angle, stretch_amount]` from KF 2.15's keys or, failing those, the old
+/// `Rotate` and `Ratio` (see the module documentation).
+fn view_transform(kfr: &Kfr<'_>) -> Result<[f64; 3], SourceError> {
+    let number = |key: &str| -> Result<Option<(f64, usize)>, SourceError> {
+        let Some(e) = kfr.get(key) else { return Ok(None) };
+        let d = Decimal::parse(e.value).map_err(|err| kfr.error_at(e.value_at, format!("`{key}`: {err}")))?;
+        let v = d.to_f64();
+        if !(v.is_finite() && v.abs() <= 1e6) {
+            return Err(kfr.error_at(e.value_at, format!("`{key}: {}` is out of range; expected at most 1e6", e.value)));
+        }
+        Ok(Some((v, e.value_at)))
+    };
+    let new_style = ["RotateAngle", "StretchAngle", "StretchAmount"].iter().any(|k| kfr.get(k).is_some());
+    let out = if new_style {
+        let v = |k| number(k).map(|x| x.map_or(0.0, |(v, _)| v));
+        let (rotate, angle, amount) = (v("RotateAngle")?, v("StretchAngle")?, v("StretchAmount")?);
+        // Without a stretch its angle means nothing (KF 2.15 writes one anyway).
+        [rotate, if amount == 0.0 { 0.0 } else { angle }, amount]
+    } else {
+        let rotate = number("Rotate")?.map_or(0.0, |(v, _)| v);
+        let amount = match number("Ratio")? {
+            None => 0.0,
+            // Ratio 360.000000 (square pixels) is exactly no stretch.
+            Some((r, _)) if r > 0.0 => (360.0 / r).log2() / 2.0,
+            Some((_, at)) => {
+                return Err(kfr.error_at(at, "`Ratio` must be positive (360 is square pixels)"));
+            }
+        };
+        [-rotate, if amount == 0.0 { 0.0 } else { rotate }, amount]
+    };
+    if out[2].abs() > crate::field::transform::MAX_STRETCH_AMOUNT {
+        let at = kfr.get("StretchAmount").or(kfr.get("Ratio")).map_or(0, |e| e.value_at);
+        return Err(kfr.error_at(
+            at,
+            format!(
+                "the stretch 2^{} is beyond deepfield's limit of 2^{}",
+                out[2],
+                crate::field::transform::MAX_STRETCH_AMOUNT
+            ),
+        ));
+    }
+    // Negative zero reads as zero.
+    Ok(out.map(|v| if v == 0.0 { 0.0 } else { v }))
+}
+
+/// KF's `ColorMethod` numbers that are one of deepfield's transfers.
+const COLOR_METHODS: &[(u64, &str)] = &[(0, "linear"), (1, "sqrt"), (2, "cbrt"), (3, "log"), (9, "log-log")];
+
+/// The `[[layer]]` text that colours the view as the file's `Colors` do, or `None` when it
+/// has none. `name` is the file's path (its last component is what the layer names).
+fn colour_layer(kfr: &Kfr<'_>, name: &str) -> Result<Option<String>, SourceError> {
+    match kfr.get("Colors") {
+        Some(e) if !e.value.trim().trim_end_matches(',').trim().is_empty() => {}
+        _ => return Ok(None),
+    }
+    let file = std::path::Path::new(name).file_name().map_or_else(|| name.to_string(), |f| f.to_string_lossy().into());
+    let iter_div = match kfr.get("IterDiv") {
+        None => 1.0,
+        Some(e) => {
+            let d =
+                Decimal::parse(e.value).map_err(|err| kfr.error_at(e.value_at, format!("`IterDiv`: {err}")))?.to_f64();
+            if !(d.is_finite() && d > 0.0) {
+                return Err(kfr.error_at(
+                    e.value_at,
+                    format!("`IterDiv: {}` must be a positive number (iterations per colour table entry)", e.value),
+                ));
+            }
+            d
+        }
+    };
+    let method = kfr.integer("ColorMethod", 0, u32::MAX as u64, "KF's colour method")?.unwrap_or(0);
+    let mut out =
+        String::from("\n# Colours from the file: its `Colors` and `ColorOffset` (the palette is the file itself),\n");
+    out.push_str("# one cycle per 1024 x `IterDiv` iterations as in KF.\n");
+    let transfer = match COLOR_METHODS.iter().find(|(m, _)| *m == method) {
+        Some((_, t)) => t,
+        None => {
+            out.push_str(&format!(
+                "# KF's `ColorMethod: {method}` (a distance, stretched, atan or fourth-root method) is drawn as linear iterations.\n"
+            ));
+            "linear"
+        }
+    };
+    out.push_str("[[layer]]\nkind = \"smooth\"\n");
+    out.push_str(&format!("palette = {}\n", toml::Value::String(file)));
+    out.push_str(&format!("density = {:e}\n", 1.0 / (1024.0 * iter_div)));
+    out.push_str(&format!("transfer = \"{transfer}\"\n"));
+    if let Some(e) = kfr.get("InteriorColor") {
+        let bytes: Vec<&str> = e.value.split(',').map(str::trim).filter(|w| !w.is_empty()).collect();
+        let parsed: Option<Vec<u8>> = bytes.iter().map(|w| w.parse::<u8>().ok()).collect();
+        match parsed.as_deref() {
+            Some([b, g, r]) => out.push_str(&format!("interior = \"#{r:02x}{g:02x}{b:02x}\"\n")),
+            _ => {
+                return Err(kfr.error_at(
+                    e.value_at,
+                    format!("`InteriorColor: {}`: expected three colour values 0-255 (B,G,R)", e.value),
+                ));
+            }
+        }
+    }
+    Ok(Some(out))
 }
 
 #[cfg(test)]
@@ -366,7 +485,12 @@ Version: 2150500\r\n";
         assert_eq!(view["width"].as_integer(), Some(800));
         assert_eq!(view["height"].as_integer(), Some(600));
         assert_eq!(t["iteration"]["max"].as_integer(), Some(4036));
-        assert!(t.get("layer").is_none(), "KF colours are not converted");
+        let layer = &t["layer"][0];
+        assert_eq!(layer["kind"].as_str(), Some("smooth"));
+        assert_eq!(layer["palette"].as_str(), Some("e14.kfr"), "the file is its own palette");
+        assert_eq!(layer["density"].as_float(), Some(1.0 / (1024.0 * 0.01)), "IterDiv 0.01");
+        assert_eq!(layer["interior"].as_str(), Some("#000000"));
+        assert!(out.contains("ColorMethod: 7"), "the distance method is named as not reproduced");
         assert!(out.starts_with("# Converted from the Kalles Fraktaler location e14.kfr."));
         assert!(!out.contains("mirrored"), "ImagPointsUp: 1 matches deepfield's orientation");
         // It is a scene file deepfield reads.
@@ -463,23 +587,42 @@ Version: 2150500\r\n";
     }
 
     #[test]
-    fn unsupported_transforms_and_formulas_are_refused() {
+    fn unsupported_formulas_are_refused() {
         let base = "Re: 0\nIm: 0\nZoom: 1\n";
         for (line, needle) in [
-            ("RotateAngle: 30.5", "rotation"),
-            ("Rotate: 12.000000", "rotation"),
-            ("StretchAmount: 0.5", "skew"),
-            ("Ratio: 400.000000", "skew"),
             ("FractalType: 1", "Mandelbrot"),
             ("Power: 3", "power 2"),
             ("UseHybridFormula: 1", "hybrid"),
             ("ImagPointsUp: 2", "ImagPointsUp"),
+            ("StretchAmount: 21", "limit"),
+            ("Ratio: -3", "positive"),
+            ("RotateAngle: 1e7", "range"),
         ] {
             let e = err(&format!("{base}{line}\n"));
             assert_eq!(e.position.map(|p| p.line), Some(4), "{line}");
             assert!(e.message.contains(needle), "{line}: {e}");
         }
-        kfr_to_toml("x.kfr", &format!("{base}RotateAngle: 0\nStretchAngle: 45\nStretchAmount: 0\n")).unwrap();
+    }
+
+    #[test]
+    fn rotation_and_stretch_become_view_keys() {
+        let base = "Re: 0\nIm: 0\nZoom: 1\n";
+        let view = |text: &str| table(&kfr_to_toml("x.kfr", &format!("{base}{text}")).unwrap())["view"].clone();
+        let v = view("RotateAngle: 30.5\nStretchAngle: 45\nStretchAmount: 0.25\n");
+        assert_eq!(v["rotate"].as_float(), Some(30.5));
+        assert_eq!(v["stretch_angle"].as_float(), Some(45.0));
+        assert_eq!(v["stretch_amount"].as_float(), Some(0.25));
+        // KF 2.15 writes zeros: no keys.
+        let v = view("RotateAngle: 0\nStretchAngle: 45\nStretchAmount: 0\n");
+        assert!(v.get("rotate").is_none() && v.get("stretch_angle").is_none() && v.get("stretch_amount").is_none());
+        // Old style: square pixels are no stretch; 381.176471 (KF's 1e1086 benchmark) a slight one.
+        let v = view("Rotate: 0.000000\nRatio: 360.000000\n");
+        assert!(v.get("stretch_amount").is_none());
+        let v = view("Rotate: 12\nRatio: 381.176471\n");
+        assert_eq!(v["rotate"].as_float(), Some(-12.0));
+        assert_eq!(v["stretch_angle"].as_float(), Some(12.0));
+        let a = v["stretch_amount"].as_float().unwrap();
+        assert!((a - (360.0f64 / 381.176471).log2() / 2.0).abs() < 1e-15, "{a}");
     }
 
     #[test]

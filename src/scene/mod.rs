@@ -162,6 +162,14 @@ pub enum EngineError {
         /// What the GPU paths lack.
         reason: String,
     },
+    /// The GPU paths draw unrotated, unstretched views only.
+    #[error(
+        "--engine {engine}: the GPU paths do not rotate or stretch the view (view.rotate, view.stretch_amount); use --engine auto"
+    )]
+    GpuTransform {
+        /// The engine's name.
+        engine: &'static str,
+    },
     /// A GPU engine's escape radius limit.
     #[error(
         "--engine {engine}: iteration.escape_radius = {escape_radius:e} is above the GPU's limit of 2^60 (|z|^2 must stay finite in f32)"
@@ -231,6 +239,8 @@ pub struct Scene {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Rotation and stretch of the view (`[view] rotate`, `stretch_angle`, `stretch_amount`).
+    pub transform: crate::field::Transform,
     /// Maximum iterations.
     pub max_iter: u32,
     /// Escape radius.
@@ -384,12 +394,15 @@ impl Scene {
     }
 
     /// The GPU engine in `precision`, or why it cannot address the scene: traps other than
-    /// one bitmap trap, the stripe average, an escape radius past 2^60, a view past the f64
+    /// one bitmap trap, the stripe average, a rotated or stretched view, an escape radius past 2^60, a view past the f64
     /// range, or a view deeper than the precision resolves ([`Precision::exhausted`]).
     fn gpu_plan(&self, precision: Precision) -> Result<EnginePlan, EngineError> {
         let name = precision.name();
         crate::gpu::field::supported_trap(&self.traps)
             .map_err(|e| EngineError::GpuTraps { engine: name, reason: e.to_string() })?;
+        if !self.transform.is_identity() {
+            return Err(EngineError::GpuTransform { engine: name });
+        }
         if self.escape_radius > crate::gpu::MAX_ESCAPE_RADIUS {
             return Err(EngineError::GpuEscapeRadius { engine: name, escape_radius: self.escape_radius });
         }

@@ -81,6 +81,24 @@ pub struct ViewRaw {
     /// Image height in pixels.
     #[serde(default = "default_height")]
     pub height: Spanned<i64>,
+    /// Degrees the picture turns counter-clockwise (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<Spanned<f64>>,
+    /// Direction of the stretch, degrees (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_angle: Option<Spanned<f64>>,
+    /// log2 of the stretch factor (default 0: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_amount: Option<Spanned<f64>>,
+}
+
+impl ViewRaw {
+    /// The rotation and stretch these keys describe (absent keys are 0; validation checks
+    /// the ranges).
+    pub fn transform(&self) -> crate::field::Transform {
+        let v = |k: &Option<Spanned<f64>>| k.as_ref().map_or(0.0, |x| *x.get_ref());
+        crate::field::Transform::new(v(&self.rotate), v(&self.stretch_angle), v(&self.stretch_amount))
+    }
 }
 
 fn default_center() -> Spanned<[String; 2]> {
@@ -95,7 +113,16 @@ fn default_height() -> Spanned<i64> {
 
 impl Default for ViewRaw {
     fn default() -> Self {
-        Self { center: default_center(), zoom: None, radius: None, width: default_width(), height: default_height() }
+        Self {
+            center: default_center(),
+            zoom: None,
+            radius: None,
+            width: default_width(),
+            height: default_height(),
+            rotate: None,
+            stretch_angle: None,
+            stretch_amount: None,
+        }
     }
 }
 

@@ -10,6 +10,7 @@ use super::{
     Scene,
 };
 use crate::compose::Stack;
+use crate::field::transform::MAX_STRETCH_AMOUNT;
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
 use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
@@ -150,6 +151,16 @@ pub(super) fn validate(
             "the view is wider than 1000 units; zoom must be at least 0.002",
         );
     }
+    if let Some(a) = &view.rotate {
+        cx.finite(a, -1e6, 1e6, "view.rotate (degrees)")?;
+    }
+    if let Some(a) = &view.stretch_angle {
+        cx.finite(a, -1e6, 1e6, "view.stretch_angle (degrees)")?;
+    }
+    if let Some(a) = &view.stretch_amount {
+        cx.finite(a, -MAX_STRETCH_AMOUNT, MAX_STRETCH_AMOUNT, "view.stretch_amount (log2 of the factor)")?;
+    }
+    let transform = view.transform();
     let width = cx.range_i(&view.width, 1, MAX_SIDE, "width")? as u32;
     let height = cx.range_i(&view.height, 1, MAX_SIDE, "height")? as u32;
     let max_iter = cx.range_i(&file.iteration.max, 1, MAX_ITER_LIMIT as i64, "iteration.max")? as u32;
@@ -226,6 +237,7 @@ pub(super) fn validate(
         radius,
         width,
         height,
+        transform,
         max_iter,
         escape_radius,
         aa,

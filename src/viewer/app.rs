@@ -165,7 +165,8 @@ impl ViewerApp {
             (None, None) => ("default".to_string(), "version = 1\n".to_string(), PathBuf::from("."), None),
         };
         let file = Scene::parse_file(&origin, &text).map_err(|e| e.to_string())?;
-        let nav = nav.unwrap_or_else(|| nav_of(&file));
+        // A saved view keeps its centre and zoom; its rotation and stretch are the scene's.
+        let nav = nav.map_or_else(|| nav_of(&file), |n| Nav { transform: file.view.transform(), ..n });
         let mut app = Self {
             file,
             origin,
@@ -270,7 +271,7 @@ impl ViewerApp {
         self.history.push(self.nav.clone());
         self.file.formula.kind = cli("julia".into());
         self.file.formula.c = Some(cli(c));
-        self.nav = Nav { center: ["0".into(), "0".into()], log10_zoom: 1.3f64.log10() };
+        self.nav = Nav { center: ["0".into(), "0".into()], log10_zoom: 1.3f64.log10(), transform: self.nav.transform };
         self.changed();
     }
 
@@ -479,7 +480,7 @@ fn nav_of(file: &SceneFile) -> Nav {
         (None, Some(r)) => crate::num::Decimal::parse(r.get_ref()).map(|d| 2f64.log10() - d.log10_abs()).unwrap_or(0.0),
         (None, None) => 1.6f64.log10(),
     };
-    Nav { center: file.view.center.get_ref().clone(), log10_zoom: zoom }
+    Nav { center: file.view.center.get_ref().clone(), log10_zoom: zoom, transform: file.view.transform() }
 }
 
 /// True when `new` differs from `old` only in colouring that `old`'s planes can serve.
@@ -1198,6 +1199,10 @@ impl ViewerApp {
     /// The paint callback's parameters for drawing the part `rect` of the image area `full`.
     fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::gpu::paint::PaintParams> {
         let scene = self.scene.as_ref()?;
+        // The paint shader draws unrotated, unstretched views only.
+        if !scene.transform.is_identity() {
+            return None;
+        }
         let h = self.size_px[1].max(1) as f64;
         let spacing = self.nav.spacing(h);
         // The GPU half of a side-by-side view shows the right half of the same view.

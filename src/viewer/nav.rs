@@ -11,20 +11,26 @@ use malachite_base::num::conversion::traits::FromSciString;
 use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
 
+use crate::field::Transform;
+
 /// A view: centre (decimal strings, [re, im]) and log10 of the zoom (the image height spans
-/// 4 / zoom).
+/// 4 / zoom), with the scene's rotation and stretch, through which pixel moves become plane
+/// moves (not persisted: it belongs to the scene, which sets it).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Nav {
     /// Centre, decimal strings.
     pub center: [String; 2],
     /// log10 of the zoom.
     pub log10_zoom: f64,
+    /// The view's rotation and stretch.
+    #[serde(skip)]
+    pub transform: Transform,
 }
 
 impl Nav {
     /// The whole Mandelbrot set.
     pub fn home() -> Self {
-        Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10() }
+        Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10(), transform: Transform::IDENTITY }
     }
 
     /// Plane units per pixel for an image `height` pixels high, as f64 (0 past 1e-308: for
@@ -90,14 +96,15 @@ impl Nav {
             return [0.0; 2];
         }
         let d = |a: &String, b: &String| -> f64 { f64::rounding_from(&((rat(b) - rat(a)) / &s)) };
-        [d(&self.center[0], &other.center[0]), d(&self.center[1], &other.center[1])]
+        self.transform.invert([d(&self.center[0], &other.center[0]), d(&self.center[1], &other.center[1])])
     }
 
     /// The point of the plane at pixel `at` (from the image centre, y down), as f64.
     pub fn point_at(&self, at: [f64; 2], height: f64) -> [f64; 2] {
         let s = self.spacing(height);
         let c = |t: &String| f64::rounding_from(&rat(t));
-        [c(&self.center[0]) + at[0] * s, c(&self.center[1]) - at[1] * s]
+        let o = self.transform.apply([at[0], -at[1]]);
+        [c(&self.center[0]) + o[0] * s, c(&self.center[1]) + o[1] * s]
     }
 
     /// The view moved by (dx, dy) pixels (y down), in exact rationals.
@@ -105,9 +112,11 @@ impl Nav {
         let s = self.spacing_rational(height);
         let add = |t: &String, d: f64| rat(t) + Rational::try_from(d).unwrap_or_default() * &s;
         let digits = self.digits(height);
+        let o = self.transform.apply([dx, -dy]);
         let out = Self {
-            center: [text(&add(&self.center[0], dx), digits), text(&add(&self.center[1], -dy), digits)],
+            center: [text(&add(&self.center[0], o[0]), digits), text(&add(&self.center[1], o[1]), digits)],
             log10_zoom: self.log10_zoom,
+            transform: self.transform,
         };
         out.round(height)
     }
@@ -121,7 +130,11 @@ impl Nav {
     fn round(&self, height: f64) -> Self {
         let digits = self.digits(height);
         let r = |t: &String| text(&rat(t), digits);
-        Self { center: [r(&self.center[0]), r(&self.center[1])], log10_zoom: self.log10_zoom }
+        Self {
+            center: [r(&self.center[0]), r(&self.center[1])],
+            log10_zoom: self.log10_zoom,
+            transform: self.transform,
+        }
     }
 }
 
@@ -190,7 +203,7 @@ mod tests {
 
     #[test]
     fn zoom_about_keeps_the_point_under_the_cursor() {
-        let n = Nav { center: ["-0.75".into(), "0.1".into()], log10_zoom: 0.3 };
+        let n = Nav { center: ["-0.75".into(), "0.1".into()], log10_zoom: 0.3, transform: Default::default() };
         let at = [123.0, -45.0];
         let before = n.point_at(at, 600.0);
         for factor in [2.0, 0.5, 1.1, 10.0] {
@@ -206,6 +219,7 @@ mod tests {
         let n = Nav {
             center: ["-1.7400623825793399052208441670658".into(), "0.0281753397792110489924115211361".into()],
             log10_zoom: 28.0,
+            transform: Default::default(),
         };
         let p = n.pan(100.0, 0.0, 1000.0).pan(-100.0, 0.0, 1000.0);
         assert_eq!(p.center, n.center);
@@ -221,7 +235,8 @@ mod tests {
     fn pans_and_zooms_work_past_the_f64_range() {
         // 1080 digits: within the thousandth of a spacing the centre is rounded to.
         let digits = "7".repeat(1080);
-        let n = Nav { center: [format!("-1.{digits}"), "0.001".into()], log10_zoom: 1086.0 };
+        let n =
+            Nav { center: [format!("-1.{digits}"), "0.001".into()], log10_zoom: 1086.0, transform: Default::default() };
         let p = n.pan(250.0, -40.0, 800.0);
         assert_ne!(p.center, n.center);
         let d = n.offset_px_of(&p, 800.0);

@@ -41,13 +41,16 @@ pub fn newton_zoom(nav: &Nav, at: [f64; 2], height: f64, target: Target, factor:
             let log10_zoom = if factor > 1.0 { (nav.log10_zoom + factor.log10()).min(framing) } else { framing };
             let size = m.size.log2() * std::f64::consts::LOG10_2;
             let line = format!("minibrot of period {}, size 1e{size:.1}", m.period);
-            Ok((Nav { center: text(&m.nucleus), log10_zoom }, line))
+            Ok((Nav { center: text(&m.nucleus), log10_zoom, transform: nav.transform }, line))
         }
         Target::Misiurewicz => {
             let m = search::misiurewicz_in_view(&c, disc, 2000, 64).map_err(|e| e.to_string())?;
             let step = if factor > 1.0 { factor } else { 4.0 };
             let line = format!("Misiurewicz point of preperiod {} and period {}", m.preperiod, m.period);
-            Ok((Nav { center: text(&m.point), log10_zoom: nav.log10_zoom + step.log10() }, line))
+            Ok((
+                Nav { center: text(&m.point), log10_zoom: nav.log10_zoom + step.log10(), transform: nav.transform },
+                line,
+            ))
         }
     }
 }
@@ -60,7 +63,7 @@ mod tests {
     /// (-1.7548776662466927..., published), framed; with a factor, a zoom by that factor.
     #[test]
     fn finds_the_airplane_and_frames_it() {
-        let nav = Nav { center: ["-1.7".into(), "0".into()], log10_zoom: 1.0 };
+        let nav = Nav { center: ["-1.7".into(), "0".into()], log10_zoom: 1.0, transform: Default::default() };
         // 0.05 to the left of the centre: 0.05 / (4 / 10 / 600) = 75 px.
         let (framed, line) = newton_zoom(&nav, [-75.0, 0.0], 600.0, Target::Minibrot, 0.0).unwrap();
         assert!(line.contains("period 3"), "{line}");
@@ -75,12 +78,12 @@ mod tests {
     #[test]
     fn finds_a_misiurewicz_point_and_refuses_empty_views() {
         // c = i (preperiod 2, period 2), 0.02 above a view centre at 0.01 + 0.98i.
-        let nav = Nav { center: ["0.01".into(), "0.98".into()], log10_zoom: 1.3 };
+        let nav = Nav { center: ["0.01".into(), "0.98".into()], log10_zoom: 1.3, transform: Default::default() };
         let (at, line) = newton_zoom(&nav, [0.0, -60.0], 600.0, Target::Misiurewicz, 0.0).unwrap();
         assert!(line.contains("preperiod 2 and period 2"), "{line}");
         let part = |k: usize| at.center[k].parse::<f64>().unwrap();
         assert!(part(0).abs() < 1e-15 && (part(1) - 1.0).abs() < 1e-15, "{:?}", at.center);
-        let far = Nav { center: ["0.6".into(), "0.6".into()], log10_zoom: 6.0 };
+        let far = Nav { center: ["0.6".into(), "0.6".into()], log10_zoom: 6.0, transform: Default::default() };
         assert!(newton_zoom(&far, [0.0, 0.0], 600.0, Target::Minibrot, 0.0).is_err());
     }
 }

@@ -200,3 +200,44 @@ fn seahorse_valley_at_zoom_1e10_is_within_f64_limits() {
     let de_median = median(s.iter().filter_map(|x| x.de_err).collect());
     assert!(de_median <= 1e-5, "median distance error {de_median}");
 }
+
+/// A picture turned a quarter turn counter-clockwise is the unturned picture with pixel
+/// (i, j) moved to (H - 1 - j, i) (a square image), and its distance vectors turn with it:
+/// (x, y) becomes (-y, x). Not bit for bit: cos 90° is 6e-17 in f64, so the points differ
+/// in the last bits.
+#[test]
+fn a_quarter_turn_turns_the_picture_and_its_distance_vectors() {
+    let text = |rotate: &str| {
+        format!(
+            "version = 1\n[view]\ncenter = [\"-0.7436\", \"0.1318\"]\nradius = \"0.004\"\nwidth = 96\nheight = 96\n{rotate}\n[iteration]\nmax = 2000\n[render]\nengine = \"f64\"\n"
+        )
+    };
+    let cancel = AtomicBool::new(false);
+    let planes = |t: &str| {
+        let params = deepfield::render::field_params(&scene(t), ChannelSet::default_exr());
+        field::compute_strip(&params, 0..96, &cancel).unwrap().planes
+    };
+    let plain = planes(&text(""));
+    let turned = planes(&text("rotate = 90.0"));
+    let (mut same, mut escaped) = (0, 0);
+    for j in 0..96usize {
+        for i in 0..96usize {
+            let a = j * 96 + i;
+            let b = i * 96 + (95 - j);
+            if turned.n[a] != plain.n[b] {
+                continue;
+            }
+            same += 1;
+            if plain.n[b] == INTERIOR {
+                continue;
+            }
+            escaped += 1;
+            let (x, y) = (plain.dex[b] as f64, plain.dey[b] as f64);
+            let (u, v) = (turned.dex[a] as f64, turned.dey[a] as f64);
+            let err = (u + y).hypot(v - x) / x.hypot(y);
+            assert!(err < 1e-4, "pixel ({i}, {j}): ({u}, {v}) is not ({x}, {y}) turned: {err}");
+        }
+    }
+    assert!(same >= 96 * 96 * 995 / 1000, "N agrees at only {same} of {} pixels", 96 * 96);
+    assert!(escaped > 1000, "the view has escaping pixels ({escaped})");
+}

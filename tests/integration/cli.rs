@@ -174,6 +174,25 @@ fn kfr_locations_are_scenes() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("bad.kfr:2:5"), "{}", stderr(&o));
     assert!(!dir.join("b.png").exists());
+    // The location's colours come with it: the file is its own palette.
+    let embedded = deepfield::io::read_png_scene(&dir.join("k.png")).unwrap().expect("scene chunk");
+    assert!(embedded.contains("bench-e14.kfr") && embedded.contains("kind = \"smooth\""), "{embedded}");
+    // An old-style file stretched by `Ratio` (as Kalles Fraktaler's 1e1086 benchmark is)
+    // renders, stretched.
+    let old = "Re: -0.75\r\nIm: 0.1\r\nZoom: 2\r\nIterations: 200\r\nIterDiv: 0.5\r\nRotate: 0.000000\r\n\
+               Ratio: 381.176471\r\nColors: 0,0,0,41,35,190,132,225,108,\r\nInteriorColor: 0,0,255,\r\n";
+    write(&dir, "old.kfr", old);
+    let o = deepfield(&["render", "old.kfr", "--size", "32x24", "-o", "o.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let embedded = deepfield::io::read_png_scene(&dir.join("o.png")).unwrap().expect("scene chunk");
+    assert!(embedded.contains("stretch_amount = -0.04"), "{embedded}");
+    assert!(embedded.contains("interior = \"#ff0000\""), "B,G,R: {embedded}");
+    // A bad colour in the file is reported where it is, as the palette it is.
+    write(&dir, "c.kfr", "Re: 0\nIm: 0\nZoom: 1\nColors: 1,2,x,\n");
+    let o = deepfield(&["render", "c.kfr", "--size", "8x6", "-o", "c.png"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("c.kfr:4:13"), "{}", stderr(&o));
+    assert!(!dir.join("c.png").exists());
 }
 
 /// `deepfield compare` prints one row per engine with the documented keys; on a shallow

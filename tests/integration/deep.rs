@@ -49,6 +49,8 @@ struct View {
     /// Iterate against the reference orbits of the same centre at this deeper radius (a
     /// zoom-out keyframe reading the deepest frame's orbits).
     reference_radius: Option<&'static str>,
+    /// `[view] rotate`, `stretch_angle`, `stretch_amount`.
+    transform: Option<[f64; 3]>,
 }
 
 impl View {
@@ -64,8 +66,24 @@ impl View {
             render: "",
             reference_from: None,
             reference_radius: None,
+            transform: None,
         }
     }
+}
+
+/// The view's rotation and stretch matrix (image offset, y up, to plane offset), written
+/// out here from its definition rather than taken from the engine: Rot(-rotate) ·
+/// Rot(angle) · diag(2^amount, 2^-amount) · Rot(-angle), angles in degrees.
+fn view_matrix([rotate, angle, amount]: [f64; 3]) -> [[f64; 2]; 2] {
+    let rot = |d: f64| {
+        let (s, c) = d.to_radians().sin_cos();
+        [[c, -s], [s, c]]
+    };
+    let mul = |a: [[f64; 2]; 2], b: [[f64; 2]; 2]| -> [[f64; 2]; 2] {
+        std::array::from_fn(|i| std::array::from_fn(|j| a[i][0] * b[0][j] + a[i][1] * b[1][j]))
+    };
+    let k = amount.exp2();
+    mul(mul(mul(rot(-rotate), rot(angle)), [[k, 0.0], [0.0, 1.0 / k]]), rot(-angle))
 }
 
 const SIZE: (u32, u32) = (40, 30);
@@ -83,8 +101,12 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
         Some([re, im]) => format!("[formula]\nkind = \"julia\"\nc = [\"{re}\", \"{im}\"]\n"),
         None => String::new(),
     };
+    let transform = match v.transform {
+        Some([r, a, k]) => format!("rotate = {r:?}\nstretch_angle = {a:?}\nstretch_amount = {k:?}\n"),
+        None => String::new(),
+    };
     let text = format!(
-        "version = 1\n{formula}[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{}\"\nwidth = {}\nheight = {}\n[iteration]\nmax = {}\n[render]\nengine = \"{}\"\n{}\n",
+        "version = 1\n{formula}[view]\ncenter = [\"{}\", \"{}\"]\nradius = \"{}\"\nwidth = {}\nheight = {}\n{transform}[iteration]\nmax = {}\n[render]\nengine = \"{}\"\n{}\n",
         v.center[0], v.center[1], v.radius, SIZE.0, SIZE.1, v.max_iter, v.engine, v.render
     );
     let s = scene(&text);
@@ -134,12 +156,34 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     let mut latest = 0;
     for _ in 0..v.samples {
         let (i, j) = (rng.below(SIZE.0), rng.below(SIZE.1));
-        let p = reference::pixel(v.center, v.radius, SIZE.0, SIZE.1, i, j, bits);
+        let p = match v.transform {
+            None => reference::pixel(v.center, v.radius, SIZE.0, SIZE.1, i, j, bits),
+            Some(t) => {
+                // The offset in spacings through the matrix (f64, as a scene defines it),
+                // then placed exactly.
+                let m = view_matrix(t);
+                let o = [(2.0 * i as f64 + 1.0 - SIZE.0 as f64) / 2.0, -(2.0 * j as f64 + 1.0 - SIZE.1 as f64) / 2.0];
+                let po = [m[0][0] * o[0] + m[0][1] * o[1], m[1][0] * o[0] + m[1][1] * o[1]];
+                std::array::from_fn(|k| {
+                    let d = BigFloat::from_f64(po[k], bits).mul(&spacing, bits, rm);
+                    reference::parse(v.center[k], bits).add(&d, bits, rm)
+                })
+            }
+        };
         let t =
             reference::orbit_scaled(&p, julia_c.as_ref(), v.max_iter, params.orbit.escape_radius, bits, Some(&spacing));
         latest = latest.max(t.n.unwrap_or(0));
         if !t.near_circle {
-            out.push(judge(&t, &planes, (j * SIZE.0 + i) as usize, 1.0, ln_r));
+            let mut sample = judge(&t, &planes, (j * SIZE.0 + i) as usize, 1.0, ln_r);
+            if v.transform.is_some() {
+                // The engine reports the distance vector in image terms; the rotation of
+                // vectors has its own test. Length only here.
+                sample.de_err = sample.d.map(|d| {
+                    let k = (j * SIZE.0 + i) as usize;
+                    ((planes.dex[k] as f64).hypot(planes.dey[k] as f64) - d).abs() / d
+                });
+            }
+            out.push(sample);
         }
     }
     let reference = params.deep.as_ref().filter(|d| d.reference_escaped()).map(|d| (d.reference_length(), latest));
@@ -301,6 +345,33 @@ fn reference_escaping_before_its_samples_near_minus_two() {
     }
 }
 
+/// Rotated and stretched views, shallow enough for f64 deltas and past the f64 range: each
+/// sample's point is the matrix applied to its offset, placed exactly, and iterated
+/// directly. (The views are the tuned minibrot and liiiines locations at depths this file
+/// tests unrotated.)
+#[test]
+fn rotated_and_stretched_views() {
+    for (name, v, engine) in [
+        (
+            "1e50 rotated 30°",
+            View { transform: Some([30.0, 0.0, 0.0]), ..View::mandelbrot(MINIBROT, "2e-50", 10000, 30) },
+            "perturb-f64",
+        ),
+        (
+            "1e50 stretched 2^0.7 at 20°, rotated -65°",
+            View { transform: Some([-65.0, 20.0, 0.7]), ..View::mandelbrot(MINIBROT, "2e-50", 10000, 30) },
+            "perturb-f64",
+        ),
+        (
+            "1e320 rotated 100°, stretched 2^-1.5 at 80°",
+            View { transform: Some([100.0, 80.0, -1.5]), ..View::mandelbrot(LIIIINES, "2e-320", 12500, 24) },
+            "perturb-floatexp",
+        ),
+    ] {
+        check(name, v, engine);
+    }
+}
+
 #[test]
 fn cusp_at_one_quarter() {
     // Orbits near c = 0.25 crawl past the parabolic fixed point 1/2 (thousands of
@@ -324,6 +395,7 @@ fn julia_sets_at_1e40_and_1e310() {
         render: "",
         reference_from: None,
         reference_radius: None,
+        transform: None,
     };
     check("julia 1e40", e40, "perturb-f64");
     let e310 = View {
@@ -339,6 +411,7 @@ fn julia_sets_at_1e40_and_1e310() {
         render: "",
         reference_from: None,
         reference_radius: None,
+        transform: None,
     };
     check("julia 1e310", e310, "perturb-floatexp");
 }
