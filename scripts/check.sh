@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs exactly what CI runs (.ci/run calls this): formatting, lints, the whole test suite.
+# Runs exactly what CI runs (.ci/run calls this): formatting, lints (default and headless
+# builds), documentation with warnings denied, the whole test suite.
 # Needs only cargo to build; the viewer and GPU tests need a display server and a Vulkan
 # adapter at run time (Xvfb, and Mesa's lavapipe software Vulkan), installed here when
 # missing so this one command works on a fresh machine (as root, or with sudo).
@@ -24,6 +25,11 @@ cargo fmt --all -- --check
 
 echo "== clippy"
 cargo clippy --locked --all-targets -- -D warnings
+# The headless build (no viewer, no wgpu) compiles and lints clean on its own.
+cargo clippy --locked --no-default-features --lib --bins -- -D warnings
+
+echo "== docs"
+RUSTDOCFLAGS="-D warnings" cargo doc --locked --no-deps
 
 echo "== tests"
 log=$(mktemp)
