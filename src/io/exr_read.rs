@@ -8,7 +8,11 @@
 
 use std::path::Path;
 
-use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers, read};
+use ::exr::block::reader::ChunksReader;
+use ::exr::math::Vec2;
+use ::exr::meta::BlockDescription;
+use ::exr::meta::attribute::SampleType;
+use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers, f16, read};
 
 use super::IoError;
 use super::exr::SCENE_ATTRIBUTE;
@@ -87,8 +91,236 @@ fn check_decoded_size(path: &Path) -> Result<(), IoError> {
 }
 
 /// Reads every plane of `path`, cut into strips of `strip_rows` rows (at least 1).
+///
+/// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is decoded block
+/// by block straight into the strips, the blocks decompressed on every core
+/// ([`read_scanlines`]); anything else (tiles, mip levels, several parts) goes through the
+/// exr crate's whole-image reader.
 pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoError> {
     check_decoded_size(path)?;
+    match read_scanlines(path, strip_rows.max(1))? {
+        Some(raw) => Ok(raw),
+        None => read_whole_image(path, strip_rows),
+    }
+}
+
+/// Where one channel's samples go.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Slot {
+    /// `N` (must be uint32).
+    N,
+    /// NF, T, DEX, DEY.
+    Plane(Channel),
+    /// A single-plane trap's channel (trap index).
+    Trap(usize),
+    /// Component `c` of a bitmap trap's colour (trap index, component).
+    Color(usize, usize),
+    /// A channel deepfield does not read.
+    Skip,
+}
+
+/// The trap kinds present in a list of channel names: trap0, trap1, ... until one is
+/// missing (as the whole-image reader finds them).
+fn trap_layout(has: &dyn Fn(&str) -> bool) -> Vec<TrapKind> {
+    let mut kinds = Vec::new();
+    loop {
+        let k = kinds.len();
+        let h = |s: &str| has(&format!("trap{k}.{s}"));
+        let kind = if h("D") {
+            TrapKind::Distance
+        } else if h("STRIPE") {
+            TrapKind::Stripe
+        } else if h("IFS") {
+            TrapKind::Density
+        } else if h("R") && h("G") && h("B") && h("A") {
+            TrapKind::Color
+        } else {
+            return kinds;
+        };
+        kinds.push(kind);
+    }
+}
+
+/// The slot of channel `name` given the trap layout.
+fn slot_of(name: &str, traps: &[TrapKind]) -> Slot {
+    match name {
+        "N" => return Slot::N,
+        "NF" => return Slot::Plane(Channel::NF),
+        "T" => return Slot::Plane(Channel::T),
+        "DEX" => return Slot::Plane(Channel::DEX),
+        "DEY" => return Slot::Plane(Channel::DEY),
+        _ => {}
+    }
+    let Some((k, what)) = name.strip_prefix("trap").and_then(|r| r.split_once('.')) else { return Slot::Skip };
+    let Ok(k) = k.parse::<usize>() else { return Slot::Skip };
+    match (traps.get(k), what) {
+        (Some(TrapKind::Distance), "D") | (Some(TrapKind::Stripe), "STRIPE") | (Some(TrapKind::Density), "IFS") => {
+            Slot::Trap(k)
+        }
+        (Some(TrapKind::Color), c) => {
+            ["R", "G", "B", "A"].iter().position(|x| *x == c).map_or(Slot::Skip, |i| Slot::Color(k, i))
+        }
+        _ => Slot::Skip,
+    }
+}
+
+/// Converts one line of samples (`bytes`, little-endian, of `kind`) to f32.
+fn floats_into(dst: &mut [f32], bytes: &[u8], kind: SampleType) {
+    match kind {
+        SampleType::F32 => {
+            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(4)) {
+                *d = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            }
+        }
+        SampleType::F16 => {
+            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(2)) {
+                *d = f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
+            }
+        }
+        SampleType::U32 => {
+            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(4)) {
+                *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32;
+            }
+        }
+    }
+}
+
+/// The fast path of [`read_exr_planes`]: `None` when the file is not a single-part,
+/// single-level scan-line image with full-resolution channels.
+fn read_scanlines(path: &Path, rows_per: usize) -> Result<Option<RawData>, IoError> {
+    let err = |e: ::exr::error::Error| IoError::new(path, e);
+    let file = std::fs::File::open(path).map_err(|e| IoError::new(path, e))?;
+    let reader = ::exr::block::read(std::io::BufReader::new(file), false).map_err(err)?;
+    let header = match reader.headers() {
+        [h] => h.clone(),
+        _ => return Ok(None),
+    };
+    if header.deep
+        || !matches!(header.blocks, BlockDescription::ScanLines)
+        || header.channels.list.iter().any(|c| c.sampling != Vec2(1, 1))
+    {
+        return Ok(None);
+    }
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    let names: Vec<String> =
+        header.channels.list.iter().map(|c| String::from_utf8_lossy(c.name.bytes()).into_owned()).collect();
+    let has = |n: &str| names.iter().any(|x| x == n);
+    let traps = trap_layout(&has);
+    let slots: Vec<(Slot, SampleType)> =
+        names.iter().zip(&header.channels.list).map(|(n, c)| (slot_of(n, &traps), c.sample_type)).collect();
+    match slots.iter().find(|(s, _)| *s == Slot::N) {
+        None => return Err(IoError::new(path, "no N channel: this is not a raw-data EXR (render with --exr)")),
+        Some((_, t)) if *t != SampleType::U32 => return Err(IoError::new(path, "channel N is not uint32")),
+        _ => {}
+    }
+    let mut channels = ChannelSet::default();
+    channels.insert(Channel::N);
+    for c in [Channel::NF, Channel::T, Channel::DEX, Channel::DEY] {
+        if slots.iter().any(|(s, _)| *s == Slot::Plane(c)) {
+            channels.insert(c);
+        }
+    }
+    let scene = match header.own_attributes.other.get(&::exr::meta::attribute::Text::from(SCENE_ATTRIBUTE)) {
+        Some(::exr::meta::attribute::AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
+        _ => None,
+    };
+    let mut strips: Vec<Planes> = (0..height)
+        .step_by(rows_per)
+        .map(|r0| {
+            let rows = rows_per.min(height - r0);
+            let len = rows * width;
+            let plane = |c: Channel| if channels.contains(c) { vec![0.0f32; len] } else { Vec::new() };
+            Planes {
+                width,
+                rows,
+                n: vec![0; len],
+                nf: plane(Channel::NF),
+                t: plane(Channel::T),
+                dex: plane(Channel::DEX),
+                dey: plane(Channel::DEY),
+                traps: traps
+                    .iter()
+                    .map(|k| match k {
+                        TrapKind::Distance => TrapPlane::Distance(vec![0.0; len]),
+                        TrapKind::Stripe => TrapPlane::Stripe { value: vec![0.0; len], prev: Vec::new() },
+                        TrapKind::Density => TrapPlane::Density(vec![0.0; len]),
+                        TrapKind::Color => TrapPlane::Color(vec![[0.0; 4]; len]),
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    let line_bytes: usize = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() * width).sum();
+    let mut lines_read = 0usize;
+    let mut scratch = vec![0.0f32; width];
+    let insert = |_: &::exr::meta::MetaData, block: ::exr::block::UncompressedBlock| -> ::exr::error::UnitResult {
+        let index = block.index;
+        if index.layer != 0 || index.level != Vec2(0, 0) {
+            return Ok(());
+        }
+        let lines = index.pixel_size.1;
+        if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * line_bytes {
+            return Err(::exr::error::Error::Invalid("a scan-line block of the wrong size".into()));
+        }
+        for (l, line) in block.data.chunks_exact(line_bytes).enumerate() {
+            let y = index.pixel_position.1 + l;
+            if y >= height {
+                return Err(::exr::error::Error::Invalid("a scan line outside the data window".into()));
+            }
+            let planes = &mut strips[y / rows_per];
+            let at = (y % rows_per) * width..(y % rows_per + 1) * width;
+            let mut offset = 0;
+            for &(slot, kind) in &slots {
+                let bytes = &line[offset..offset + kind.bytes_per_sample() * width];
+                offset += bytes.len();
+                match slot {
+                    Slot::N => {
+                        for (d, b) in planes.n[at.clone()].iter_mut().zip(bytes.chunks_exact(4)) {
+                            *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                        }
+                    }
+                    Slot::Plane(c) => {
+                        let dst = match c {
+                            Channel::NF => &mut planes.nf,
+                            Channel::T => &mut planes.t,
+                            Channel::DEX => &mut planes.dex,
+                            _ => &mut planes.dey,
+                        };
+                        floats_into(&mut dst[at.clone()], bytes, kind);
+                    }
+                    Slot::Trap(k) => match &mut planes.traps[k] {
+                        TrapPlane::Distance(v) | TrapPlane::Density(v) | TrapPlane::Stripe { value: v, .. } => {
+                            floats_into(&mut v[at.clone()], bytes, kind)
+                        }
+                        TrapPlane::Color(_) => {}
+                    },
+                    Slot::Color(k, i) => {
+                        if let TrapPlane::Color(v) = &mut planes.traps[k] {
+                            floats_into(&mut scratch, bytes, kind);
+                            for (d, s) in v[at.clone()].iter_mut().zip(&scratch) {
+                                d[i] = *s;
+                            }
+                        }
+                    }
+                    Slot::Skip => {}
+                }
+            }
+            lines_read += 1;
+        }
+        Ok(())
+    };
+    reader.all_chunks(false).map_err(err)?.decompress_parallel(false, insert).map_err(err)?;
+    if lines_read != height {
+        return Err(IoError::new(
+            path,
+            format!("the file holds {lines_read} of its {height} scan lines: it is damaged"),
+        ));
+    }
+    Ok(Some(RawData { width, height, scene, strips, channels }))
+}
+
+/// Every plane through the exr crate's whole-image reader (tiled and multi-level files).
+fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -125,22 +357,19 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
         }
     }
     // Trap planes, by index: trap0, trap1, ... until one is missing.
-    let mut traps: Vec<(TrapKind, Vec<&[f32]>)> = Vec::new();
-    loop {
-        let k = traps.len();
-        let get = |s: &str| take(&format!("trap{k}.{s}"));
-        if let Some(d) = get("D") {
-            traps.push((TrapKind::Distance, vec![d]));
-        } else if let Some(s) = get("STRIPE") {
-            traps.push((TrapKind::Stripe, vec![s]));
-        } else if let Some(s) = get("IFS") {
-            traps.push((TrapKind::Density, vec![s]));
-        } else if let (Some(r), Some(g), Some(b), Some(a)) = (get("R"), get("G"), get("B"), get("A")) {
-            traps.push((TrapKind::Color, vec![r, g, b, a]));
-        } else {
-            break;
-        }
-    }
+    let traps: Vec<(TrapKind, Vec<&[f32]>)> = trap_layout(&|n| take(n).is_some())
+        .into_iter()
+        .enumerate()
+        .map(|(k, kind)| {
+            let parts: &[&str] = match kind {
+                TrapKind::Distance => &["D"],
+                TrapKind::Stripe => &["STRIPE"],
+                TrapKind::Density => &["IFS"],
+                TrapKind::Color => &["R", "G", "B", "A"],
+            };
+            (kind, parts.iter().filter_map(|p| take(&format!("trap{k}.{p}"))).collect())
+        })
+        .collect();
     let rows_per = strip_rows.max(1);
     let mut strips = Vec::with_capacity(height.div_ceil(rows_per));
     for r0 in (0..height).step_by(rows_per) {
@@ -170,4 +399,65 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
         });
     }
     Ok(RawData { width, height, scene, strips, channels })
+}
+
+#[cfg(test)]
+mod tests {
+    use ::exr::prelude::*;
+
+    use super::*;
+
+    /// A file with every kind of channel the reader maps (u32 N, f16 NF, f32 DEX, a colour
+    /// trap, a distance trap as u32) and one it skips, ZIP-compressed in 16-line blocks over
+    /// 37 rows: the block path and the whole-image path read the same planes.
+    #[test]
+    fn block_and_whole_image_readers_agree() {
+        let (w, h) = (7usize, 37usize);
+        let k = |x: usize, y: usize| (y * w + x) as f32;
+        let channels = SpecificChannels::build()
+            .with_channel("N")
+            .with_channel("NF")
+            .with_channel("DEX")
+            .with_channel("Z")
+            .with_channel("trap0.R")
+            .with_channel("trap0.G")
+            .with_channel("trap0.B")
+            .with_channel("trap0.A")
+            .with_channel("trap1.D")
+            .with_pixel_fn(|p: Vec2<usize>| {
+                let v = k(p.0, p.1);
+                (
+                    (v as u32) * 3,
+                    f16::from_f32(v / 300.0),
+                    -v,
+                    v * 7.0,
+                    v + 0.25,
+                    v + 0.5,
+                    v + 0.75,
+                    1.0f32,
+                    (v as u32) + 9,
+                )
+            });
+        let mut layer = Layer::new(
+            (w, h),
+            LayerAttributes::named("deepfield"),
+            Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
+            channels,
+        );
+        layer.attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from("version = 1")));
+        let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}.exr", std::process::id()));
+        Image::from_layer(layer).write().to_file(&path).unwrap();
+        for rows in [1, 5, 32] {
+            let fast = read_scanlines(&path, rows).unwrap().expect("a scan-line file");
+            let whole = read_whole_image(&path, rows).unwrap();
+            assert_eq!(fast.strips, whole.strips, "{rows} rows per strip");
+            assert_eq!((fast.width, fast.height, &fast.scene), (w, h, &Some("version = 1".to_string())));
+            assert_eq!(fast.channels, whole.channels);
+            assert_eq!(fast.trap_kinds(), [TrapKind::Color, TrapKind::Distance]);
+        }
+        let raw = read_exr_planes(&path, 5).unwrap();
+        // Strip 6 holds rows 30..35: its row 2 is row 32.
+        assert_eq!(raw.strips[6].n[2 * w + 3], (32 * w as u32 + 3) * 3);
+        std::fs::remove_file(&path).unwrap();
+    }
 }
