@@ -94,7 +94,7 @@ fn check_decoded_size(path: &Path) -> Result<(), IoError> {
 ///
 /// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is decoded block
 /// by block straight into the strips, the blocks decompressed on every core
-/// ([`read_scanlines`]); anything else (tiles, mip levels, several parts) goes through the
+/// (`read_scanlines`); anything else (tiles, mip levels, several parts) goes through the
 /// exr crate's whole-image reader.
 pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoError> {
     check_decoded_size(path)?;
