@@ -141,6 +141,29 @@ fn trap_layout(has: &dyn Fn(&str) -> bool) -> Vec<TrapKind> {
     }
 }
 
+/// N and whichever of NF, T, DEX, DEY a file holds (by channel name).
+fn plane_channels(has: &dyn Fn(&str) -> bool) -> ChannelSet {
+    let mut channels = ChannelSet::default();
+    channels.insert(Channel::N);
+    for c in [Channel::NF, Channel::T, Channel::DEX, Channel::DEY] {
+        if has(c.name()) {
+            channels.insert(c);
+        }
+    }
+    channels
+}
+
+/// The scene text stored in a header's attributes, if any.
+fn scene_text(attributes: &::exr::meta::header::LayerAttributes) -> Option<String> {
+    match attributes.other.get(&::exr::meta::attribute::Text::from(SCENE_ATTRIBUTE)) {
+        Some(::exr::meta::attribute::AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
+        _ => None,
+    }
+}
+
+/// Why a file without an `N` channel is refused.
+const NO_N: &str = "no N channel: this is not a raw-data EXR (render with --exr)";
+
 /// The slot of channel `name` given the trap layout.
 fn slot_of(name: &str, traps: &[TrapKind]) -> Slot {
     match name {
@@ -209,21 +232,12 @@ fn read_scanlines(path: &Path, rows_per: usize) -> Result<Option<RawData>, IoErr
     let slots: Vec<(Slot, SampleType)> =
         names.iter().zip(&header.channels.list).map(|(n, c)| (slot_of(n, &traps), c.sample_type)).collect();
     match slots.iter().find(|(s, _)| *s == Slot::N) {
-        None => return Err(IoError::new(path, "no N channel: this is not a raw-data EXR (render with --exr)")),
+        None => return Err(IoError::new(path, NO_N)),
         Some((_, t)) if *t != SampleType::U32 => return Err(IoError::new(path, "channel N is not uint32")),
         _ => {}
     }
-    let mut channels = ChannelSet::default();
-    channels.insert(Channel::N);
-    for c in [Channel::NF, Channel::T, Channel::DEX, Channel::DEY] {
-        if slots.iter().any(|(s, _)| *s == Slot::Plane(c)) {
-            channels.insert(c);
-        }
-    }
-    let scene = match header.own_attributes.other.get(&::exr::meta::attribute::Text::from(SCENE_ATTRIBUTE)) {
-        Some(::exr::meta::attribute::AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
-        _ => None,
-    };
+    let channels = plane_channels(&has);
+    let scene = scene_text(&header.own_attributes);
     let mut strips: Vec<Planes> = (0..height)
         .step_by(rows_per)
         .map(|r0| {
@@ -331,10 +345,7 @@ fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> 
         .map_err(|e| IoError::new(path, e))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.0, layer.size.1);
-    let scene = match layer.attributes.other.get(&::exr::meta::attribute::Text::from(SCENE_ATTRIBUTE)) {
-        Some(::exr::meta::attribute::AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
-        _ => None,
-    };
+    let scene = scene_text(&layer.attributes);
     let mut n: Option<Vec<u32>> = None;
     let mut floats: Vec<(String, Vec<f32>)> = Vec::new();
     for ch in &layer.channel_data.list {
@@ -347,15 +358,9 @@ fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> 
             (FlatSamples::U32(v), _) => floats.push((name, v.iter().map(|&x| x as f32).collect())),
         }
     }
-    let n = n.ok_or_else(|| IoError::new(path, "no N channel: this is not a raw-data EXR (render with --exr)"))?;
+    let n = n.ok_or_else(|| IoError::new(path, NO_N))?;
     let take = |name: &str| floats.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice());
-    let mut channels = ChannelSet::default();
-    channels.insert(Channel::N);
-    for (c, name) in [(Channel::NF, "NF"), (Channel::T, "T"), (Channel::DEX, "DEX"), (Channel::DEY, "DEY")] {
-        if take(name).is_some() {
-            channels.insert(c);
-        }
-    }
+    let channels = plane_channels(&|name| take(name).is_some());
     // Trap planes, by index: trap0, trap1, ... until one is missing.
     let traps: Vec<(TrapKind, Vec<&[f32]>)> = trap_layout(&|n| take(n).is_some())
         .into_iter()
