@@ -43,6 +43,54 @@ pub enum Command {
     /// Write a zoom-out sequence of EXR keyframes (00000.exr outermost .. the scene's view),
     /// each a factor shallower than the next, from the deepest frame's one reference orbit.
     Zoom(Box<ZoomArgs>),
+    /// Turn the keyframes of `deepfield zoom` into the frames of a zoom video: coloured by
+    /// the scene's layers, resampled between keyframes, written as PNG or piped to ffmpeg.
+    Frames(Box<FramesArgs>),
+}
+
+/// `deepfield frames`.
+#[derive(Debug, Args)]
+pub struct FramesArgs {
+    /// Folder of keyframes written by `deepfield zoom` (00000.exr the outermost).
+    #[arg(value_name = "DIR")]
+    pub keyframes: PathBuf,
+    /// Frames per second.
+    #[arg(long, value_name = "F", default_value_t = 30.0)]
+    pub fps: f64,
+    /// Length of the video in seconds (default: one second per keyframe step).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
+    /// Frame size (default: the keyframes' size; the aspect ratio must be theirs).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Zoom out from the deepest keyframe instead of in towards it.
+    #[arg(long)]
+    pub zoom_out: bool,
+    /// Colour with this scene's layers (default: the scene stored in each keyframe).
+    #[arg(long, value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+    /// Palette for every layer that uses one: a built-in name or a palette file.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub palette: Option<String>,
+    /// Replace the layers: KIND[:key=value,...] (repeat for a stack, bottom first).
+    #[arg(long = "layer", value_name = "SPEC")]
+    pub layers: Vec<String>,
+    /// Only frames A..B (0-based, B excluded): one work unit of the video.
+    #[arg(long, value_name = "A..B", value_parser = parse_units)]
+    pub units: Option<(u32, u32)>,
+    /// Folder for the frames as PNG (frame-00000.png, ...; created if missing).
+    #[arg(short, long, value_name = "DIR", required_unless_present = "video")]
+    pub output: Option<PathBuf>,
+    /// Encode the frames into this video with ffmpeg (H.264, yuv420p), which must be on
+    /// the PATH; the file appears only when ffmpeg has finished.
+    #[arg(long, value_name = "FILE")]
+    pub video: Option<PathBuf>,
+    /// Worker threads (default: one per core). Output does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// No line per frame.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// `deepfield zoom`.

@@ -9,6 +9,7 @@
 mod args;
 mod compare;
 mod find;
+mod frames;
 mod palettes;
 mod recolor;
 mod reference;
@@ -100,6 +101,7 @@ pub fn main() -> ExitCode {
         args::Command::Find(f) => find::run(*f),
         args::Command::Reference(r) => reference::run(*r),
         args::Command::Zoom(z) => zoom::run(*z),
+        args::Command::Frames(f) => frames::run(*f),
         args::Command::Assemble(a) => {
             deepfield::io::assemble_png(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
         }

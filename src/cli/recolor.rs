@@ -99,7 +99,7 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
 }
 
 /// Refuses a scene whose raster or layers the data cannot serve.
-fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<(), Failure> {
+pub(super) fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<(), Failure> {
     let name = data.display();
     let (w, h) = ((scene.width * scene.aa) as usize, (scene.height * scene.aa) as usize);
     if (w, h) != (raw.width, raw.height) {

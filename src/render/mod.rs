@@ -8,6 +8,7 @@
 //! encoding overlaps computing. No I/O happens here; cancellation and progress come in as
 //! an atomic flag and a callback.
 
+pub mod frames;
 mod recolor;
 
 pub use recolor::{recolor, recolor_rgb8};

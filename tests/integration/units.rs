@@ -177,3 +177,68 @@ fn zoom_sequences_share_the_deepest_reference() {
     assert_eq!(written, ["00002.exr", "00003.exr"]);
     assert!(same("unit/00003.exr", "frames/00003.exr"));
 }
+
+/// `deepfield frames`: the last frame of a zoom in is the deepest keyframe recoloured, byte
+/// for byte; frames rendered as two work units are the frames rendered at once; with
+/// `--video` the frames go to ffmpeg's standard input as raw RGB (a stand-in ffmpeg on
+/// the PATH records what it is given), and without ffmpeg the run is refused, leaving no
+/// file.
+#[test]
+fn frames_come_from_the_keyframes() {
+    let dir = scratch("units-frames");
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/seahorse-valley.toml")).unwrap();
+    std::fs::write(dir.join("scene.toml"), &text).unwrap();
+    ok(deepfield(&["zoom", "scene.toml", "--size", "48x32", "--frames", "4", "-o", "keys", "-q"], &dir));
+    ok(deepfield(&["frames", "keys", "--fps", "5", "-o", "all", "-q"], &dir));
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.join("all")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    assert_eq!(names.len(), 15, "3 s at 5 frames per second: {names:?}");
+    let rgb = |p: &str| {
+        let img = image::open(dir.join(p)).unwrap().to_rgb8();
+        (img.dimensions(), img.into_raw())
+    };
+    ok(deepfield(&["recolor", "keys/00003.exr", "-o", "deepest.png"], &dir));
+    assert_eq!(rgb("all/frame-00014.png"), rgb("deepest.png"), "the last frame is not the deepest keyframe");
+    // Consecutive frames change a little, not wholesale.
+    let (a, b) = (rgb("all/frame-00007.png").1, rgb("all/frame-00008.png").1);
+    let mean = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y) as f64).sum::<f64>() / a.len() as f64;
+    assert!(mean > 0.0 && mean < 40.0, "mean change between frames {mean}");
+    // Two work units.
+    ok(deepfield(&["frames", "keys", "--fps", "5", "--units", "0..6", "-o", "split", "-q", "--threads", "1"], &dir));
+    ok(deepfield(&["frames", "keys", "--fps", "5", "--units", "6..15", "-o", "split", "-q"], &dir));
+    for n in &names {
+        let same = std::fs::read(dir.join("all").join(n)).unwrap() == std::fs::read(dir.join("split").join(n)).unwrap();
+        assert!(same, "{n} differs between one run and two units");
+    }
+    // A stand-in ffmpeg: counts the bytes it reads and writes its arguments to the output.
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let fake = bin.join("ffmpeg");
+    std::fs::write(&fake, "#!/bin/sh\nfor a; do last=$a; done\necho \"$@\" > \"$last\"\nwc -c >> \"$last\"\n").unwrap();
+    std::process::Command::new("chmod").arg("+x").arg(&fake).status().unwrap();
+    let with_path = |path: &str, args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_deepfield")).args(args).current_dir(&dir).env("PATH", path).output().unwrap()
+    };
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let o = with_path(&path, &["frames", "keys", "--fps", "5", "--video", "zoom.mp4", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let log = std::fs::read_to_string(dir.join("zoom.mp4")).unwrap();
+    assert!(log.contains("-s 48x32") && log.contains("-pix_fmt rgb24") && log.contains("-r 5"), "{log}");
+    assert_eq!(log.lines().last().unwrap().trim(), (15 * 48 * 32 * 3).to_string(), "{log}");
+    let o = with_path("/nonexistent", &["frames", "keys", "--video", "none.mp4", "-q"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("ffmpeg is not on the PATH"));
+    assert!(!dir.join("none.mp4").exists());
+    let leftovers = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains("partial"));
+    assert_eq!(leftovers.count(), 0, "a temporary video was left behind");
+    // Bad input.
+    let o = deepfield(&["frames", "all", "-o", "x", "-q"], &dir);
+    assert_eq!(o.status.code(), Some(2), "a folder without keyframes");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("at least two keyframes"));
+    let o = deepfield(&["frames", "keys", "--size", "40x40", "-o", "x", "-q"], &dir);
+    assert_eq!(o.status.code(), Some(2), "another aspect ratio");
+}

@@ -1,0 +1,180 @@
+//! Video frames from a zoom sequence: each frame of a continuous zoom is resampled from the
+//! coloured keyframes around its depth, the way a zoom-video assembler (Claude Heiland-Allen's
+//! zoomasm, or Kalles Fraktaler's own zoom-out playback) does it.
+//!
+//! Keyframe k (0 the outermost) shows a view `factor` times wider than keyframe k + 1, about
+//! the same centre, at the same pixel size. A frame at depth z (a real number in keyframe
+//! units: z = 2.5 lies halfway, in log zoom, between keyframes 2 and 3) shows the view
+//! factor^-(z - k) times the width of keyframe k = floor(z). Each of its pixels is taken
+//! from the deepest keyframe whose area holds it, so the centre always comes from the most
+//! detailed data there is; where a keyframe is magnified (a pixel of it wider than a pixel
+//! of the frame) it is read bilinearly, and where it is reduced, several bilinear taps over
+//! the frame pixel's footprint are averaged. All of it in linear light.
+//!
+//! Frames are deterministic: every output pixel is a fixed function of its keyframes, so
+//! the bytes do not depend on the thread count.
+
+use rayon::prelude::*;
+
+/// A coloured keyframe: linear RGB, row-major, top row first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Keyframe {
+    /// Pixels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// The pixels.
+    pub rgb: Vec<[f32; 3]>,
+}
+
+impl Keyframe {
+    /// Bilinear sample at continuous pixel coordinates (pixel (i, j) has its centre at
+    /// (i + 0.5, j + 0.5)); coordinates outside are clamped to the edge pixels.
+    fn bilinear(&self, x: f64, y: f64) -> [f32; 3] {
+        let fx = (x - 0.5).clamp(0.0, (self.width - 1) as f64);
+        let fy = (y - 0.5).clamp(0.0, (self.height - 1) as f64);
+        let (i0, j0) = (fx as usize, fy as usize);
+        let (i1, j1) = ((i0 + 1).min(self.width - 1), (j0 + 1).min(self.height - 1));
+        let (wx, wy) = ((fx - i0 as f64) as f32, (fy - j0 as f64) as f32);
+        let p = |i: usize, j: usize| self.rgb[j * self.width + i];
+        let mix = |a: [f32; 3], b: [f32; 3], w: f32| std::array::from_fn(|c| a[c] + (b[c] - a[c]) * w);
+        mix(mix(p(i0, j0), p(i1, j0), wx), mix(p(i0, j1), p(i1, j1), wx), wy)
+    }
+}
+
+/// Where a frame lies in a sequence of `count` keyframes: the keyframe it zooms from and
+/// how far (in log zoom, 0 ..= 1 of one factor) past it. The last keyframe is reached
+/// exactly at z = count - 1.
+pub fn locate(z: f64, count: usize) -> (usize, f64) {
+    let last = count.saturating_sub(1);
+    let z = z.clamp(0.0, last as f64);
+    let k = (z.floor() as usize).min(last);
+    (k, z - k as f64)
+}
+
+/// The depth (keyframe units) of frame `f` of `frames` for a zoom in from keyframe 0 to
+/// keyframe `count - 1` at constant speed in log zoom (or out, reversed).
+pub fn depth(f: usize, frames: usize, count: usize, zoom_out: bool) -> f64 {
+    if frames < 2 {
+        return if zoom_out { 0.0 } else { count.saturating_sub(1) as f64 };
+    }
+    let t = f as f64 / (frames - 1) as f64;
+    let t = if zoom_out { 1.0 - t } else { t };
+    t * count.saturating_sub(1) as f64
+}
+
+/// Frame at depth `z` (see [`depth`]), `width` x `height` pixels, from keyframes that are
+/// each `factor` times wider than the next; `key(k)` gives keyframe k (all the same size,
+/// with the frame's aspect ratio). Returns linear RGB, row-major.
+pub fn frame<'a>(
+    key: &(dyn Fn(usize) -> &'a Keyframe + Sync),
+    count: usize,
+    factor: f64,
+    z: f64,
+    width: usize,
+    height: usize,
+) -> Vec<[f32; 3]> {
+    let (k, s) = locate(z, count);
+    let base = key(k);
+    let (kw, kh) = (base.width as f64, base.height as f64);
+    // Keyframe-k pixels per frame pixel (same aspect: one scale for both axes).
+    let scale = kh / height as f64 * factor.powf(-s);
+    let mut out = vec![[0.0f32; 3]; width * height];
+    out.par_chunks_mut(width).enumerate().for_each(|(j, row)| {
+        for (i, o) in row.iter_mut().enumerate() {
+            // The pixel's centre as an offset from the view's centre, in keyframe-k pixels.
+            let ox = (i as f64 + 0.5 - width as f64 / 2.0) * scale;
+            let oy = (j as f64 + 0.5 - height as f64 / 2.0) * scale;
+            // The deepest keyframe that holds the whole footprint of this pixel.
+            let (mut d, mut m) = (k, 1.0);
+            while d + 1 < count {
+                let m2 = m * factor;
+                let half = scale * m2 / 2.0;
+                if (ox * m2).abs() + half > kw / 2.0 || (oy * m2).abs() + half > kh / 2.0 {
+                    break;
+                }
+                d += 1;
+                m = m2;
+            }
+            let kf = key(d);
+            let (cx, cy) = (ox * m + kw / 2.0, oy * m + kh / 2.0);
+            // Keyframe pixels across one frame pixel: taps enough to cover them.
+            let span = scale * m;
+            let taps = span.ceil().clamp(1.0, 4.0) as usize;
+            *o = if taps == 1 {
+                kf.bilinear(cx, cy)
+            } else {
+                let mut sum = [0.0f32; 3];
+                for ty in 0..taps {
+                    for tx in 0..taps {
+                        let dx = ((tx as f64 + 0.5) / taps as f64 - 0.5) * span;
+                        let dy = ((ty as f64 + 0.5) / taps as f64 - 0.5) * span;
+                        let p = kf.bilinear(cx + dx, cy + dy);
+                        for c in 0..3 {
+                            sum[c] += p[c];
+                        }
+                    }
+                }
+                let n = (taps * taps) as f32;
+                sum.map(|v| v / n)
+            };
+        }
+    });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flat(w: usize, h: usize, f: impl Fn(usize, usize) -> [f32; 3]) -> Keyframe {
+        Keyframe {
+            width: w,
+            height: h,
+            rgb: (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).map(|(i, j)| f(i, j)).collect(),
+        }
+    }
+
+    #[test]
+    fn depth_runs_from_the_outermost_to_the_deepest() {
+        assert_eq!(depth(0, 11, 3, false), 0.0);
+        assert_eq!(depth(10, 11, 3, false), 2.0);
+        assert_eq!(depth(5, 11, 3, false), 1.0);
+        assert_eq!(depth(0, 11, 3, true), 2.0);
+        assert_eq!(locate(2.0, 3), (2, 0.0));
+        assert_eq!(locate(1.25, 3), (1, 0.25));
+        assert_eq!(locate(-1.0, 3), (0, 0.0));
+    }
+
+    /// At a keyframe's own depth and size, the frame is that keyframe where no deeper one
+    /// covers, and the deeper keyframe (reduced) where one does.
+    #[test]
+    fn a_frame_at_a_keyframe_is_that_keyframe_outside_the_next() {
+        let outer = flat(8, 6, |i, j| [i as f32, j as f32, 0.0]);
+        let inner = flat(8, 6, |_, _| [100.0, 100.0, 100.0]);
+        let keys = [outer.clone(), inner];
+        let f = frame(&|k| &keys[k], 2, 2.0, 0.0, 8, 6);
+        for j in 0..6 {
+            for i in 0..8 {
+                let covered = (2..6).contains(&i) && (2..4).contains(&j);
+                let want = if covered { [100.0; 3] } else { outer.rgb[j * 8 + i] };
+                assert_eq!(f[j * 8 + i], want, "pixel {i},{j}");
+            }
+        }
+        // At the deepest depth the frame is exactly the deepest keyframe.
+        let last = frame(&|k| &keys[k], 2, 2.0, 1.0, 8, 6);
+        assert_eq!(last, keys[1].rgb);
+    }
+
+    /// Halfway (in log zoom) between two keyframes, a linear ramp stays a ramp with the
+    /// slope magnified by sqrt(factor).
+    #[test]
+    fn halfway_magnifies_by_the_square_root_of_the_factor() {
+        let ramp = flat(64, 48, |i, _| [i as f32, 0.0, 0.0]);
+        let keys = [ramp.clone(), flat(64, 48, |i, _| [31.5 + (i as f32 - 31.5) / 2.0, 0.0, 0.0])];
+        let f = frame(&|k| &keys[k], 2, 2.0, 0.5, 64, 48);
+        let row = &f[24 * 64..25 * 64];
+        let slope = (row[40][0] - row[30][0]) / 10.0;
+        assert!((slope as f64 - 2f64.sqrt().recip()).abs() < 1e-3, "slope {slope}");
+    }
+}
