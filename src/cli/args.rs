@@ -105,9 +105,13 @@ pub struct ZoomArgs {
     /// Or: keyframes out to this zoom (the outermost is at most this deep).
     #[arg(long, value_name = "Z")]
     pub to_zoom: Option<String>,
-    /// Zoom factor between keyframes (a decimal, taken exactly).
-    #[arg(long, value_name = "F", default_value = "2", value_parser = parse_decimal)]
-    pub factor: String,
+    /// Zoom factor between keyframes (a decimal, taken exactly; default 2). With
+    /// `--exponential-map F` the keyframes are the strips of an exponential map instead,
+    /// one per factor F: rings from each keyframe's circumscribed circle inwards, sized for
+    /// video frames of the scene's size and supersampling, plus `center.exr`, the flat view
+    /// inside the deepest ring.
+    #[arg(long, value_name = "F", value_parser = parse_decimal)]
+    pub factor: Option<String>,
     /// Only keyframes A..B (0-based, B excluded): one work unit of the sequence.
     #[arg(long, value_name = "A..B", value_parser = parse_units)]
     pub units: Option<(u32, u32)>,
@@ -380,6 +384,10 @@ pub struct SceneArgs {
     /// across it (view.stretch_amount, view.stretch_angle; ANGLE defaults to 0).
     #[arg(long, value_name = "AMOUNT[@ANGLE]", value_parser = parse_stretch, allow_hyphen_values = true)]
     pub stretch: Option<(f64, f64)>,
+    /// Render a strip of an exponential map instead of a flat image: columns go round the
+    /// centre, rows from the view's radius inwards to radius / F (view.exponential_map).
+    #[arg(long, value_name = "F")]
+    pub exponential_map: Option<f64>,
     /// Maximum iterations (1 ..= 4294967294).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=u32::MAX as u64 - 1))]
     pub max_iter: Option<u64>,

@@ -13,6 +13,11 @@ use super::args::CompareArgs;
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
     let cancel = super::render::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
+    if !scene.projection.is_flat() {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "compare measures flat views; drop view.exponential_map (a strip's samples are the same engines' at other points)"
+        )));
+    }
     let simd = super::simd_level(args.simd.as_deref())?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)

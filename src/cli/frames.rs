@@ -34,8 +34,18 @@ pub fn run(args: FramesArgs) -> Result<(), Failure> {
     let scenes = files.iter().map(|f| stored_scene(f)).collect::<Result<Vec<_>, _>>()?;
     let factor = factor_of(&scenes, &files)?;
     let (kw, kh) = (scenes[0].width as usize, scenes[0].height as usize);
-    let (w, h) = args.size.map_or((kw, kh), |(w, h)| (w as usize, h as usize));
-    if ((w * kh) as f64 / (h * kw) as f64 - 1.0).abs() > 0.01 {
+    let is_map = !scenes[0].projection.is_flat();
+    let (w, h) = match args.size {
+        Some((w, h)) => (w as usize, h as usize),
+        None if is_map => {
+            return Err(Failure::Input(anyhow!(
+                "{}: an exponential map has no frame size of its own; give --size WxH",
+                args.keyframes.display()
+            )));
+        }
+        None => (kw, kh),
+    };
+    if !is_map && ((w * kh) as f64 / (h * kw) as f64 - 1.0).abs() > 0.01 {
         return Err(Failure::Input(anyhow!(
             "--size {w}x{h} has another aspect ratio than the keyframes ({kw}x{kh}); frames keep the keyframes' shape"
         )));
@@ -68,9 +78,15 @@ pub fn run(args: FramesArgs) -> Result<(), Failure> {
         }
         (None, None) => return Err(Failure::Input(anyhow!("give -o DIR for PNG frames or --video FILE"))),
     };
+    // The flat view inside an exponential map's deepest ring.
+    let center = match is_map {
+        true => Some(colours.keyframe(&args.keyframes.join(super::zoom::CENTER), &pool)?),
+        false => None,
+    };
     // Keyframes a frame at keyframe k can show: k and the deeper ones whose area is still
     // at least a pixel wide in it.
-    let reach = ((kw.max(kh) as f64).ln() / factor.ln()).ceil() as usize + 1;
+    let side = if is_map { (w as f64).hypot(h as f64) } else { kw.max(kh) as f64 };
+    let reach = (side.ln() / factor.ln()).ceil() as usize + 1;
     let mut window: Vec<Option<Keyframe>> = vec![None; count];
     let enc = Srgb8Encoder::get();
     for f in units.clone() {
@@ -89,7 +105,13 @@ pub fn run(args: FramesArgs) -> Result<(), Failure> {
         }
         let rgb = pool.install(|| {
             let key = |d: usize| window[d].as_ref().unwrap_or_else(|| unreachable!("keyframe {d} is loaded"));
-            frames::frame(&key, count, factor, z, w, h)
+            match &center {
+                Some(center) => {
+                    let map = frames::Map { strip: &key, count, held: keep.clone(), factor, center };
+                    frames::frame_from_map(&map, z, w, h)
+                }
+                None => frames::frame(&key, count, factor, z, w, h),
+            }
         });
         let bytes: Vec<u8> = rgb.iter().flat_map(|p| p.map(|v| enc.encode(v))).collect();
         sink.write(f, w, h, &bytes)?;

@@ -141,6 +141,9 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
         file.view.stretch_amount = Some(cli(amount));
         file.view.stretch_angle = Some(cli(angle));
     }
+    if let Some(f) = a.exponential_map {
+        file.view.exponential_map = Some(cli(f));
+    }
     if let Some(n) = a.max_iter {
         file.iteration.max = cli(n as i64);
     }

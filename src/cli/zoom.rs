@@ -8,6 +8,12 @@
 //! read from `--reference`): a shallower frame needs fewer bits and the same centre, so
 //! they serve it; frames shallow enough for direct f64 iteration need none. `--units A..B`
 //! renders only those keyframes: a work unit of the sequence for a job array.
+//!
+//! With `--exponential-map F` the keyframes are instead the strips of an exponential map
+//! (`field::projection`), one per factor F, sized for video frames of the scene's size and
+//! supersampling: strip k's outer circle circumscribes the frame k factors out, and
+//! `center.exr` holds the flat view inside the deepest ring (written with the unit that
+//! holds the last strip). Its spacing is the finest, so its reference orbits serve all.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -30,7 +36,17 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     let cancel = super::render::install_ctrlc();
     let simd = super::simd_level(args.simd.as_deref())?;
     let deepest = super::scene::load(&args.scene)?;
-    let factor = Decimal::parse(&args.factor).map_err(Failure::input)?;
+    let factor_text = match (&args.factor, args.scene.exponential_map) {
+        (Some(_), Some(_)) => {
+            return Err(Failure::Input(anyhow!(
+                "give the zoom factor once: --exponential-map F is the factor between its strips"
+            )));
+        }
+        (Some(f), None) => f.clone(),
+        (None, Some(f)) => format!("{f}"),
+        (None, None) => "2".into(),
+    };
+    let factor = Decimal::parse(&factor_text).map_err(Failure::input)?;
     if factor.is_negative() || factor.log10_abs() <= 0.0 || factor.log10_abs() > 1e6 {
         return Err(Failure::Input(anyhow!("--factor must be above 1, got {factor}")));
     }
@@ -61,10 +77,25 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     let dir = &args.output;
     std::fs::create_dir_all(dir).map_err(|e| Failure::Input(anyhow!("{}: {e}", dir.display())))?;
     let start = Instant::now();
-    // The deepest frame's reference orbits, shared by every frame that perturbs.
-    let plan = deepest.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    // An exponential map: strips for video frames of the scene's size, each ring from a
+    // keyframe's circumscribed circle inwards by the factor, and the flat view inside the
+    // deepest ring (the finest spacing: its reference orbits serve every strip).
+    let map = args.scene.exponential_map.map(|f| ExponentialMap::of(&deepest, f));
+    let center = match &map {
+        Some(m) => Some(super::scene::load_edited(&args.scene, |file| {
+            file.view.zoom = Some(cli(scaled_zoom(&deepest, &factor, 0, m.circumradius / m.factor)));
+            file.view.radius = None;
+            file.view.width = cli(m.center_side as i64);
+            file.view.height = cli(m.center_side as i64);
+            file.view.exponential_map = None;
+        })?),
+        None => None,
+    };
+    let finest = center.as_ref().unwrap_or(&deepest);
+    // The finest frame's reference orbits, shared by every frame that perturbs.
+    let plan = finest.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let options = Options { simd, ..Options::default() };
-    let references = match (&args.reference, render::deep_spec(&deepest, &plan, &options).1) {
+    let references = match (&args.reference, render::deep_spec(finest, &plan, &options).1) {
         (Some(path), _) => Some(Arc::new(super::reference::read(path)?)),
         (None, Some(spec)) => {
             let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).map_err(|e| match e {
@@ -79,15 +110,23 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     let mut frame_seconds = 0.0;
     for k in units.clone() {
         let steps_out = frames - 1 - k;
-        let zoom = shallower(&deepest, &factor, steps_out);
+        let zoom = match &map {
+            Some(m) => scaled_zoom(&deepest, &factor, steps_out, m.circumradius),
+            None => scaled_zoom(&deepest, &factor, steps_out, 1.0),
+        };
         // The deepest keyframe is the scene as given (its zoom written as it was).
-        let scene = if steps_out == 0 {
-            deepest.clone()
-        } else {
-            super::scene::load_edited(&args.scene, |file| {
+        let scene = match &map {
+            None if steps_out == 0 => deepest.clone(),
+            _ => super::scene::load_edited(&args.scene, |file| {
                 file.view.zoom = Some(cli(zoom.clone()));
                 file.view.radius = None;
-            })?
+                if let Some(m) = &map {
+                    file.view.width = cli(m.strip.0 as i64);
+                    file.view.height = cli(m.strip.1 as i64);
+                    file.render.aa = cli(1);
+                    file.view.exponential_map = Some(cli(m.factor));
+                }
+            })?,
         };
         let path = dir.join(format!("{k:05}.exr"));
         let t = Instant::now();
@@ -96,6 +135,11 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
         if !args.quiet {
             eprintln!("keyframe {k} of {frames}: zoom {zoom} ({:.2} s)", t.elapsed().as_secs_f64());
         }
+    }
+    if let Some(center) = center.as_ref().filter(|_| units.end == frames) {
+        let t = Instant::now();
+        write_frame(center, &dir.join(CENTER), simd, references.clone(), &cancel)?;
+        frame_seconds += t.elapsed().as_secs_f64();
     }
     if args.stats {
         let total = start.elapsed().as_secs_f64();
@@ -110,13 +154,43 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The zoom `steps` factors shallower than the scene's, as exact decimal text.
-fn shallower(scene: &Scene, factor: &Decimal, steps: u32) -> String {
+/// The file of an exponential map that holds the flat view inside its deepest ring.
+pub const CENTER: &str = "center.exr";
+
+/// The layout of an exponential map for video frames of a scene's size.
+struct ExponentialMap {
+    /// Zoom factor per strip.
+    factor: f64,
+    /// The frames' circumscribed radius in units of their half-height.
+    circumradius: f64,
+    /// Strip columns and rows.
+    strip: (u32, u32),
+    /// Side of the square flat view inside the deepest ring, in pixels.
+    center_side: u32,
+}
+
+impl ExponentialMap {
+    fn of(scene: &Scene, factor: f64) -> ExponentialMap {
+        let (w, h) = (scene.width as f64, scene.height as f64);
+        let circumradius = w.hypot(h) / h;
+        let strip = deepfield::field::projection::strip_size(scene.width, scene.height, scene.aa, factor.ln());
+        ExponentialMap { factor, circumradius, strip, center_side: (h * circumradius / factor).ceil() as u32 }
+    }
+}
+
+/// The zoom of the view `steps` factors shallower than the scene's whose radius is
+/// `radius_scale` times the scene's, as decimal text (exact for a scale of 1).
+fn scaled_zoom(scene: &Scene, factor: &Decimal, steps: u32, radius_scale: f64) -> String {
     let zoom = match &scene.scale {
         deepfield::orbit::Scale::Zoom(z) => z.to_rational(),
         deepfield::orbit::Scale::Radius(r) => Rational::from(2u32) / r.to_rational(),
     };
-    let z = zoom / factor.to_rational().pow(steps as u64);
+    let scale = if radius_scale == 1.0 {
+        Rational::from(1u32)
+    } else {
+        Rational::try_from(1.0 / radius_scale).unwrap_or_else(|_| Rational::from(1u32))
+    };
+    let z = zoom * scale / factor.to_rational().pow(steps as u64);
     // Digits enough for any zoom of at most 1e6 steps of a factor above 1.
     Decimal::from_rational(&z, 40).text().to_string()
 }

@@ -1,6 +1,6 @@
 //! The sample raster: which point of the plane each sample stands for (the coordinate convention of docs/design.md).
 
-use super::Transform;
+use super::{Projection, Transform};
 
 /// A raster of samples over a view: sample (i, j) sits at the centre of its cell, at image
 /// offset `(2(i + 0.5) - width, height - 2(j + 0.5)) / 2` spacings from the centre (x right,
@@ -20,13 +20,15 @@ pub struct SampleGrid {
     pub height: u32,
     /// Rotation and stretch of the view.
     pub transform: Transform,
+    /// A flat image or a strip of an exponential map.
+    pub projection: Projection,
 }
 
 impl SampleGrid {
     /// The point of sample (i, j).
     #[inline]
     pub fn point(&self, i: u32, j: u32) -> [f64; 2] {
-        if !self.transform.is_identity() {
+        if !self.transform.is_identity() || !self.projection.is_flat() {
             let o = self.offset(i, j);
             let s = self.spacing();
             return [self.center[0] + o[0] * s, self.center[1] + o[1] * s];
@@ -41,12 +43,21 @@ impl SampleGrid {
     /// (exact halves without a transform).
     #[inline]
     pub fn offset(&self, i: u32, j: u32) -> [f64; 2] {
-        self.transform.apply(image_offset(self.width, self.height, i, j))
+        match self.projection {
+            Projection::Flat => self.transform.apply(image_offset(self.width, self.height, i, j)),
+            Projection::Exponential { ln_factor } => {
+                self.transform.apply(Projection::polar_offset(ln_factor, self.width, self.height, i, j))
+            }
+        }
     }
 
     /// The largest |offset| of any sample, in units of the spacing.
     pub fn max_offset(&self) -> f64 {
-        self.transform.max_offset(self.width as f64, self.height as f64)
+        match self.projection {
+            Projection::Flat => self.transform.max_offset(self.width as f64, self.height as f64),
+            // The outer circle (a rotation keeps it; a stretch is refused with a map).
+            Projection::Exponential { .. } => 0.5 * self.height as f64,
+        }
     }
 
     /// Distance between neighbouring samples in the plane.
@@ -70,7 +81,14 @@ mod tests {
 
     #[test]
     fn pixel_centres_follow_the_convention() {
-        let g = SampleGrid { center: [0.0, 0.0], radius: 2.0, width: 4, height: 2, transform: Transform::IDENTITY };
+        let g = SampleGrid {
+            center: [0.0, 0.0],
+            radius: 2.0,
+            width: 4,
+            height: 2,
+            transform: Transform::IDENTITY,
+            projection: Projection::Flat,
+        };
         assert_eq!(g.point(0, 0), [-3.0, 1.0]);
         assert_eq!(g.point(3, 1), [3.0, -1.0]);
         assert_eq!(g.spacing(), 2.0);

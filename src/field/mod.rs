@@ -9,6 +9,7 @@
 
 mod grid;
 mod planes;
+pub mod projection;
 pub mod quantities;
 pub mod scalar;
 pub mod simd;
@@ -20,6 +21,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use grid::{SampleGrid, image_offset};
 pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
+pub use projection::Projection;
 pub use transform::Transform;
 
 use crate::formula::Family;
@@ -104,18 +106,30 @@ pub struct Strip {
 }
 
 /// Computes sample rows `rows` of the grid. Distance vectors come out in image terms (the
-/// view's rotation and stretch undone, [`Transform::gradient_to_image`]).
+/// view's rotation and stretch undone, [`Transform::gradient_to_image`]; an exponential
+/// map's in the strip's terms, [`Projection::gradient_to_image`]).
 pub fn compute_strip(
     params: &FieldParams,
     rows: std::ops::Range<u32>,
     cancel: &AtomicBool,
 ) -> Result<Strip, Cancelled> {
+    let first = rows.start;
     let mut strip = compute_plane_strip(params, rows, cancel)?;
-    let t = params.grid.transform;
+    let grid = &params.grid;
+    let t = grid.transform;
     if params.needs.de && !t.is_identity() {
         let planes = &mut strip.planes;
         for (x, y) in planes.dex.iter_mut().zip(planes.dey.iter_mut()) {
             let g = t.gradient_to_image([*x as f64, *y as f64]);
+            [*x, *y] = [g[0] as f32, g[1] as f32];
+        }
+    }
+    if let (true, Projection::Exponential { ln_factor }) = (params.needs.de, grid.projection) {
+        let planes = &mut strip.planes;
+        let width = grid.width as usize;
+        for (k, (x, y)) in planes.dex.iter_mut().zip(planes.dey.iter_mut()).enumerate() {
+            let (i, j) = ((k % width) as u32, first + (k / width) as u32);
+            let g = Projection::gradient_to_image(ln_factor, grid.width, grid.height, i, j, [*x as f64, *y as f64]);
             [*x, *y] = [g[0] as f32, g[1] as f32];
         }
     }

@@ -738,7 +738,8 @@ mod tests {
 
     /// The sample points of a `width` x `height` grid over the view.
     fn grid_points(center: [f64; 2], radius: f64, width: u32, height: u32) -> Vec<[f64; 2]> {
-        let grid = SampleGrid { center, radius, width, height, transform: Default::default() };
+        let grid =
+            SampleGrid { center, radius, width, height, transform: Default::default(), projection: Default::default() };
         (0..height).flat_map(|j| (0..width).map(move |i| grid.point(i, j))).collect()
     }
 

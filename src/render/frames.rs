@@ -11,6 +11,12 @@
 //! of the frame) it is read bilinearly, and where it is reduced, several bilinear taps over
 //! the frame pixel's footprint are averaged. All of it in linear light.
 //!
+//! An exponential map (`deepfield zoom --exponential-map F`) is read the same way with
+//! another lookup: a frame pixel at distance ρ from the centre and angle θ lies in the
+//! strip and row that ring holds (strip k covers radii F^-k down to F^-(k+1) of the
+//! outermost), at the column of its angle; rows are read bilinearly across strip edges and
+//! columns wrap around. Inside the deepest ring the flat centre view is read instead.
+//!
 //! Frames are deterministic: every output pixel is a fixed function of its keyframes, so
 //! the bytes do not depend on the thread count.
 
@@ -123,6 +129,105 @@ pub fn frame<'a>(
     out
 }
 
+/// An exponential map's strips and the flat view inside its deepest ring.
+pub struct Map<'a> {
+    /// Strip k (0 the outermost), for the strips held; see `held`.
+    pub strip: &'a (dyn Fn(usize) -> &'a Keyframe + Sync),
+    /// How many strips the map has.
+    pub count: usize,
+    /// The strips held: a frame reads the deepest of them for rings deeper still (they are
+    /// then a fraction of a frame pixel across).
+    pub held: std::ops::Range<usize>,
+    /// Zoom factor per strip.
+    pub factor: f64,
+    /// The square flat view inside the deepest ring (half its side is that ring's inner
+    /// radius).
+    pub center: &'a Keyframe,
+}
+
+impl Map<'_> {
+    /// The colour at plane offset (x, y) from the centre, in units of the outermost
+    /// strip's outer radius.
+    fn at(&self, x: f64, y: f64) -> [f32; 3] {
+        let ln_f = self.factor.ln();
+        let rho = x.hypot(y);
+        let t = if rho > 0.0 { -rho.ln() / ln_f } else { f64::INFINITY };
+        if t >= self.count as f64 {
+            // Inside the deepest ring: the flat centre view, half-side F^-count.
+            let c = self.center;
+            let half = (-(self.count as f64) * ln_f).exp();
+            let px = c.width as f64 / (2.0 * half);
+            return c.bilinear(x * px + c.width as f64 / 2.0, -y * px + c.height as f64 / 2.0);
+        }
+        let t = t.max(0.0);
+        let last = self.held.end - 1;
+        let (k, frac) = match t.floor() as usize {
+            k if k > last => (last, 1.0),
+            k => (k.max(self.held.start), if k < self.held.start { 0.0 } else { t - k as f64 }),
+        };
+        let s = (self.strip)(k);
+        let (w, h) = (s.width, s.height);
+        let theta = y.atan2(x).rem_euclid(std::f64::consts::TAU);
+        let fu = theta / std::f64::consts::TAU * w as f64 - 0.5;
+        let fv = frac * h as f64 - 0.5;
+        let (u0, v0) = (fu.floor(), fv.floor());
+        let (wu, wv) = ((fu - u0) as f32, (fv - v0) as f32);
+        let col = |u: f64| (u as i64).rem_euclid(w as i64) as usize;
+        // Row v of strip k, continuing into the neighbouring strips held.
+        let px = |u: f64, v: f64| -> [f32; 3] {
+            let v = v as i64;
+            let (kk, vv) = if v < 0 && k > self.held.start {
+                (k - 1, h - 1)
+            } else if v >= h as i64 && k < last {
+                (k + 1, 0)
+            } else {
+                (k, v.clamp(0, h as i64 - 1) as usize)
+            };
+            let strip = if kk == k { s } else { (self.strip)(kk) };
+            strip.rgb[vv * strip.width + col(u).min(strip.width - 1)]
+        };
+        let mix = |a: [f32; 3], b: [f32; 3], w: f32| std::array::from_fn(|c| a[c] + (b[c] - a[c]) * w);
+        mix(mix(px(u0, v0), px(u0 + 1.0, v0), wu), mix(px(u0, v0 + 1.0), px(u0 + 1.0, v0 + 1.0), wu), wv)
+    }
+}
+
+/// Frame at depth `z` (see [`depth`]) of `width` x `height` pixels from an exponential map:
+/// the frame's circumscribed circle is the outer edge of strip z (so frame 0 fills its
+/// corners from the outermost strip). Linear RGB, row-major.
+pub fn frame_from_map(map: &Map<'_>, z: f64, width: usize, height: usize) -> Vec<[f32; 3]> {
+    let circumradius = (-z * map.factor.ln()).exp();
+    let pixel = 2.0 * circumradius / (width as f64).hypot(height as f64);
+    let strip_w = (map.strip)(map.held.start).width as f64;
+    let mut out = vec![[0.0f32; 3]; width * height];
+    out.par_chunks_mut(width).enumerate().for_each(|(j, row)| {
+        for (i, o) in row.iter_mut().enumerate() {
+            let x = (i as f64 + 0.5 - width as f64 / 2.0) * pixel;
+            let y = -(j as f64 + 0.5 - height as f64 / 2.0) * pixel;
+            // Strip pixels across this frame pixel (a column's width at its radius).
+            let span = pixel * strip_w / (std::f64::consts::TAU * x.hypot(y).max(1e-300));
+            let taps = span.ceil().clamp(1.0, 4.0) as usize;
+            if taps == 1 {
+                *o = map.at(x, y);
+                continue;
+            }
+            let mut sum = [0.0f32; 3];
+            for ty in 0..taps {
+                for tx in 0..taps {
+                    let dx = ((tx as f64 + 0.5) / taps as f64 - 0.5) * pixel;
+                    let dy = ((ty as f64 + 0.5) / taps as f64 - 0.5) * pixel;
+                    let p = map.at(x + dx, y + dy);
+                    for c in 0..3 {
+                        sum[c] += p[c];
+                    }
+                }
+            }
+            let n = (taps * taps) as f32;
+            *o = sum.map(|v| v / n);
+        }
+    });
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,6 +238,39 @@ mod tests {
             height: h,
             rgb: (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).map(|(i, j)| f(i, j)).collect(),
         }
+    }
+
+    /// A map whose strips hold, per pixel, the radius of its row: a frame reads back the
+    /// distance of each of its pixels from the centre (in units of the outer radius).
+    #[test]
+    fn map_frames_read_the_ring_of_each_pixel() {
+        let (w, h, count, factor) = (720usize, 80usize, 3usize, 2f64);
+        let strips: Vec<Keyframe> = (0..count)
+            .map(|k| {
+                flat(w, h, |_, j| {
+                    let r = factor.powf(-(k as f64) - (j as f64 + 0.5) / h as f64);
+                    [r as f32, 0.0, 0.0]
+                })
+            })
+            .collect();
+        let center = flat(8, 8, |_, _| [-1.0, 0.0, 0.0]);
+        let key = |k: usize| &strips[k];
+        let map = Map { strip: &key, count, held: 0..count, factor, center: &center };
+        let (fw, fh) = (64usize, 36usize);
+        let f = frame_from_map(&map, 0.5, fw, fh);
+        let pixel = 2.0 * factor.powf(-0.5) / (fw as f64).hypot(fh as f64);
+        for j in [0usize, 5, 17] {
+            for i in [0usize, 10, 40, 63] {
+                let x = (i as f64 + 0.5 - fw as f64 / 2.0) * pixel;
+                let y = (j as f64 + 0.5 - fh as f64 / 2.0) * pixel;
+                let want = x.hypot(y);
+                let got = f[j * fw + i][0] as f64;
+                assert!((got - want).abs() < 0.01 * want, "pixel {i},{j}: {got} vs {want}");
+            }
+        }
+        // Deep enough, the centre pixels come from the flat view inside the deepest ring.
+        let deep = frame_from_map(&map, 2.0, 64, 36);
+        assert_eq!(deep[18 * 64 + 32], [-1.0, 0.0, 0.0]);
     }
 
     #[test]

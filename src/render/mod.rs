@@ -256,6 +256,7 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
         width: scene.width * scene.aa,
         height: scene.height * scene.aa,
         transform: scene.transform,
+        projection: scene.projection,
     };
     FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
 }

@@ -164,7 +164,7 @@ pub enum EngineError {
     },
     /// The GPU paths draw unrotated, unstretched views only.
     #[error(
-        "--engine {engine}: the GPU paths do not rotate or stretch the view (view.rotate, view.stretch_amount); use --engine auto"
+        "--engine {engine}: the GPU paths draw only flat views without rotation or stretch (view.rotate, view.stretch_amount, view.exponential_map); use --engine auto"
     )]
     GpuTransform {
         /// The engine's name.
@@ -241,6 +241,8 @@ pub struct Scene {
     pub height: u32,
     /// Rotation and stretch of the view (`[view] rotate`, `stretch_angle`, `stretch_amount`).
     pub transform: crate::field::Transform,
+    /// A flat image, or a strip of an exponential map (`[view] exponential_map`).
+    pub projection: crate::field::Projection,
     /// Maximum iterations.
     pub max_iter: u32,
     /// Escape radius.
@@ -400,7 +402,7 @@ impl Scene {
         let name = precision.name();
         crate::gpu::field::supported_trap(&self.traps)
             .map_err(|e| EngineError::GpuTraps { engine: name, reason: e.to_string() })?;
-        if !self.transform.is_identity() {
+        if !self.transform.is_identity() || !self.projection.is_flat() {
             return Err(EngineError::GpuTransform { engine: name });
         }
         if self.escape_radius > crate::gpu::MAX_ESCAPE_RADIUS {

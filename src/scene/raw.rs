@@ -90,6 +90,10 @@ pub struct ViewRaw {
     /// log2 of the stretch factor (default 0: none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stretch_amount: Option<Spanned<f64>>,
+    /// A strip of an exponential map covering radii `radius` down to `radius` / this
+    /// factor, instead of a flat image (see `field::projection`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exponential_map: Option<Spanned<f64>>,
 }
 
 impl ViewRaw {
@@ -122,6 +126,7 @@ impl Default for ViewRaw {
             rotate: None,
             stretch_angle: None,
             stretch_amount: None,
+            exponential_map: None,
         }
     }
 }

@@ -161,6 +161,22 @@ pub(super) fn validate(
         cx.finite(a, -MAX_STRETCH_AMOUNT, MAX_STRETCH_AMOUNT, "view.stretch_amount (log2 of the factor)")?;
     }
     let transform = view.transform();
+    let projection = match &view.exponential_map {
+        None => crate::field::Projection::Flat,
+        Some(f) => {
+            let factor = cx.finite(f, 1.0, 1e6, "view.exponential_map (zoom factor per strip)")?;
+            if factor <= 1.0 {
+                return cx.err(f.span(), "view.exponential_map must be above 1 (the zoom factor from a strip's outer edge to its inner edge)");
+            }
+            if view.stretch_amount.as_ref().is_some_and(|a| *a.get_ref() != 0.0) {
+                return cx.err(
+                    f.span(),
+                    "an exponential map cannot be stretched (view.stretch_amount); rotate it if needed",
+                );
+            }
+            crate::field::Projection::Exponential { ln_factor: factor.ln() }
+        }
+    };
     let width = cx.range_i(&view.width, 1, MAX_SIDE, "width")? as u32;
     let height = cx.range_i(&view.height, 1, MAX_SIDE, "height")? as u32;
     let max_iter = cx.range_i(&file.iteration.max, 1, MAX_ITER_LIMIT as i64, "iteration.max")? as u32;
@@ -238,6 +254,7 @@ pub(super) fn validate(
         width,
         height,
         transform,
+        projection,
         max_iter,
         escape_radius,
         aa,

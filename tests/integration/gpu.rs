@@ -56,8 +56,14 @@ fn field_params(
     max_iter: u32,
     needs: Needs,
 ) -> FieldParams {
-    let grid =
-        SampleGrid { center, radius: 2.0 / zoom, width: size[0], height: size[1], transform: Default::default() };
+    let grid = SampleGrid {
+        center,
+        radius: 2.0 / zoom,
+        width: size[0],
+        height: size[1],
+        transform: Default::default(),
+        projection: Default::default(),
+    };
     FieldParams::new(family, max_iter, 65536.0, needs, grid)
 }
 
@@ -321,8 +327,14 @@ fn bitmap_trap_agrees_with_the_cpu_on_a_julia_set() {
 fn ifs_shader_agrees_with_the_cpu_density() {
     let Some(ctx) = gpu() else { return };
     for params in [IfsParams::default(), IfsParams { z: 0.35, scale: 1.7, ..IfsParams::default() }] {
-        let grid =
-            SampleGrid { center: [0.1, -0.2], radius: 1.5, width: 160, height: 120, transform: Default::default() };
+        let grid = SampleGrid {
+            center: [0.1, -0.2],
+            radius: 1.5,
+            width: 160,
+            height: 120,
+            transform: Default::default(),
+            projection: Default::default(),
+        };
         let got = ifs::compute_ifs(&ctx, &params, &grid, 0..120).expect("gpu");
         let mut diffs = Vec::new();
         let mut lit = 0;
@@ -354,6 +366,7 @@ fn cpu_paint(params: &PaintParams, pal: &palette::Palette) -> Vec<[u8; 4]> {
         width: w,
         height: h,
         transform: Default::default(),
+        projection: Default::default(),
     };
     let family = params.julia.map_or(Family::Mandelbrot, |c| Family::Julia { c });
     let needs = Needs { nf: true, t: false, de: params.distance_k.is_some(), traps: Vec::new() };

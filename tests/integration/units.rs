@@ -242,3 +242,49 @@ fn frames_come_from_the_keyframes() {
     let o = deepfield(&["frames", "keys", "--size", "40x40", "-o", "x", "-q"], &dir);
     assert_eq!(o.status.code(), Some(2), "another aspect ratio");
 }
+
+/// `deepfield zoom --exponential-map 2`: log-polar strips sized for the frames (2307 x 255
+/// columns and rows for 320 x 180 at 2 x 2 samples) plus the flat centre; the frames
+/// `deepfield frames` makes from them show what the frames from flat keyframes show (mean
+/// difference a few levels, where frames a step of zoom apart differ by tens), and a map
+/// without `--size` is refused.
+#[test]
+fn exponential_maps_make_the_same_video_as_keyframes() {
+    let dir = scratch("units-expmap");
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/seahorse-valley.toml")).unwrap();
+    std::fs::write(dir.join("scene.toml"), &text).unwrap();
+    let size = ["--size", "160x90", "--aa", "2"];
+    ok(deepfield(&[&["zoom", "scene.toml", "--frames", "4", "-o", "keys", "-q"][..], &size].concat(), &dir));
+    let map = ["zoom", "scene.toml", "--frames", "4", "--exponential-map", "2", "-o", "map", "-q"];
+    ok(deepfield(&[&map[..], &size].concat(), &dir));
+    let header = |p: &str| {
+        ok(deepfield(&["recolor", p, "-o", &format!("{p}.png")], &dir));
+        image::open(dir.join(format!("{p}.png"))).unwrap().to_rgb8().dimensions()
+    };
+    assert_eq!(header("map/00000.exr"), (1154, 127));
+    assert_eq!(header("map/center.exr"), (92, 92));
+    ok(deepfield(&["frames", "keys", "--fps", "4", "-o", "flat", "-q"], &dir));
+    ok(deepfield(&["frames", "map", "--size", "160x90", "--fps", "4", "-o", "polar", "-q"], &dir));
+    let px = |p: String| image::open(dir.join(p)).unwrap().to_rgb8().into_raw();
+    let mean = |a: &[u8], b: &[u8]| a.iter().zip(b).map(|(x, y)| x.abs_diff(*y) as f64).sum::<f64>() / a.len() as f64;
+    for f in [0, 4, 8, 11] {
+        let (a, b) = (px(format!("flat/frame-{f:05}.png")), px(format!("polar/frame-{f:05}.png")));
+        let d = mean(&a, &b);
+        assert!(d < 12.0, "frame {f}: the map's frame differs from the keyframes' by {d} on average");
+    }
+    let far = mean(&px("flat/frame-00004.png".into()), &px("polar/frame-00008.png".into()));
+    assert!(far > 20.0, "frames a step of zoom apart differ by only {far}: the comparison cannot tell");
+    let o = deepfield(&["frames", "map", "-o", "x", "-q"], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--size"));
+    // The perturbation engine places a strip's samples as direct iteration does.
+    for engine in ["f64", "perturb-floatexp"] {
+        let out = format!("strip-{engine}.png");
+        let args =
+            ["render", "scene.toml", "--exponential-map", "2", "--size", "288x32", "--engine", engine, "-o", &out];
+        ok(deepfield(&args, &dir));
+    }
+    let d = mean(&px("strip-f64.png".into()), &px("strip-perturb-floatexp.png".into()));
+    assert!(d < 0.5, "the perturbed strip differs from the direct one by {d} on average");
+}
