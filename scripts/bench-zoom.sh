@@ -4,7 +4,8 @@
 # size. Prints `deepfield zoom --stats` of each (the reference once, the frames' time) and
 # the time of `deepfield frames` making the video frames from each.
 #   scripts/bench-zoom.sh [KEYFRAMES] [VIDEO_WxH] [SCENE] [ZOOM]
-# Defaults: 100 keyframes, 640x360, scenes/liiiines.toml at zoom 1e300.
+# Defaults: 100 keyframes, 640x360, scenes/liiiines.toml at zoom 1e300. DEEPFIELD=BIN runs
+# that binary instead of building one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=${1:-100}
@@ -13,8 +14,8 @@ scene=${3:-scenes/liiiines.toml}
 zoom=${4:-1e300}
 w=${size%x*}
 h=${size#*x}
-cargo build --release --quiet --no-default-features
-bin=target/release/deepfield
+bin=${DEEPFIELD:-target/release/deepfield}
+[ -n "${DEEPFIELD:-}" ] || cargo build --release --quiet --no-default-features
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 echo "== flat keyframes, $((2 * w))x$((2 * h)) (twice the video), $n of them, from zoom $zoom"

@@ -35,7 +35,7 @@ pub enum Command {
     /// print it as a scene framed on it, centre in full precision.
     Find(Box<FindArgs>),
     /// Join the work units of `render --tile K/N` into the whole PNG (streamed, one row in
-    /// memory at a time).
+    /// memory at a time), or their raw data into the whole EXR.
     Assemble(AssembleArgs),
     /// Compute a deep view's reference orbit(s) once and write them to a file that
     /// `render --reference` reads (work units, frames of a zoom: no recomputing).
@@ -158,10 +158,12 @@ pub struct ReferenceArgs {
 /// `deepfield assemble`.
 #[derive(Debug, Args)]
 pub struct AssembleArgs {
-    /// The units' PNG files, in any order (all N of them).
+    /// The units' PNG files, or their EXR files (`render --tile K/N --exr`), in any order
+    /// (all N of them).
     #[arg(value_name = "UNIT", required = true)]
     pub units: Vec<PathBuf>,
-    /// The whole image.
+    /// The whole image: a PNG, or with a `.exr` name the whole raw data (recolour it for
+    /// layers that colour from the whole image, like histogram equalisation).
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
 }
@@ -326,8 +328,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
     /// Render only work unit K of N (0-based): rows K·H/N .. (K+1)·H/N, as a PNG that
-    /// `deepfield assemble` joins with the others into the whole image, byte for byte.
-    #[arg(long, value_name = "K/N", value_parser = parse_tile, conflicts_with = "exr")]
+    /// `deepfield assemble` joins with the others into the whole image, byte for byte (and
+    /// with --exr its raw data, which assemble joins into the whole EXR).
+    #[arg(long, value_name = "K/N", value_parser = parse_tile)]
     pub tile: Option<(u32, u32)>,
     /// Read the reference orbit(s) from FILE (written by `deepfield reference`) instead of
     /// computing them; refused, with the reason, when the file does not serve the scene.

@@ -103,7 +103,9 @@ pub fn main() -> ExitCode {
         args::Command::Zoom(z) => zoom::run(*z),
         args::Command::Frames(f) => frames::run(*f),
         args::Command::Assemble(a) => {
-            deepfield::io::assemble_png(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
+            let exr = a.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+            let assemble = if exr { deepfield::io::assemble_exr } else { deepfield::io::assemble_png };
+            assemble(&a.units, &a.output, &|_, _| {}).map_err(Failure::input)
         }
     };
     match result {

@@ -37,9 +37,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             if n > scene.height {
                 return Err(Failure::Input(anyhow!("--tile {k}/{n}: the image has only {} rows", scene.height)));
             }
-            if scene.stack.is_global() {
+            if scene.stack.is_global() && args.exr.is_none() {
                 return Err(Failure::Input(anyhow!(
-                    "--tile: a histogram layer colours each pixel from the whole image, which one unit does not see; render such scenes in one piece"
+                    "--tile: a histogram layer colours each pixel from the whole image, which one unit does not see; add --exr, assemble the units' EXR files and recolour the whole (the unit's PNG is then coloured from its band alone)"
                 )));
             }
             Some(io::band_rows(k, n, scene.height))
@@ -56,10 +56,17 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     }
     .map_err(Failure::input)?;
     let png_enc = PngEncoder::new(scene.png_bits);
-    let exr = match &args.exr {
-        Some(path) => Some(open_exr(&scene, &plan, simd, path)?),
-        None => None,
+    let exr = match (&args.exr, args.tile) {
+        (Some(path), Some((k, n))) => {
+            let band = rows.clone().unwrap_or_default();
+            let tile = io::tile_text(k, n, scene.width, scene.height);
+            Some(open_exr_unit(&scene, &plan, simd, path, band.end - band.start, &tile)?)
+        }
+        (Some(path), None) => Some(open_exr(&scene, &plan, simd, path)?),
+        (None, _) => None,
     };
+    // A unit's EXR counts its sample rows from the band's first.
+    let first_sample = rows.as_ref().map_or(0, |r| r.start as usize * scene.aa as usize);
     let (mut exr_writer, exr_enc) = match exr {
         Some((w, e)) => (Some(w), Some(e)),
         None => (None, None),
@@ -75,7 +82,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
         let bytes = png_enc.encode(&strip.rgb);
         let chunks = match &exr_enc {
-            Some(e) => Some(e.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref())?),
+            Some(e) => {
+                Some(e.encode(strip.row as usize * aa - first_sample, &strip.planes, strip.samples.as_deref())?)
+            }
             None => None,
         };
         Ok((bytes, chunks))
@@ -121,8 +130,27 @@ pub fn open_exr(
 ) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
     let layout = ExrLayout::new(scene.channels, &scene.traps);
     let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
-    let engine = format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe());
-    ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine).map_err(Failure::input)
+    ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd)).map_err(Failure::input)
+}
+
+/// The header comment of an EXR: the engine, why, and the SIMD level.
+fn engine_text(plan: &deepfield::scene::EnginePlan, simd: deepfield::simd_level::SimdLevel) -> String {
+    format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe())
+}
+
+/// [`open_exr`] for one work unit: `rows` pixel rows of the image, its place in `tile`.
+fn open_exr_unit(
+    scene: &deepfield::scene::Scene,
+    plan: &deepfield::scene::EnginePlan,
+    simd: deepfield::simd_level::SimdLevel,
+    path: &Path,
+    rows: u32,
+    tile: &str,
+) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
+    let layout = ExrLayout::new(scene.channels, &scene.traps);
+    let (w, h) = (scene.width * scene.aa, rows * scene.aa);
+    ExrWriter::create_unit(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd), tile)
+        .map_err(Failure::input)
 }
 
 /// Refuses runs whose outputs would collide with each other or overwrite the input scene.

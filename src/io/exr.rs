@@ -24,6 +24,9 @@ use crate::trap::Trap;
 
 /// Header attribute holding the scene TOML.
 pub const SCENE_ATTRIBUTE: &str = "deepfield.scene";
+/// Header attribute of a work unit's place in the whole image (`render --tile K/N --exr`),
+/// in the text of [`super::tile_text`].
+pub const TILE_ATTRIBUTE: &str = "deepfield.tile";
 const BLOCK_ROWS: usize = 16;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -146,6 +149,34 @@ impl ExrWriter {
             return Err(IoError::new(path, "no channels to write (choose some with --channels)"));
         }
         let header = layout.header(width as usize, height as usize, scene_toml, engine);
+        let (writer, headers) = Self::with_header(path, header)?;
+        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+    }
+
+    /// [`ExrWriter::create`] for one work unit of `render --tile`: `rows` sample rows of
+    /// the whole image (blocks counted from the unit's first row) and the unit's place in
+    /// the [`TILE_ATTRIBUTE`].
+    pub fn create_unit(
+        path: &Path,
+        width: u32,
+        rows: u32,
+        layout: ExrLayout,
+        scene_toml: &str,
+        engine: &str,
+        tile: &str,
+    ) -> Result<(Self, ExrEncoder), IoError> {
+        if layout.channels.is_empty() {
+            return Err(IoError::new(path, "no channels to write (choose some with --channels)"));
+        }
+        let mut header = layout.header(width as usize, rows as usize, scene_toml, engine);
+        header.own_attributes.other.insert(Text::from(TILE_ATTRIBUTE), AttributeValue::Text(utf8_text(tile)));
+        let (writer, headers) = Self::with_header(path, header)?;
+        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+    }
+
+    /// Starts a file with this header (written atomically); returns the writer and the
+    /// headers blocks are compressed for.
+    pub(super) fn with_header(path: &Path, header: Header) -> Result<(Self, Headers), IoError> {
         let headers: Headers = SmallVec::from_elem(header, 1);
         let (file, out) = AtomicFile::create(path)?;
         let (tail, tail_error) = Tail::new(out);
@@ -162,7 +193,7 @@ impl ExrWriter {
             .map_err(|e| e.to_string())
         });
         let writer = Self { sender: Some(sender), thread: Some(thread), tail_error, file: Some(file) };
-        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+        Ok((writer, headers))
     }
 
     /// Queues encoded blocks for writing.

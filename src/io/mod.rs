@@ -12,14 +12,16 @@ mod exr_read;
 mod png;
 mod scene_source;
 mod tile;
+mod tile_exr;
 
 pub use atomic::AtomicFile;
 pub use bitmap::load_bitmap;
-pub use exr::{ExrEncoder, ExrLayout, ExrWriter, read_exr_scene};
+pub use exr::{ExrEncoder, ExrLayout, ExrWriter, TILE_ATTRIBUTE, read_exr_scene};
 pub use exr_read::{RawData, TrapKind, read_exr_planes};
 pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene, write_png_rgb8};
 pub use scene_source::{SceneSource, read_scene_source};
 pub use tile::{TILE_KEYWORD, assemble_png, band_rows, tile_text};
+pub use tile_exr::assemble_exr;
 
 /// An I/O failure with the path it concerns.
 #[derive(Debug, thiserror::Error)]

@@ -1,4 +1,5 @@
-//! Work units of a PNG render: bands of rows rendered apart (`render --tile K/N`, one per
+//! Work units of a PNG render (their raw data: [`super::tile_exr`]): bands of rows rendered
+//! apart (`render --tile K/N`, one per
 //! machine or job) and streamed back into the whole image (`deepfield assemble`).
 //!
 //! A band is a PNG of the image's full width and its own rows, carrying the whole scene
@@ -34,17 +35,18 @@ pub fn tile_text(k: u32, n: u32, width: u32, height: u32) -> String {
 
 /// A band read back: where it belongs and what made it.
 #[derive(Debug, Clone)]
-struct Band {
-    path: PathBuf,
-    k: u32,
-    n: u32,
-    width: u32,
-    height: u32,
-    bits: u8,
-    scene: String,
+pub(super) struct Band {
+    pub(super) path: PathBuf,
+    pub(super) k: u32,
+    pub(super) n: u32,
+    pub(super) width: u32,
+    pub(super) height: u32,
+    /// PNG bit depth (0 for raw data).
+    pub(super) bits: u8,
+    pub(super) scene: String,
 }
 
-fn parse_tile_text(path: &Path, t: &str) -> Result<(u32, u32, u32, u32), IoError> {
+pub(super) fn parse_tile_text(path: &Path, t: &str) -> Result<(u32, u32, u32, u32), IoError> {
     let bad = || IoError::new(path, format!("its {TILE_KEYWORD} text `{t}` is not `K/N rows A..B of WxH`"));
     let mut words = t.split_whitespace();
     let (k, n) = words.next().and_then(|s| s.split_once('/')).ok_or_else(bad)?;
@@ -95,16 +97,13 @@ fn read_band(path: &Path) -> Result<Band, IoError> {
     Ok(Band { path: path.to_path_buf(), k, n, width, height, bits, scene })
 }
 
-/// Streams the bands at `paths` (any order) into the whole image at `out`. Refuses, naming
-/// the file, bands of different renders, a band given twice, or a missing band.
-pub fn assemble_png(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) -> Result<(), IoError> {
-    let Some(first) = paths.first() else {
+/// Checks that `bands` (sorted by unit) are one render's complete set: the same scene,
+/// size, format and unit count, every unit once.
+pub(super) fn check_set(bands: &[Band], first: Option<&PathBuf>, out: &Path) -> Result<(), IoError> {
+    let (Some(b0), Some(first)) = (bands.first(), first) else {
         return Err(IoError::new(out, "no work units given"));
     };
-    let mut bands = paths.iter().map(|p| read_band(p)).collect::<Result<Vec<_>, _>>()?;
-    bands.sort_by_key(|b| b.k);
-    let b0 = bands[0].clone();
-    for b in &bands {
+    for b in bands {
         if (b.n, b.width, b.height, b.bits) != (b0.n, b0.width, b0.height, b0.bits) || b.scene != b0.scene {
             return Err(IoError::new(
                 &b.path,
@@ -122,6 +121,19 @@ pub fn assemble_png(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) 
     if let Some(missing) = (0..b0.n).find(|k| !have.contains(k)) {
         return Err(IoError::new(first, format!("unit {missing} of {} is missing", b0.n)));
     }
+    Ok(())
+}
+
+/// Streams the bands at `paths` (any order) into the whole image at `out`. Refuses, naming
+/// the file, bands of different renders, a band given twice, or a missing band.
+pub fn assemble_png(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) -> Result<(), IoError> {
+    let Some(first) = paths.first() else {
+        return Err(IoError::new(out, "no work units given"));
+    };
+    let mut bands = paths.iter().map(|p| read_band(p)).collect::<Result<Vec<_>, _>>()?;
+    bands.sort_by_key(|b| b.k);
+    check_set(&bands, Some(first), out)?;
+    let b0 = bands[0].clone();
     let mut writer = PngWriter::create(out, b0.width, b0.height, b0.bits, &b0.scene)?;
     let mut done = 0;
     for b in &bands {

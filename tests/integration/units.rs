@@ -288,3 +288,52 @@ fn exponential_maps_make_the_same_video_as_keyframes() {
     let d = mean(&px("strip-f64.png".into()), &px("strip-perturb-floatexp.png".into()));
     assert!(d < 0.5, "the perturbed strip differs from the direct one by {d} on average");
 }
+
+/// Raw-data work units: `render --tile K/N --exr` in separate processes and `assemble -o
+/// whole.exr` give the EXR of the render done in one piece byte for byte (supersampled
+/// with bands that do not start on the file's 16-line blocks, and deep), and a histogram
+/// layer, which one unit cannot colour, is coloured after assembly: `recolor` of the
+/// assembled file is the whole render's PNG. Without --exr such a unit is refused; a
+/// missing or repeated unit is refused.
+#[test]
+fn exr_units_assemble_to_the_whole_raw_data() {
+    let dir = scratch("units-exr");
+    let shallow = "version = 1\n[view]\ncenter = [\"-0.745\", \"0.11\"]\nzoom = \"200\"\nwidth = 70\nheight = 45\n[render]\naa = 2\n[[layer]]\nkind = \"histogram\"\n[[layer]]\nkind = \"distance\"\nblend = \"multiply\"\n";
+    std::fs::write(dir.join("shallow.toml"), shallow).unwrap();
+    let deep = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/liiiines.toml")).unwrap();
+    std::fs::write(dir.join("deep.toml"), deep).unwrap();
+    let same = |a: &str, b: &str| std::fs::read(dir.join(a)).unwrap() == std::fs::read(dir.join(b)).unwrap();
+    for (name, n, size) in [("shallow", 3u32, "70x45"), ("deep", 4, "64x40")] {
+        let scene = format!("{name}.toml");
+        let whole = ["render", &scene, "--size", size, "-o", "whole.png", "--exr", "whole.exr", "-q"];
+        ok(deepfield(&whole, &dir));
+        let children: Vec<_> = (0..n)
+            .map(|k| {
+                let (tile, png, exr) = (format!("{k}/{n}"), format!("u{k}.png"), format!("u{k}.exr"));
+                let args = ["render", &scene, "--size", size, "--tile", &tile, "-o", &png, "--exr", &exr, "-q"];
+                Command::new(env!("CARGO_BIN_EXE_deepfield")).args(args).current_dir(&dir).spawn().unwrap()
+            })
+            .collect();
+        for c in children {
+            assert!(c.wait_with_output().unwrap().status.success(), "{name}: a unit failed");
+        }
+        let mut units: Vec<String> = (0..n).rev().map(|k| format!("u{k}.exr")).collect();
+        let mut args: Vec<String> = vec!["assemble".into(), "-o".into(), "assembled.exr".into()];
+        args.extend(units.iter().cloned());
+        ok(deepfield(&args.iter().map(String::as_str).collect::<Vec<_>>(), &dir));
+        assert!(same("assembled.exr", "whole.exr"), "{name}: the assembled EXR differs from the whole render's");
+        ok(deepfield(&["recolor", "assembled.exr", "-o", "recoloured.png"], &dir));
+        assert!(same("recoloured.png", "whole.png"), "{name}: recolouring the assembled data differs from the render");
+        units.pop();
+        let o = deepfield(
+            &[&["assemble", "-o", "x.exr"][..], &units.iter().map(String::as_str).collect::<Vec<_>>()].concat(),
+            &dir,
+        );
+        assert_eq!(o.status.code(), Some(2), "{name}: a missing unit");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("is missing"));
+        assert!(!dir.join("x.exr").exists());
+    }
+    let o = deepfield(&["render", "shallow.toml", "--tile", "0/3", "-o", "x.png"], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("add --exr"));
+}
