@@ -88,6 +88,7 @@ pub fn run(args: FramesArgs) -> Result<(), Failure> {
     let side = if is_map { (w as f64).hypot(h as f64) } else { kw.max(kh) as f64 };
     let reach = (side.ln() / factor.ln()).ceil() as usize + 1;
     let mut window: Vec<Option<Keyframe>> = vec![None; count];
+    let taps = center.as_ref().map(|_| frames::MapTaps::new(w, h, kw, factor));
     let enc = Srgb8Encoder::get();
     for f in units.clone() {
         if cancel.load(Ordering::Relaxed) {
@@ -105,12 +106,12 @@ pub fn run(args: FramesArgs) -> Result<(), Failure> {
         }
         let rgb = pool.install(|| {
             let key = |d: usize| window[d].as_ref().unwrap_or_else(|| unreachable!("keyframe {d} is loaded"));
-            match &center {
-                Some(center) => {
+            match (&center, &taps) {
+                (Some(center), Some(taps)) => {
                     let map = frames::Map { strip: &key, count, held: keep.clone(), factor, center };
-                    frames::frame_from_map(&map, z, w, h)
+                    frames::frame_from_map(&map, taps, z)
                 }
-                None => frames::frame(&key, count, factor, z, w, h),
+                _ => frames::frame(&key, count, factor, z, w, h),
             }
         });
         let bytes: Vec<u8> = rgb.iter().flat_map(|p| p.map(|v| enc.encode(v))).collect();

@@ -149,8 +149,7 @@ fn open_exr_unit(
 ) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
     let layout = ExrLayout::new(scene.channels, &scene.traps);
     let (w, h) = (scene.width * scene.aa, rows * scene.aa);
-    ExrWriter::create_unit(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd), tile)
-        .map_err(Failure::input)
+    ExrWriter::create_unit(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd), tile).map_err(Failure::input)
 }
 
 /// Refuses runs whose outputs would collide with each other or overwrite the input scene.

@@ -146,17 +146,17 @@ pub struct Map<'a> {
 }
 
 impl Map<'_> {
-    /// The colour at plane offset (x, y) from the centre, in units of the outermost
-    /// strip's outer radius.
-    fn at(&self, x: f64, y: f64) -> [f32; 3] {
+    /// The colour of a tap in the frame at depth `z`.
+    fn at(&self, tap: &Tap, z: f64) -> [f32; 3] {
         let ln_f = self.factor.ln();
-        let rho = x.hypot(y);
-        let t = if rho > 0.0 { -rho.ln() / ln_f } else { f64::INFINITY };
+        let t = tap.t + z;
         if t >= self.count as f64 {
             // Inside the deepest ring: the flat centre view, half-side F^-count.
             let c = self.center;
+            let scale = (-z * ln_f).exp();
             let half = (-(self.count as f64) * ln_f).exp();
             let px = c.width as f64 / (2.0 * half);
+            let (x, y) = (tap.x * scale, tap.y * scale);
             return c.bilinear(x * px + c.width as f64 / 2.0, -y * px + c.height as f64 / 2.0);
         }
         let t = t.max(0.0);
@@ -167,8 +167,7 @@ impl Map<'_> {
         };
         let s = (self.strip)(k);
         let (w, h) = (s.width, s.height);
-        let theta = y.atan2(x).rem_euclid(std::f64::consts::TAU);
-        let fu = theta / std::f64::consts::TAU * w as f64 - 0.5;
+        let fu = tap.a * w as f64 - 0.5;
         let fv = frac * h as f64 - 0.5;
         let (u0, v0) = (fu.floor(), fv.floor());
         let (wu, wv) = ((fu - u0) as f32, (fv - v0) as f32);
@@ -191,37 +190,82 @@ impl Map<'_> {
     }
 }
 
-/// Frame at depth `z` (see [`depth`]) of `width` x `height` pixels from an exponential map:
-/// the frame's circumscribed circle is the outer edge of strip z (so frame 0 fills its
-/// corners from the outermost strip). Linear RGB, row-major.
-pub fn frame_from_map(map: &Map<'_>, z: f64, width: usize, height: usize) -> Vec<[f32; 3]> {
-    let circumradius = (-z * map.factor.ln()).exp();
-    let pixel = 2.0 * circumradius / (width as f64).hypot(height as f64);
-    let strip_w = (map.strip)(map.held.start).width as f64;
-    let mut out = vec![[0.0f32; 3]; width * height];
-    out.par_chunks_mut(width).enumerate().for_each(|(j, row)| {
-        for (i, o) in row.iter_mut().enumerate() {
-            let x = (i as f64 + 0.5 - width as f64 / 2.0) * pixel;
-            let y = -(j as f64 + 0.5 - height as f64 / 2.0) * pixel;
-            // Strip pixels across this frame pixel (a column's width at its radius).
-            let span = pixel * strip_w / (std::f64::consts::TAU * x.hypot(y).max(1e-300));
-            let taps = span.ceil().clamp(1.0, 4.0) as usize;
-            if taps == 1 {
-                *o = map.at(x, y);
-                continue;
-            }
-            let mut sum = [0.0f32; 3];
-            for ty in 0..taps {
-                for tx in 0..taps {
-                    let dx = ((tx as f64 + 0.5) / taps as f64 - 0.5) * pixel;
-                    let dy = ((ty as f64 + 0.5) / taps as f64 - 0.5) * pixel;
-                    let p = map.at(x + dx, y + dy);
-                    for c in 0..3 {
-                        sum[c] += p[c];
+/// A point a frame pixel reads from an exponential map, in terms that do not change from
+/// frame to frame: its offset from the centre in units of the frame's circumscribed
+/// radius, its ring coordinate at depth 0 (-log_F of that radius) and its angle in turns.
+#[derive(Debug, Clone, Copy)]
+struct Tap {
+    x: f64,
+    y: f64,
+    t: f64,
+    a: f64,
+}
+
+/// The taps of every pixel of a `width` x `height` frame read from an exponential map of
+/// `strip_width` columns and factor F: frames differ only by their depth, so the polar
+/// coordinates are computed once. Where a frame pixel spans several strip columns, it
+/// takes up to 4 x 4 taps over its footprint.
+pub struct MapTaps {
+    width: usize,
+    starts: Vec<usize>,
+    taps: Vec<Tap>,
+}
+
+impl MapTaps {
+    /// The taps for frames of this size.
+    pub fn new(width: usize, height: usize, strip_width: usize, factor: f64) -> MapTaps {
+        let ln_f = factor.ln();
+        let pixel = 2.0 / (width as f64).hypot(height as f64);
+        let tap = |x: f64, y: f64| {
+            let rho = x.hypot(y);
+            let t = if rho > 0.0 { -rho.ln() / ln_f } else { f64::INFINITY };
+            Tap { x, y, t, a: y.atan2(x).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU }
+        };
+        let mut starts = Vec::with_capacity(width * height + 1);
+        let mut taps = Vec::new();
+        for j in 0..height {
+            for i in 0..width {
+                starts.push(taps.len());
+                let x = (i as f64 + 0.5 - width as f64 / 2.0) * pixel;
+                let y = -(j as f64 + 0.5 - height as f64 / 2.0) * pixel;
+                // Strip columns across this pixel (a column's width at its radius).
+                let span = pixel * strip_width as f64 / (std::f64::consts::TAU * x.hypot(y).max(1e-300));
+                let n = span.ceil().clamp(1.0, 4.0) as usize;
+                for ty in 0..n {
+                    for tx in 0..n {
+                        let dx = ((tx as f64 + 0.5) / n as f64 - 0.5) * pixel;
+                        let dy = ((ty as f64 + 0.5) / n as f64 - 0.5) * pixel;
+                        taps.push(tap(x + dx, y + dy));
                     }
                 }
             }
-            let n = (taps * taps) as f32;
+        }
+        starts.push(taps.len());
+        MapTaps { width, starts, taps }
+    }
+}
+
+/// Frame at depth `z` (see [`depth`]) from an exponential map, through `taps` (made for
+/// the frame's size and the map): the frame's circumscribed circle is the outer edge of
+/// strip z (so frame 0 fills its corners from the outermost strip). Linear RGB, row-major.
+pub fn frame_from_map(map: &Map<'_>, taps: &MapTaps, z: f64) -> Vec<[f32; 3]> {
+    let mut out = vec![[0.0f32; 3]; taps.starts.len() - 1];
+    out.par_chunks_mut(taps.width).enumerate().for_each(|(j, row)| {
+        for (i, o) in row.iter_mut().enumerate() {
+            let k = j * taps.width + i;
+            let mine = &taps.taps[taps.starts[k]..taps.starts[k + 1]];
+            if let [one] = mine {
+                *o = map.at(one, z);
+                continue;
+            }
+            let mut sum = [0.0f32; 3];
+            for t in mine {
+                let p = map.at(t, z);
+                for c in 0..3 {
+                    sum[c] += p[c];
+                }
+            }
+            let n = mine.len() as f32;
             *o = sum.map(|v| v / n);
         }
     });
@@ -257,7 +301,8 @@ mod tests {
         let key = |k: usize| &strips[k];
         let map = Map { strip: &key, count, held: 0..count, factor, center: &center };
         let (fw, fh) = (64usize, 36usize);
-        let f = frame_from_map(&map, 0.5, fw, fh);
+        let taps = MapTaps::new(fw, fh, w, factor);
+        let f = frame_from_map(&map, &taps, 0.5);
         let pixel = 2.0 * factor.powf(-0.5) / (fw as f64).hypot(fh as f64);
         for j in [0usize, 5, 17] {
             for i in [0usize, 10, 40, 63] {
@@ -269,7 +314,7 @@ mod tests {
             }
         }
         // Deep enough, the centre pixels come from the flat view inside the deepest ring.
-        let deep = frame_from_map(&map, 2.0, 64, 36);
+        let deep = frame_from_map(&map, &taps, 2.0);
         assert_eq!(deep[18 * 64 + 32], [-1.0, 0.0, 0.0]);
     }
 
