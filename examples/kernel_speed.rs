@@ -9,7 +9,14 @@ use deepfield::formula::Family;
 fn main() {
     let a: Vec<f64> = std::env::args().skip(1).map(|s| s.parse().expect("number")).collect();
     let [cx, cy, radius, max_iter] = a[..] else { panic!("CX CY RADIUS MAX_ITER") };
-    let grid = SampleGrid { center: [cx, cy], radius, width: 640, height: 480, transform: Default::default() };
+    let grid = SampleGrid {
+        center: [cx, cy],
+        radius,
+        width: 640,
+        height: 480,
+        transform: Default::default(),
+        projection: Default::default(),
+    };
     let p = FieldParams::new(Family::Mandelbrot, max_iter as u32, 65536.0, Needs::default(), grid);
     let cancel = AtomicBool::new(false);
     let mut best = 0.0f64;

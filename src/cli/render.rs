@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::anyhow;
 use deepfield::field::ChannelSet;
-use deepfield::io::{self, ExrLayout, ExrWriter, PngEncoder, PngWriter};
+use deepfield::io;
 use deepfield::render::{self, Options, Stats};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -25,7 +25,6 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.path.as_deref()));
     check_distinct(&args, &png_path)?;
     let exr_channels = if args.exr.is_some() { scene.channels } else { ChannelSet::default() };
-    let toml = scene.to_toml();
 
     // Open every output before computing anything: an unwritable path fails at once.
     let stats_file = match &args.stats_json {
@@ -46,31 +45,10 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         }
         None => None,
     };
-    let png = match args.tile {
-        Some((k, n)) => {
-            let band = rows.clone().unwrap_or_default();
-            let tile = [(io::TILE_KEYWORD, io::tile_text(k, n, scene.width, scene.height))];
-            PngWriter::create_with(&png_path, scene.width, band.end - band.start, scene.png_bits, &toml, &tile)
-        }
-        None => PngWriter::create(&png_path, scene.width, scene.height, scene.png_bits, &toml),
-    }
-    .map_err(Failure::input)?;
-    let png_enc = PngEncoder::new(scene.png_bits);
-    let exr = match (&args.exr, args.tile) {
-        (Some(path), Some((k, n))) => {
-            let band = rows.clone().unwrap_or_default();
-            let tile = io::tile_text(k, n, scene.width, scene.height);
-            Some(open_exr_unit(&scene, &plan, simd, path, band.end - band.start, &tile)?)
-        }
-        (Some(path), None) => Some(open_exr(&scene, &plan, simd, path)?),
-        (None, _) => None,
-    };
-    // A unit's EXR counts its sample rows from the band's first.
-    let first_sample = rows.as_ref().map_or(0, |r| r.start as usize * scene.aa as usize);
-    let (mut exr_writer, exr_enc) = match exr {
-        Some((w, e)) => (Some(w), Some(e)),
-        None => (None, None),
-    };
+    let engine = engine_text(&plan, simd);
+    let targets =
+        io::output::Targets { png: Some(&png_path), exr: args.exr.as_deref(), tile: args.tile, engine: &engine };
+    let (writers, encoders) = io::output::open(&scene, targets).map_err(Failure::input)?;
 
     let references = match &args.reference {
         Some(path) => Some(std::sync::Arc::new(super::reference::read(path)?)),
@@ -78,21 +56,11 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     };
     let bar = bar(args.quiet, rows.as_ref().map_or(scene.height, |r| r.end - r.start) as u64);
     let progress = |p: render::Progress| show(&bar, p);
-    let aa = scene.aa as usize;
-    let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
-        let bytes = png_enc.encode(&strip.rgb);
-        let chunks = match &exr_enc {
-            Some(e) => {
-                Some(e.encode(strip.row as usize * aa - first_sample, &strip.planes, strip.samples.as_deref())?)
-            }
-            None => None,
-        };
-        Ok((bytes, chunks))
-    };
-    let mut png = Some(png);
+    let prepare =
+        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
+    let mut writers = Some(writers);
     let result = {
-        let png = &mut png;
-        let exr_writer = &mut exr_writer;
+        let writers = &mut writers;
         let options = Options {
             threads: args.threads.unwrap_or(0) as usize,
             exr_channels,
@@ -101,55 +69,23 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             references: references.clone(),
             ..Options::default()
         };
-        render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, (bytes, chunks)| {
-            png.as_mut().expect("open until finished").write_encoded(&bytes).map_err(|e| e.to_string())?;
-            if let (Some(w), Some(c)) = (exr_writer.as_mut(), chunks) {
-                w.write(c)?;
-            }
-            Ok(())
+        render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, encoded| {
+            writers.as_mut().ok_or("output already finished")?.write(encoded)
         })
     };
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     let stats = result?;
-    png.take().expect("still open").finish().map_err(|e| Failure::Runtime(e.into()))?;
-    if let Some(w) = exr_writer.take() {
+    if let Some(w) = writers.take() {
         w.finish().map_err(|e| Failure::Runtime(e.into()))?;
     }
     report(&args, &stats, stats_file)
 }
 
-/// Opens the EXR of `scene`'s raw data (its channels, every sample) at `path`, the engine
-/// and SIMD level in the header's comments.
-pub fn open_exr(
-    scene: &deepfield::scene::Scene,
-    plan: &deepfield::scene::EnginePlan,
-    simd: deepfield::simd_level::SimdLevel,
-    path: &Path,
-) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
-    let layout = ExrLayout::new(scene.channels, &scene.traps);
-    let (w, h) = (scene.width * scene.aa, scene.height * scene.aa);
-    ExrWriter::create(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd)).map_err(Failure::input)
-}
-
 /// The header comment of an EXR: the engine, why, and the SIMD level.
-fn engine_text(plan: &deepfield::scene::EnginePlan, simd: deepfield::simd_level::SimdLevel) -> String {
+pub fn engine_text(plan: &deepfield::scene::EnginePlan, simd: deepfield::simd_level::SimdLevel) -> String {
     format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe())
-}
-
-/// [`open_exr`] for one work unit: `rows` pixel rows of the image, its place in `tile`.
-fn open_exr_unit(
-    scene: &deepfield::scene::Scene,
-    plan: &deepfield::scene::EnginePlan,
-    simd: deepfield::simd_level::SimdLevel,
-    path: &Path,
-    rows: u32,
-    tile: &str,
-) -> Result<(ExrWriter, deepfield::io::ExrEncoder), Failure> {
-    let layout = ExrLayout::new(scene.channels, &scene.traps);
-    let (w, h) = (scene.width * scene.aa, rows * scene.aa);
-    ExrWriter::create_unit(path, w, h, layout, &scene.to_toml(), &engine_text(plan, simd), tile).map_err(Failure::input)
 }
 
 /// Refuses runs whose outputs would collide with each other or overwrite the input scene.

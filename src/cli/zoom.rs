@@ -205,17 +205,17 @@ fn write_frame(
 ) -> Result<(), Failure> {
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let perturbs = matches!(plan.kind, deepfield::scene::EngineKind::Perturb { .. });
-    let (mut writer, enc) = super::render::open_exr(scene, &plan, simd, path)?;
-    let aa = scene.aa as usize;
+    let engine = super::render::engine_text(&plan, simd);
+    let targets = deepfield::io::output::Targets { png: None, exr: Some(path), tile: None, engine: &engine };
+    let (mut writers, encoders) = deepfield::io::output::open(scene, targets).map_err(Failure::input)?;
     let prepare =
-        |strip: &render::RenderedStrip| enc.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref());
+        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
     let options = Options {
         exr_channels: scene.channels,
         simd,
         references: if perturbs { references } else { None },
         ..Options::default()
     };
-    let result = render::render(scene, options, cancel, &|_| {}, &prepare, |_, chunks| writer.write(chunks));
-    result?;
-    writer.finish().map_err(|e| Failure::Runtime(e.into()))
+    render::render(scene, options, cancel, &|_| {}, &prepare, |_, encoded| writers.write(encoded))?;
+    writers.finish().map_err(|e| Failure::Runtime(e.into()))
 }

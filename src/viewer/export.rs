@@ -10,7 +10,6 @@ use std::thread::JoinHandle;
 use eframe::egui;
 
 use crate::field::ChannelSet;
-use crate::io::{ExrLayout, ExrWriter, PngEncoder, PngWriter};
 use crate::render::{self, Options};
 use crate::scene::Scene;
 
@@ -137,36 +136,17 @@ impl Export {
 
 /// Renders and writes; the files appear only when complete (atomic writers).
 fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &AtomicU64) -> Result<f64, String> {
-    let toml = scene.to_toml();
-    let png = Mutex::new(Some(
-        PngWriter::create(&req.png, scene.width, scene.height, scene.png_bits, &toml).map_err(|e| e.to_string())?,
-    ));
-    let enc = PngEncoder::new(scene.png_bits);
     let channels = if req.exr.is_some() { scene.channels } else { ChannelSet::default() };
-    let (exr, exr_enc) = match &req.exr {
-        Some(path) => {
-            let layout = ExrLayout::new(channels, &scene.traps);
-            let (w, e) = ExrWriter::create(
-                path,
-                scene.width * scene.aa,
-                scene.height * scene.aa,
-                layout,
-                &toml,
-                "viewer export",
-            )
-            .map_err(|e| e.to_string())?;
-            (Some(Mutex::new(w)), Some(e))
-        }
-        None => (None, None),
+    let targets = crate::io::output::Targets {
+        png: Some(&req.png),
+        exr: req.exr.as_deref(),
+        tile: None,
+        engine: "viewer export",
     };
-    let aa = scene.aa as usize;
-    let prepare = |strip: &render::RenderedStrip| -> Result<_, String> {
-        let chunks = match &exr_enc {
-            Some(e) => Some(e.encode(strip.row as usize * aa, &strip.planes, strip.samples.as_deref())?),
-            None => None,
-        };
-        Ok((enc.encode(&strip.rgb), chunks))
-    };
+    let (writers, encoders) = crate::io::output::open(scene, targets).map_err(|e| e.to_string())?;
+    let writers = Mutex::new(Some(writers));
+    let prepare =
+        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
     let progress = |p: render::Progress| {
         if let render::Progress::Rows(r) = p {
             rows.store(r, Ordering::Relaxed);
@@ -178,22 +158,14 @@ fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &Atomic
         cancel,
         &progress,
         &prepare,
-        |_, (bytes, chunks)| {
-            if let Some(w) = png.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
-                w.write_encoded(&bytes).map_err(|e| e.to_string())?;
-            }
-            if let (Some(w), Some(c)) = (&exr, chunks) {
-                w.lock().unwrap_or_else(|e| e.into_inner()).write(c)?;
-            }
-            Ok(())
+        |_, encoded| match writers.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+            Some(w) => w.write(encoded),
+            None => Err("the export's files are already closed".into()),
         },
     )
     .map_err(|e| e.to_string())?;
-    if let Some(w) = png.lock().unwrap_or_else(|e| e.into_inner()).take() {
+    if let Some(w) = writers.lock().unwrap_or_else(|e| e.into_inner()).take() {
         w.finish().map_err(|e| e.to_string())?;
-    }
-    if let Some(w) = exr {
-        w.into_inner().unwrap_or_else(|e| e.into_inner()).finish().map_err(|e| e.to_string())?;
     }
     Ok(stats.wall_seconds)
 }
