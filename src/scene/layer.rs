@@ -8,8 +8,8 @@ use std::sync::Arc;
 
 use toml::Spanned;
 
+use super::context::{BitmapLoader, Ctx};
 use super::raw::{LayerRaw, MaskRaw};
-use super::validate::{BitmapLoader, Ctx};
 use crate::coloring::{Coloring, DistanceStyle, InteriorFill, Light, Mask, MaskQuantity};
 use crate::compose::Layer;
 use crate::palette::{self, Palette};
