@@ -71,8 +71,8 @@ impl<'a> Ctx<'a> {
 
     /// A "#rrggbb" colour as linear RGBA.
     pub(super) fn colour(&self, s: &Spanned<String>) -> Result<[f32; 4], SourceError> {
-        match color::parse_hex(s.get_ref()) {
-            Some(c) => Ok([color::srgb_to_linear(c[0]), color::srgb_to_linear(c[1]), color::srgb_to_linear(c[2]), 1.0]),
+        match linear_colour(s.get_ref()) {
+            Some(c) => Ok(c),
             None => self.err(s.span(), format!("colour `{}` is not of the form \"#rrggbb\"", s.get_ref())),
         }
     }
@@ -94,4 +94,10 @@ impl<'a> Ctx<'a> {
         }
         Ok(x)
     }
+}
+
+/// A "#rrggbb" colour as opaque linear RGBA, or None when the text is not of that form.
+pub(super) fn linear_colour(text: &str) -> Option<[f32; 4]> {
+    let c = color::parse_hex(text)?;
+    Some([color::srgb_to_linear(c[0]), color::srgb_to_linear(c[1]), color::srgb_to_linear(c[2]), 1.0])
 }

@@ -204,8 +204,8 @@ impl Default for RenderRaw {
 /// back), its `Default`, [`LayerRaw::KEYS`], [`LayerRaw::present`] and
 /// [`LayerRaw::fields_mut`]. The order of the list is the order keys are serialised in,
 /// which the scenes embedded in existing outputs depend on. Which kinds take which key is
-/// `LAYER_KINDS`'s table, and the value a kind uses for an absent key is
-/// `scene::default_value`'s.
+/// [`crate::scene::LAYER_KINDS`]'s table, and the value a kind uses for an absent key is
+/// [`crate::scene::default_value`]'s.
 macro_rules! layer_keys {
     ($($(#[doc = $doc:literal])+ $key:ident: $ty:ty => $view:ident,)+) => {
         /// One `[[layer]]`: the union of every kind's keys; validation rejects keys that do
