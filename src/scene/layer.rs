@@ -1,22 +1,26 @@
-//! Validation of `[[layer]]` tables into colouring layers (and the traps they need).
+//! Validation of `[[layer]]` tables into colouring layers (and the traps they need), and
+//! the one table of what each kind uses for a key the layer leaves out.
 //!
-//! Each kind accepts a fixed set of keys; a key that does not apply to the kind is an error
-//! that names it and lists what the kind takes, so a typo never silently does nothing.
+//! Each kind accepts a fixed set of keys ([`LAYER_KINDS`]); a key that does not apply to the
+//! kind is an error that names it and lists what the kind takes, so a typo never silently
+//! does nothing. The value used for an absent key comes from [`default_value`], which the
+//! viewer's layer panel reads too, so each default is written once.
 
 use std::path::Path;
 use std::sync::Arc;
 
 use toml::Spanned;
 
+use super::context::{BitmapLoader, Ctx, linear_colour};
 use super::raw::{LayerRaw, MaskRaw};
-use super::validate::{BitmapLoader, Ctx};
-use crate::coloring::{Coloring, DistanceStyle, InteriorFill, Light, Mask, MaskQuantity};
-use crate::compose::Layer;
+use crate::coloring::{Coloring, DistanceStyle, InteriorFill, Light, Mask, MaskQuantity, Transfer};
+use crate::compose::{BlendMode, Layer};
 use crate::palette::{self, Palette};
 use crate::source::SourceError;
+use crate::trap::ifs::IfsParams;
 use crate::trap::{BitmapTrap, Frame, Shape, Stripe, Trap};
 
-/// Every layer kind, with the keys it takes beyond `kind`, `blend`, `opacity` and `mask`.
+/// Every layer kind, with the keys it takes beyond `kind` and the [`COMMON_KEYS`].
 pub const LAYER_KINDS: [(&str, &[&str]); 12] = [
     ("smooth", &["palette", "density", "offset", "transfer", "interior"]),
     ("histogram", &["palette", "density", "offset", "interior"]),
@@ -32,9 +36,167 @@ pub const LAYER_KINDS: [(&str, &[&str]); 12] = [
     ("ifs", &["fold_offset", "slice", "iterations", "strength", "decay", "scale", "palette", "density", "offset"]),
 ];
 
+/// The keys every kind takes.
+pub const COMMON_KEYS: [&str; 3] = ["blend", "opacity", "mask"];
+
 /// The names of the layer kinds, quoted and comma-separated (for messages).
 pub fn kind_list() -> String {
     LAYER_KINDS.iter().map(|(k, _)| format!("\"{k}\"")).collect::<Vec<_>>().join(", ")
+}
+
+/// The keys `kind` takes beyond `kind` and the [`COMMON_KEYS`], or None for an unknown kind.
+pub fn kind_keys(kind: &str) -> Option<&'static [&'static str]> {
+    LAYER_KINDS.iter().find(|(k, _)| *k == kind).map(|(_, keys)| *keys)
+}
+
+/// The value a layer uses for a key it leaves out ([`default_value`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DefaultValue {
+    /// A number.
+    Number(f64),
+    /// An integer.
+    Integer(i64),
+    /// A word, a colour "#rrggbb" or a built-in palette's name.
+    Text(&'static str),
+    /// Two colours "#rrggbb".
+    Colors([&'static str; 2]),
+    /// A point in the plane.
+    Point([f64; 2]),
+    /// Three numbers.
+    Triple([f64; 3]),
+    /// A transfer function.
+    Transfer(Transfer),
+    /// A blend mode.
+    Blend(BlendMode),
+    /// No value stands in for the key: leaving it out means what the text says (a distance
+    /// layer without a palette is grey; a soft distance layer takes no density).
+    Unset(&'static str),
+}
+
+impl DefaultValue {
+    /// The number, if this is one.
+    pub fn number(self) -> Option<f64> {
+        if let DefaultValue::Number(x) = self { Some(x) } else { None }
+    }
+
+    /// The integer, if this is one.
+    pub fn integer(self) -> Option<i64> {
+        if let DefaultValue::Integer(x) = self { Some(x) } else { None }
+    }
+
+    /// The text, if this is one.
+    pub fn text(self) -> Option<&'static str> {
+        if let DefaultValue::Text(x) = self { Some(x) } else { None }
+    }
+
+    /// The two colours, if this is them.
+    pub fn colors(self) -> Option<[&'static str; 2]> {
+        if let DefaultValue::Colors(x) = self { Some(x) } else { None }
+    }
+
+    /// The point, if this is one.
+    pub fn point(self) -> Option<[f64; 2]> {
+        if let DefaultValue::Point(x) = self { Some(x) } else { None }
+    }
+
+    /// The three numbers, if this is them.
+    pub fn triple(self) -> Option<[f64; 3]> {
+        if let DefaultValue::Triple(x) = self { Some(x) } else { None }
+    }
+
+    /// The transfer function, if this is one.
+    pub fn transfer(self) -> Option<Transfer> {
+        if let DefaultValue::Transfer(x) = self { Some(x) } else { None }
+    }
+
+    /// The blend mode, if this is one.
+    pub fn blend(self) -> Option<BlendMode> {
+        if let DefaultValue::Blend(x) = self { Some(x) } else { None }
+    }
+}
+
+/// The distance layer's style when it names none.
+const DISTANCE_STYLE: &str = "soft";
+
+/// What validation uses for `key` when layer `l` leaves it out: by the layer's kind, and for
+/// a distance layer by its style (the soft style takes `k`, the others `density`). None when
+/// the kind does not take the key, or is unknown.
+pub fn default_value(l: &LayerRaw, key: &str) -> Option<DefaultValue> {
+    use DefaultValue::{Blend, Colors, Integer, Number, Point, Text, Triple, Unset};
+    let kind = l.kind.get_ref().as_str();
+    let keys = kind_keys(kind)?;
+    if !COMMON_KEYS.contains(&key) && !keys.contains(&key) {
+        return None;
+    }
+    let style = l.style.as_ref().map_or(DISTANCE_STYLE, |s| s.get_ref().as_str());
+    let ifs = IfsParams::default();
+    Some(match (kind, key) {
+        (_, "blend") => Blend(BlendMode::default()),
+        (_, "opacity") => Number(1.0),
+        (_, "mask") => Unset("none: the layer applies everywhere"),
+        ("distance", "style") => Text(DISTANCE_STYLE),
+        ("distance", "k") if style == "soft" => Number(0.25),
+        ("distance", "k") => Unset("only with style = \"soft\""),
+        ("distance", "density") => match style {
+            "linear" => Number(0.05),
+            "log" => Number(0.25),
+            _ => Unset("only with style = \"linear\" or \"log\""),
+        },
+        ("distance", "palette") => Unset("none: grey"),
+        ("interior", "palette") => Unset("none: a solid `color`"),
+        ("ifs", "palette") => Unset("none: white, as opaque as the field is dense"),
+        ("trap", "palette") => Text("fire"),
+        (_, "palette") => Text("classic"),
+        ("smooth", "density") => Number(0.05),
+        (_, "density") => Number(1.0),
+        (_, "offset") => Number(0.0),
+        (_, "transfer") => DefaultValue::Transfer(Transfer::default()),
+        (_, "interior" | "color") => Text("#000000"),
+        (_, "width") => Number(1.0),
+        ("slope", "angle") => Number(45.0),
+        (_, "angle") => Number(0.0),
+        (_, "height") => Number(1.5),
+        ("slope", "strength") => Number(1.0),
+        (_, "colors") => Colors(["#ffffff", "#000000"]),
+        (_, "frequency") => Number(5.0),
+        (_, "shape") => Text("point"),
+        (_, "center") => Point([0.0, 0.0]),
+        (_, "radius") => Number(1.0),
+        (_, "image") => Unset("required: a PNG, relative to the scene file"),
+        (_, "size") => Number(1.0),
+        (_, "threshold") => Number(0.1),
+        (_, "frames") => Unset("none: the whole image is one picture"),
+        (_, "frame") => Integer(0),
+        (_, "frame_width") => Unset("the image's width divided by `frames`"),
+        (_, "fold_offset") => Triple(ifs.offset.map(f64::from)),
+        (_, "slice") => Number(ifs.z.into()),
+        (_, "iterations") => Integer(ifs.iterations.into()),
+        (_, "strength") => Number(ifs.strength.into()),
+        (_, "decay") => Number(ifs.decay.into()),
+        (_, "scale") => Number(ifs.scale.into()),
+        _ => return None,
+    })
+}
+
+/// The default of `key` for layer `l`, read as `pick` expects. The table's tests make a
+/// missing or mistyped entry impossible; should one slip through, it is reported as an
+/// error rather than a panic.
+fn expect_default<T>(
+    cx: &Ctx<'_>,
+    l: &LayerRaw,
+    key: &str,
+    pick: impl FnOnce(DefaultValue) -> Option<T>,
+) -> Result<T, SourceError> {
+    match default_value(l, key).and_then(pick) {
+        Some(v) => Ok(v),
+        None => cx.err(
+            l.kind.span(),
+            format!(
+                "deepfield has no default for `{key}` in a `{}` layer (a defect: please report it)",
+                l.kind.get_ref()
+            ),
+        ),
+    }
 }
 
 /// The layer used when a scene names none: smooth iteration through `classic`.
@@ -53,55 +215,82 @@ pub(super) fn layer(
 ) -> Result<Layer, SourceError> {
     let l = spanned.get_ref();
     let kind = l.kind.get_ref().as_str();
-    let Some((_, allowed)) = LAYER_KINDS.iter().find(|(k, _)| *k == kind) else {
+    let Some(allowed) = kind_keys(kind) else {
         return cx.err(l.kind.span(), format!("unknown layer kind `{kind}`; expected one of {}", kind_list()));
     };
     for (key, span) in l.present() {
-        if !allowed.contains(&key) && !["blend", "opacity", "mask"].contains(&key) {
+        if !allowed.contains(&key) && !COMMON_KEYS.contains(&key) {
             return cx.err(
                 span,
                 format!(
-                    "`{key}` does not apply to a `{kind}` layer (it takes: {}, blend, opacity, mask)",
-                    allowed.join(", ")
+                    "`{key}` does not apply to a `{kind}` layer (it takes: {}, {})",
+                    allowed.join(", "),
+                    COMMON_KEYS.join(", ")
                 ),
             );
         }
     }
-    let num = |v: &Option<Spanned<f64>>, default: f64, lo: f64, hi: f64, what: &str| match v {
+    let num = |v: &Option<Spanned<f64>>, key: &str, lo: f64, hi: f64, what: &str| match v {
         Some(v) => cx.finite(v, lo, hi, what),
-        None => Ok(default),
+        None => expect_default(cx, l, key, DefaultValue::number),
     };
-    let pal = |name: Option<&Spanned<String>>, default: &str| -> Result<Palette, SourceError> {
-        let (text, span) = match name {
-            Some(n) => (n.get_ref().as_str(), n.span()),
-            None => (default, 0..0),
-        };
-        let p = palette::load(text, Some(base_dir)).or_else(|e| cx.err(span, e.to_string()))?;
+    let text = |v: &Option<Spanned<String>>, key: &str| -> Result<String, SourceError> {
+        match v {
+            Some(v) => Ok(v.get_ref().clone()),
+            None => expect_default(cx, l, key, DefaultValue::text).map(str::to_string),
+        }
+    };
+    let load = |name: &str, span: std::ops::Range<usize>| -> Result<Palette, SourceError> {
+        let p = palette::load(name, Some(base_dir)).or_else(|e| cx.err(span, e.to_string()))?;
         // Cycling moves every palette along by the same phase.
         let (offset, density) = (p.offset + cycle, p.density);
         Ok(p.adjusted(offset, density))
     };
-    let colour = |v: &Option<Spanned<String>>, default: [f32; 4]| match v {
-        Some(c) => cx.colour(c),
-        None => Ok(default),
+    // The layer's palette; None where the kind's default is to have none.
+    let pal = || -> Result<Option<Palette>, SourceError> {
+        match &l.palette {
+            Some(n) => load(n.get_ref(), n.span()).map(Some),
+            None => match default_value(l, "palette") {
+                Some(DefaultValue::Unset(_)) => Ok(None),
+                _ => load(expect_default(cx, l, "palette", DefaultValue::text)?, 0..0).map(Some),
+            },
+        }
     };
-    let center = l.center.as_ref().map_or([0.0, 0.0], |c| *c.get_ref());
+    let required_pal = || -> Result<Palette, SourceError> {
+        match pal()? {
+            Some(p) => Ok(p),
+            None => expect_default(cx, l, "palette", |_| None),
+        }
+    };
+    let colour = |v: &Option<Spanned<String>>, key: &str| match v {
+        Some(c) => cx.colour(c),
+        None => expect_default(cx, l, key, |d| d.text().and_then(linear_colour)),
+    };
+    // Checked before anything else, whichever kind reads them, so that of several problems
+    // the same one is reported first.
     if let Some(c) = &l.center
         && !c.get_ref().iter().all(|v| v.is_finite())
     {
         return cx.err(c.span(), "center must be two finite numbers");
     }
-    let angle = num(&l.angle, 0.0, -1e6, 1e6, "angle (degrees)")?;
-    let density = |default: f64| num(&l.density, default, -1e9, 1e9, "density");
-    let offset = || num(&l.offset, 0.0, -1e9, 1e9, "offset");
-    let black = [0.0, 0.0, 0.0, 1.0];
+    if let Some(a) = &l.angle {
+        cx.finite(a, -1e6, 1e6, "angle (degrees)")?;
+    }
+    let center = || match &l.center {
+        Some(c) => Ok(*c.get_ref()),
+        None => expect_default(cx, l, "center", DefaultValue::point),
+    };
+    let angle = || num(&l.angle, "angle", -1e6, 1e6, "angle (degrees)");
+    let density = || num(&l.density, "density", -1e9, 1e9, "density");
+    let offset = || num(&l.offset, "offset", -1e9, 1e9, "offset");
     let shape = || -> Result<Shape, SourceError> {
-        let dir = Shape::direction(angle);
-        match l.shape.as_ref().map_or("point", |s| s.get_ref().as_str()) {
-            "point" => Ok(Shape::Point { at: center }),
-            "line" => Ok(Shape::Line { at: center, dir }),
-            "cross" => Ok(Shape::Cross { at: center, dir }),
-            "circle" => Ok(Shape::Circle { at: center, radius: num(&l.radius, 1.0, 0.0, 1e6, "radius")? }),
+        let dir = Shape::direction(angle()?);
+        let at = center()?;
+        match text(&l.shape, "shape")?.as_str() {
+            "point" => Ok(Shape::Point { at }),
+            "line" => Ok(Shape::Line { at, dir }),
+            "cross" => Ok(Shape::Cross { at, dir }),
+            "circle" => Ok(Shape::Circle { at, radius: num(&l.radius, "radius", 0.0, 1e6, "radius")? }),
             other => cx.err(
                 l.shape.as_ref().map_or(0..0, |s| s.span()),
                 format!("unknown trap shape `{other}`; expected \"point\", \"line\", \"cross\" or \"circle\""),
@@ -115,23 +304,26 @@ pub(super) fn layer(
 
     let coloring = match kind {
         "smooth" => Coloring::Smooth {
-            palette: pal(l.palette.as_ref(), "classic")?,
-            density: density(0.05)?,
+            palette: required_pal()?,
+            density: density()?,
             offset: offset()?,
-            transfer: l.transfer.as_ref().map_or(Default::default(), |t| *t.get_ref()),
-            interior: colour(&l.interior, black)?,
+            transfer: match &l.transfer {
+                Some(t) => *t.get_ref(),
+                None => expect_default(cx, l, "transfer", DefaultValue::transfer)?,
+            },
+            interior: colour(&l.interior, "interior")?,
         },
         "histogram" => Coloring::Histogram {
-            palette: pal(l.palette.as_ref(), "classic")?,
-            cycles: density(1.0)?,
+            palette: required_pal()?,
+            cycles: density()?,
             offset: offset()?,
-            interior: colour(&l.interior, black)?,
+            interior: colour(&l.interior, "interior")?,
         },
         "distance" => {
-            let style = match l.style.as_ref().map_or("soft", |s| s.get_ref().as_str()) {
-                "soft" => DistanceStyle::Soft { k: num(&l.k, 0.25, 0.0, 1e12, "k")? },
-                "linear" => DistanceStyle::Linear { density: density(0.05)? },
-                "log" => DistanceStyle::Log { density: density(0.25)? },
+            let style = match text(&l.style, "style")?.as_str() {
+                "soft" => DistanceStyle::Soft { k: num(&l.k, "k", 0.0, 1e12, "k")? },
+                "linear" => DistanceStyle::Linear { density: density()? },
+                "log" => DistanceStyle::Log { density: density()? },
                 other => {
                     return cx.err(
                         l.style.as_ref().map_or(0..0, |s| s.span()),
@@ -145,26 +337,26 @@ pub(super) fn layer(
             if let (DistanceStyle::Linear { .. } | DistanceStyle::Log { .. }, Some(k)) = (style, &l.k) {
                 return cx.err(k.span(), "`k` applies to the soft style; the linear and log styles take `density`");
             }
-            Coloring::Distance {
-                style,
-                palette: l.palette.as_ref().map(|p| pal(Some(p), "")).transpose()?,
-                offset: offset()?,
-            }
+            Coloring::Distance { style, palette: pal()?, offset: offset()? }
         }
         "boundary" => Coloring::Boundary {
-            width: num(&l.width, 1.0, 0.0, 1e6, "width (pixels)")?,
-            color: colour(&l.color, black)?,
+            width: num(&l.width, "width", 0.0, 1e6, "width (pixels)")?,
+            color: colour(&l.color, "color")?,
         },
         "slope" => Coloring::Slope {
             light: Light::new(
-                num(&l.angle, 45.0, -1e6, 1e6, "angle (degrees)")?,
-                num(&l.height, 1.5, 0.0, 1e6, "height")?,
-                num(&l.strength, 1.0, 0.0, 1.0, "strength")?,
+                angle()?,
+                num(&l.height, "height", 0.0, 1e6, "height")?,
+                num(&l.strength, "strength", 0.0, 1.0, "strength")?,
             ),
         },
         "binary" => Coloring::Binary {
             colors: match &l.colors {
-                None => [[1.0; 4], black],
+                None => {
+                    let [a, b] = expect_default(cx, l, "colors", DefaultValue::colors)?;
+                    let one = |s: &str| expect_default(cx, l, "colors", |_| linear_colour(s));
+                    [one(a)?, one(b)?]
+                }
                 Some(c) => {
                     let [a, b] = c.get_ref();
                     let one = |s: &String| cx.colour(&Spanned::new(c.span(), s.clone()));
@@ -172,15 +364,13 @@ pub(super) fn layer(
                 }
             },
         },
-        "angle" => {
-            Coloring::Angle { palette: pal(l.palette.as_ref(), "classic")?, density: density(1.0)?, offset: offset()? }
-        }
+        "angle" => Coloring::Angle { palette: required_pal()?, density: density()?, offset: offset()? },
         "stripe" => {
-            let frequency = num(&l.frequency, 5.0, -1e6, 1e6, "frequency")?;
+            let frequency = num(&l.frequency, "frequency", -1e6, 1e6, "frequency")?;
             Coloring::Stripe {
                 trap: push(Trap::Stripe(Stripe { frequency })),
-                palette: pal(l.palette.as_ref(), "classic")?,
-                density: density(1.0)?,
+                palette: required_pal()?,
+                density: density()?,
                 offset: offset()?,
             }
         }
@@ -188,45 +378,37 @@ pub(super) fn layer(
             let s = shape()?;
             Coloring::TrapDistance {
                 trap: push(Trap::Geometric(s)),
-                palette: pal(l.palette.as_ref(), "fire")?,
-                density: density(1.0)?,
+                palette: required_pal()?,
+                density: density()?,
                 offset: offset()?,
             }
         }
         "ifs" => {
-            let d = crate::trap::ifs::IfsParams::default();
             let fold = match &l.fold_offset {
-                Some(f) if f.get_ref().iter().all(|v| v.is_finite() && v.abs() <= 100.0) => {
-                    f.get_ref().map(|v| v as f32)
-                }
+                Some(f) if f.get_ref().iter().all(|v| v.is_finite() && v.abs() <= 100.0) => *f.get_ref(),
                 Some(f) => return cx.err(f.span(), "fold_offset must be three numbers in [-100, 100]"),
-                None => d.offset,
+                None => expect_default(cx, l, "fold_offset", DefaultValue::triple)?,
             };
-            let params = crate::trap::ifs::IfsParams {
-                offset: fold,
-                z: num(&l.slice, d.z as f64, -100.0, 100.0, "slice")? as f32,
+            let params = IfsParams {
+                offset: fold.map(|v| v as f32),
+                z: num(&l.slice, "slice", -100.0, 100.0, "slice")? as f32,
                 iterations: match &l.iterations {
-                    Some(n) => cx.range_i(n, 1, 1000, "iterations")? as u32,
-                    None => d.iterations,
-                },
-                strength: num(&l.strength, d.strength as f64, 0.0, 1e6, "strength")? as f32,
-                decay: num(&l.decay, d.decay as f64, 1e-3, 1e6, "decay")? as f32,
-                scale: num(&l.scale, d.scale as f64, 1e-12, 1e12, "scale")? as f32,
+                    Some(n) => cx.range_i(n, 1, 1000, "iterations")?,
+                    None => expect_default(cx, l, "iterations", DefaultValue::integer)?,
+                } as u32,
+                strength: num(&l.strength, "strength", 0.0, 1e6, "strength")? as f32,
+                decay: num(&l.decay, "decay", 1e-3, 1e6, "decay")? as f32,
+                scale: num(&l.scale, "scale", 1e-12, 1e12, "scale")? as f32,
             };
-            Coloring::Ifs {
-                trap: push(Trap::Ifs(params)),
-                palette: l.palette.as_ref().map(|p| pal(Some(p), "")).transpose()?,
-                density: density(1.0)?,
-                offset: offset()?,
-            }
+            Coloring::Ifs { trap: push(Trap::Ifs(params)), palette: pal()?, density: density()?, offset: offset()? }
         }
         "interior" => {
             let fill = if l.palette.is_some() {
                 let s = shape()?;
                 InteriorFill::Trap {
                     trap: push(Trap::Geometric(s)),
-                    palette: pal(l.palette.as_ref(), "")?,
-                    density: density(1.0)?,
+                    palette: required_pal()?,
+                    density: density()?,
                     offset: offset()?,
                 }
             } else {
@@ -240,7 +422,7 @@ pub(super) fn layer(
                         format!("`{key}` needs `palette` (an interior layer without one is a solid `color`)"),
                     );
                 }
-                InteriorFill::Solid(colour(&l.color, black)?)
+                InteriorFill::Solid(colour(&l.color, "color")?)
             };
             Coloring::Interior { fill }
         }
@@ -254,23 +436,26 @@ pub(super) fn layer(
             let path = base_dir.join(image.get_ref());
             let bitmap = bitmaps(&path)
                 .or_else(|e| cx.err(image.span(), format!("cannot load bitmap {}: {e}", path.display())))?;
-            let size = num(&l.size, 1.0, 1e-300, 1e6, "size")?;
+            let size = num(&l.size, "size", 1e-300, 1e6, "size")?;
             let frame = frame(cx, l, bitmap.width)?;
-            let a = angle.to_radians();
+            let a = angle()?.to_radians();
             Coloring::BitmapTrap {
                 trap: push(Trap::Bitmap(BitmapTrap {
                     bitmap: Arc::new(bitmap),
-                    center,
+                    center: center()?,
                     size,
                     rotation: [a.cos(), a.sin()],
-                    threshold: num(&l.threshold, 0.1, 0.0, 1.0, "threshold")? as f32,
+                    threshold: num(&l.threshold, "threshold", 0.0, 1.0, "threshold")? as f32,
                     frame,
                 })),
             }
         }
     };
-    let opacity = num(&l.opacity, 1.0, 0.0, 1.0, "opacity")? as f32;
-    let blend = l.blend.as_ref().map_or(Default::default(), |b| *b.get_ref());
+    let opacity = num(&l.opacity, "opacity", 0.0, 1.0, "opacity")? as f32;
+    let blend = match &l.blend {
+        Some(b) => *b.get_ref(),
+        None => expect_default(cx, l, "blend", DefaultValue::blend)?,
+    };
     let mask = l.mask.as_ref().map(|m| mask(cx, m)).transpose()?;
     Ok(Layer { coloring, blend, opacity, mask })
 }
@@ -295,9 +480,9 @@ fn frame(cx: &Ctx<'_>, l: &LayerRaw, image_width: usize) -> Result<Option<Frame>
         );
     }
     let index = match &l.frame {
-        Some(f) => cx.range_i(f, 0, i64::from(u32::MAX), "frame")? as u32,
-        None => 0,
-    };
+        Some(f) => cx.range_i(f, 0, i64::from(u32::MAX), "frame")?,
+        None => expect_default(cx, l, "frame", DefaultValue::integer)?,
+    } as u32;
     Ok(Some(Frame { index, count, width }))
 }
 
@@ -323,4 +508,159 @@ fn mask(cx: &Ctx<'_>, m: &Spanned<MaskRaw>) -> Result<Mask, SourceError> {
         None => 0.0,
     };
     Ok(Mask { quantity: *quantity, above, below, feather, invert: raw.invert.as_ref().is_some_and(|v| *v.get_ref()) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::raw::KeyValueMut;
+    use crate::trap::Bitmap;
+
+    #[test]
+    fn every_kind_key_is_declared_and_every_declared_key_is_taken() {
+        for (kind, keys) in LAYER_KINDS {
+            for key in keys {
+                assert!(LayerRaw::KEYS.contains(key), "`{key}` of `{kind}` is not a declared layer key");
+                assert!(!COMMON_KEYS.contains(key), "`{key}` is listed for `{kind}` but every kind takes it");
+            }
+        }
+        for key in LayerRaw::KEYS {
+            assert!(
+                COMMON_KEYS.contains(key) || LAYER_KINDS.iter().any(|(_, keys)| keys.contains(key)),
+                "declared key `{key}` is taken by no kind"
+            );
+        }
+        for key in COMMON_KEYS {
+            assert!(LayerRaw::KEYS.contains(&key), "`{key}` is not a declared layer key");
+        }
+    }
+
+    fn with(mut l: LayerRaw, edit: impl FnOnce(&mut LayerRaw)) -> LayerRaw {
+        edit(&mut l);
+        l
+    }
+
+    fn at<T>(v: T) -> Option<Spanned<T>> {
+        Some(Spanned::new(0..0, v))
+    }
+
+    fn text(s: &str) -> Option<Spanned<String>> {
+        at(s.to_string())
+    }
+
+    /// A layer of every kind, and of every distance style (whose defaults differ).
+    fn every_kind() -> Vec<LayerRaw> {
+        let mut all: Vec<LayerRaw> = LAYER_KINDS.iter().map(|(kind, _)| LayerRaw::of_kind(kind)).collect();
+        for style in ["soft", "linear", "log"] {
+            all.push(with(LayerRaw::of_kind("distance"), |l| l.style = text(style)));
+        }
+        all
+    }
+
+    /// Every key a kind takes (what an editor shows for it) has a default of the key's type
+    /// or says what leaving it out means; keys the kind does not take have none.
+    #[test]
+    fn every_key_a_kind_takes_has_a_default_of_its_type() {
+        for l in every_kind() {
+            let kind = l.kind.get_ref().clone();
+            let takes = kind_keys(&kind).expect("a known kind");
+            let mut probe = l.clone();
+            for (key, field) in probe.fields_mut() {
+                let default = default_value(&l, key);
+                if !COMMON_KEYS.contains(&key) && !takes.contains(&key) {
+                    assert_eq!(default, None, "`{kind}` does not take `{key}`");
+                    continue;
+                }
+                let Some(default) = default else { panic!("no default for `{key}` of `{kind}`") };
+                use DefaultValue as D;
+                use KeyValueMut as K;
+                let same_type = matches!(
+                    (field, default),
+                    (_, D::Unset(_))
+                        | (K::Number(_), D::Number(_))
+                        | (K::Integer(_), D::Integer(_))
+                        | (K::Text(_), D::Text(_))
+                        | (K::Colors(_), D::Colors(_))
+                        | (K::Point(_), D::Point(_))
+                        | (K::Triple(_), D::Triple(_))
+                        | (K::Transfer(_), D::Transfer(_))
+                        | (K::Blend(_), D::Blend(_))
+                );
+                assert!(same_type, "the default of `{key}` for `{kind}` is {default:?}, not of the key's type");
+                match (key, default) {
+                    ("interior" | "color", D::Text(c)) => assert!(linear_colour(c).is_some(), "{c}"),
+                    (_, D::Colors(cs)) => assert!(cs.iter().all(|c| linear_colour(c).is_some()), "{cs:?}"),
+                    ("palette", D::Text(p)) => assert!(palette::builtin_names().contains(&p), "{p}"),
+                    _ => {}
+                }
+            }
+        }
+        // The colours written as text are exactly the ones validation once wrote as numbers.
+        assert_eq!(linear_colour("#000000"), Some([0.0, 0.0, 0.0, 1.0]));
+        assert_eq!(linear_colour("#ffffff"), Some([1.0; 4]));
+    }
+
+    /// `default_value`'s word for a key whose absence depends on the layer's other keys.
+    #[test]
+    fn distance_defaults_follow_the_style() {
+        let d = |style: Option<&str>, key| {
+            let mut l = LayerRaw::of_kind("distance");
+            l.style = style.and_then(text);
+            default_value(&l, key)
+        };
+        assert_eq!(d(None, "k"), Some(DefaultValue::Number(0.25)));
+        assert!(matches!(d(None, "density"), Some(DefaultValue::Unset(_))));
+        assert_eq!(d(Some("linear"), "density"), Some(DefaultValue::Number(0.05)));
+        assert_eq!(d(Some("log"), "density"), Some(DefaultValue::Number(0.25)));
+        assert!(matches!(d(Some("log"), "k"), Some(DefaultValue::Unset(_))));
+        assert_eq!(default_value(&LayerRaw::of_kind("nope"), "blend"), None);
+    }
+
+    /// Validation reads its defaults from the table: a layer that leaves every key out gives
+    /// the same layer and traps as one that writes out each default the table has.
+    #[test]
+    fn validation_uses_the_table() {
+        let bitmap = |_: &Path| Ok(Bitmap { width: 4, height: 2, texels: vec![[1.0; 4]; 8] });
+        let cx = Ctx::new("test", "");
+        let mut layers = every_kind();
+        // With the keys that switch the rest on: an interior layer's trap needs a palette,
+        // a bitmap needs its image, and `frame` needs `frames`.
+        for l in &mut layers {
+            match l.kind.get_ref().as_str() {
+                "interior" => l.palette = text("ocean"),
+                "bitmap" => {
+                    l.image = text("sheet.png");
+                    l.frames = at(2);
+                }
+                _ => {}
+            }
+        }
+        for l in layers {
+            let mut explicit = l.clone();
+            let mut written = 0;
+            for (key, field) in explicit.fields_mut() {
+                let Some(default) = default_value(&l, key) else { continue };
+                match (field, default) {
+                    (KeyValueMut::Number(v), DefaultValue::Number(x)) if v.is_none() => *v = at(x),
+                    (KeyValueMut::Integer(v), DefaultValue::Integer(x)) if v.is_none() => *v = at(x),
+                    (KeyValueMut::Text(v), DefaultValue::Text(x)) if v.is_none() => *v = at(x.to_string()),
+                    (KeyValueMut::Colors(v), DefaultValue::Colors(x)) if v.is_none() => *v = at(x.map(str::to_string)),
+                    (KeyValueMut::Point(v), DefaultValue::Point(x)) if v.is_none() => *v = at(x),
+                    (KeyValueMut::Triple(v), DefaultValue::Triple(x)) if v.is_none() => *v = at(x),
+                    (KeyValueMut::Transfer(v), DefaultValue::Transfer(x)) if v.is_none() => *v = at(x),
+                    (KeyValueMut::Blend(v), DefaultValue::Blend(x)) if v.is_none() => *v = at(x),
+                    _ => continue,
+                }
+                written += 1;
+            }
+            assert!(written >= 2, "{:?} wrote {written} defaults", l.kind.get_ref());
+            let run = |l: LayerRaw| {
+                let mut traps = Vec::new();
+                let layer = layer(&cx, &Spanned::new(0..0, l), Path::new("."), &bitmap, 0.0, &mut traps)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                (layer, format!("{traps:?}"))
+            };
+            assert_eq!(run(l.clone()), run(explicit), "{:?}", l.kind.get_ref());
+        }
+    }
 }

@@ -1,9 +1,11 @@
 //! Scenes: what to render, from a TOML file, a PNG's metadata, or command-line flags.
 //!
 //! [`raw`] mirrors the file; `validate` turns it into a typed [`Scene`] and reports every
-//! problem with the file, line and column of the offending value and what was expected.
+//! problem with the file, line and column of the offending value and what was expected
+//! (`layer` validates each `[[layer]]`; both locate their errors through `context`).
 //! The scene also decides which engine can address the view ([`Scene::engine`]).
 
+mod context;
 pub mod kfr;
 mod layer;
 pub mod presets;
@@ -12,9 +14,9 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-pub use layer::{LAYER_KINDS, kind_list};
+pub use context::BitmapLoader;
+pub use layer::{COMMON_KEYS, DefaultValue, LAYER_KINDS, default_value, kind_keys, kind_list};
 pub use raw::SceneFile;
-pub use validate::BitmapLoader;
 
 use crate::compose::Stack;
 use crate::field::ChannelSet;

@@ -203,115 +203,148 @@ impl Default for RenderRaw {
     }
 }
 
-/// One `[[layer]]`: the union of every kind's keys; validation rejects keys that do not
-/// apply to the layer's kind.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct LayerRaw {
-    /// The colouring: see [`crate::scene::LAYER_KINDS`].
-    pub kind: Spanned<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub blend: Option<Spanned<BlendMode>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub opacity: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub palette: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub density: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub offset: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub transfer: Option<Spanned<Transfer>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub interior: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub style: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub k: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub width: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub color: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub colors: Option<Spanned<[String; 2]>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub height: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub strength: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frequency: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shape: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub center: Option<Spanned<[f64; 2]>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub angle: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub radius: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub image: Option<Spanned<String>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub size: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub threshold: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frames: Option<Spanned<i64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frame: Option<Spanned<i64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frame_width: Option<Spanned<i64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub fold_offset: Option<Spanned<[f64; 3]>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub slice: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub iterations: Option<Spanned<i64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub decay: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scale: Option<Spanned<f64>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mask: Option<Spanned<MaskRaw>>,
+/// Declares the `[[layer]]` keys, each once, with its value type and the [`KeyValueMut`]
+/// variant that views it, and generates from that one list everything that walks the keys:
+/// the fields of [`LayerRaw`] (TOML names are the field names; absent keys are not written
+/// back), its `Default`, [`LayerRaw::KEYS`], [`LayerRaw::present`] and
+/// [`LayerRaw::fields_mut`]. The order of the list is the order keys are serialised in,
+/// which the scenes embedded in existing outputs depend on. Which kinds take which key is
+/// [`crate::scene::LAYER_KINDS`]'s table, and the value a kind uses for an absent key is
+/// [`crate::scene::default_value`]'s.
+macro_rules! layer_keys {
+    ($($(#[doc = $doc:literal])+ $key:ident: $ty:ty => $view:ident,)+) => {
+        /// One `[[layer]]`: the union of every kind's keys; validation rejects keys that do
+        /// not apply to the layer's kind.
+        #[derive(Debug, Clone, Deserialize, Serialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct LayerRaw {
+            /// The colouring: see [`crate::scene::LAYER_KINDS`].
+            pub kind: Spanned<String>,
+            $(
+                $(#[doc = $doc])+
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                pub $key: Option<Spanned<$ty>>,
+            )+
+        }
+
+        impl Default for LayerRaw {
+            fn default() -> Self {
+                Self { kind: Spanned::new(0..0, String::new()), $($key: None,)+ }
+            }
+        }
+
+        impl LayerRaw {
+            /// Every key a layer may have besides `kind`, in the order they are written.
+            pub const KEYS: &'static [&'static str] = &[$(stringify!($key)),+];
+
+            /// The keys present (other than `kind`), with their spans.
+            pub fn present(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+                let mut keys = Vec::new();
+                $(
+                    if let Some(v) = &self.$key {
+                        keys.push((stringify!($key), v.span()));
+                    }
+                )+
+                keys
+            }
+
+            /// Every key besides `kind`, in [`LayerRaw::KEYS`] order, with a typed mutable view
+            /// of its value (for editors: setting `Some` writes the key into the layer).
+            pub fn fields_mut(&mut self) -> Vec<(&'static str, KeyValueMut<'_>)> {
+                vec![$((stringify!($key), KeyValueMut::$view(&mut self.$key)),)+]
+            }
+        }
+    };
 }
 
-impl Default for LayerRaw {
-    fn default() -> Self {
-        Self {
-            kind: Spanned::new(0..0, String::new()),
-            blend: None,
-            opacity: None,
-            palette: None,
-            density: None,
-            offset: None,
-            transfer: None,
-            interior: None,
-            style: None,
-            k: None,
-            width: None,
-            color: None,
-            colors: None,
-            height: None,
-            strength: None,
-            frequency: None,
-            shape: None,
-            center: None,
-            angle: None,
-            radius: None,
-            image: None,
-            size: None,
-            threshold: None,
-            frames: None,
-            frame: None,
-            frame_width: None,
-            fold_offset: None,
-            slice: None,
-            iterations: None,
-            decay: None,
-            scale: None,
-            mask: None,
-        }
-    }
+layer_keys! {
+    /// How the layer combines with those below it.
+    blend: BlendMode => Blend,
+    /// How much of the layer shows, 0 to 1.
+    opacity: f64 => Number,
+    /// A built-in palette's name or a palette file (relative to the scene file).
+    palette: String => Text,
+    /// Palette cycles per unit of the coloured quantity (the linear and log distance styles'
+    /// scale).
+    density: f64 => Number,
+    /// Palette offset in cycles.
+    offset: f64 => Number,
+    /// Map from smooth iteration to palette position.
+    transfer: Transfer => Transfer,
+    /// Colour of the samples inside the set, "#rrggbb".
+    interior: String => Text,
+    /// Distance colouring: "soft", "linear" or "log".
+    style: String => Text,
+    /// Sharpness of the soft distance style.
+    k: f64 => Number,
+    /// Boundary line width in pixels.
+    width: f64 => Number,
+    /// A solid colour, "#rrggbb" (boundary lines, a solid interior).
+    color: String => Text,
+    /// The binary decomposition's two colours, "#rrggbb".
+    colors: [String; 2] => Colors,
+    /// Height of the slope light above the plane.
+    height: f64 => Number,
+    /// Strength of the slope light, or of the IFS field.
+    strength: f64 => Number,
+    /// Stripes per turn of the stripe average.
+    frequency: f64 => Number,
+    /// Trap shape: "point", "line", "cross" or "circle".
+    shape: String => Text,
+    /// Centre of a trap or bitmap in the plane.
+    center: [f64; 2] => Point,
+    /// Degrees: the slope light's direction, or a trap's or bitmap's rotation.
+    angle: f64 => Number,
+    /// Radius of a circle trap.
+    radius: f64 => Number,
+    /// The bitmap trap's PNG (relative to the scene file).
+    image: String => Text,
+    /// Size of the bitmap in the plane.
+    size: f64 => Number,
+    /// Alpha above which a bitmap sample stops the orbit.
+    threshold: f64 => Number,
+    /// Frames in a sprite-sheet bitmap.
+    frames: i64 => Integer,
+    /// The sprite-sheet frame shown, from 0.
+    frame: i64 => Integer,
+    /// Width of one sprite-sheet frame in texels.
+    frame_width: i64 => Integer,
+    /// The IFS field's fold offset (x, y, z).
+    fold_offset: [f64; 3] => Triple,
+    /// The IFS field's z slice.
+    slice: f64 => Number,
+    /// The IFS field's fold iterations.
+    iterations: i64 => Integer,
+    /// The IFS field's decay.
+    decay: f64 => Number,
+    /// The IFS field's scale.
+    scale: f64 => Number,
+    /// Where the layer applies.
+    mask: MaskRaw => Mask,
+}
+
+/// A typed, mutable view of one layer key's value ([`LayerRaw::fields_mut`]): editors match
+/// on the type instead of listing keys by hand.
+#[derive(Debug)]
+pub enum KeyValueMut<'a> {
+    /// A number.
+    Number(&'a mut Option<Spanned<f64>>),
+    /// An integer.
+    Integer(&'a mut Option<Spanned<i64>>),
+    /// A word, a colour "#rrggbb", a palette or a path.
+    Text(&'a mut Option<Spanned<String>>),
+    /// Two colours.
+    Colors(&'a mut Option<Spanned<[String; 2]>>),
+    /// A point in the plane.
+    Point(&'a mut Option<Spanned<[f64; 2]>>),
+    /// Three numbers.
+    Triple(&'a mut Option<Spanned<[f64; 3]>>),
+    /// A transfer function.
+    Transfer(&'a mut Option<Spanned<Transfer>>),
+    /// A blend mode.
+    Blend(&'a mut Option<Spanned<BlendMode>>),
+    /// A mask table.
+    Mask(&'a mut Option<Spanned<MaskRaw>>),
 }
 
 /// `[layer.mask]`: where a layer applies.
@@ -351,45 +384,39 @@ impl LayerRaw {
     pub fn of_kind(kind: &str) -> Self {
         Self { kind: Spanned::new(0..0, kind.to_string()), ..Self::default() }
     }
+}
 
-    /// The keys present (other than `kind`), with their spans.
-    pub fn present(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
-        fn at<T>(v: &Option<Spanned<T>>) -> Option<std::ops::Range<usize>> {
-            v.as_ref().map(|s| s.span())
-        }
-        let all = [
-            ("blend", at(&self.blend)),
-            ("opacity", at(&self.opacity)),
-            ("palette", at(&self.palette)),
-            ("density", at(&self.density)),
-            ("offset", at(&self.offset)),
-            ("transfer", at(&self.transfer)),
-            ("interior", at(&self.interior)),
-            ("style", at(&self.style)),
-            ("k", at(&self.k)),
-            ("width", at(&self.width)),
-            ("color", at(&self.color)),
-            ("colors", at(&self.colors)),
-            ("height", at(&self.height)),
-            ("strength", at(&self.strength)),
-            ("frequency", at(&self.frequency)),
-            ("shape", at(&self.shape)),
-            ("center", at(&self.center)),
-            ("angle", at(&self.angle)),
-            ("radius", at(&self.radius)),
-            ("image", at(&self.image)),
-            ("size", at(&self.size)),
-            ("threshold", at(&self.threshold)),
-            ("frames", at(&self.frames)),
-            ("frame", at(&self.frame)),
-            ("frame_width", at(&self.frame_width)),
-            ("fold_offset", at(&self.fold_offset)),
-            ("slice", at(&self.slice)),
-            ("iterations", at(&self.iterations)),
-            ("decay", at(&self.decay)),
-            ("scale", at(&self.scale)),
-            ("mask", at(&self.mask)),
-        ];
-        all.into_iter().filter_map(|(k, s)| s.map(|s| (k, s))).collect()
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Keys are written back in declaration order whatever order they were read in, absent
+    /// keys are left out, and every declared key reads and writes under its own name.
+    #[test]
+    fn layer_keys_round_trip_in_declaration_order() {
+        let text = "kind = \"ifs\"\nmask = { quantity = \"distance\", below = 8.0 }\nscale = 2.0\ndecay = 3.0\n\
+                    iterations = 9\nslice = 0.5\nfold_offset = [1.0, 2.0, 3.0]\nframe_width = 4\nframe = 1\n\
+                    frames = 2\nthreshold = 0.2\nsize = 1.5\nimage = \"a.png\"\nradius = 2.0\nangle = 30.0\n\
+                    center = [0.5, -0.5]\nshape = \"circle\"\nfrequency = 4.0\nstrength = 0.5\nheight = 1.0\n\
+                    colors = [\"#ffffff\", \"#000000\"]\ncolor = \"#ff0000\"\nwidth = 2.0\nk = 0.5\n\
+                    style = \"log\"\ninterior = \"#00ff00\"\ntransfer = \"sqrt\"\noffset = 0.25\ndensity = 5000.0\n\
+                    palette = \"fire\"\nopacity = 0.5\nblend = \"multiply\"\n";
+        let mut l: LayerRaw = toml::from_str(text).unwrap();
+        let present: Vec<&str> = l.present().into_iter().map(|(k, _)| k).collect();
+        assert_eq!(present, LayerRaw::KEYS);
+        let names: Vec<&str> = l.fields_mut().into_iter().map(|(k, _)| k).collect();
+        assert_eq!(names, LayerRaw::KEYS);
+        let expected = "kind = \"ifs\"\nblend = \"multiply\"\nopacity = 0.5\npalette = \"fire\"\ndensity = 5000.0\n\
+                        offset = 0.25\ntransfer = \"sqrt\"\ninterior = \"#00ff00\"\nstyle = \"log\"\nk = 0.5\n\
+                        width = 2.0\ncolor = \"#ff0000\"\ncolors = [\"#ffffff\", \"#000000\"]\nheight = 1.0\n\
+                        strength = 0.5\nfrequency = 4.0\nshape = \"circle\"\ncenter = [0.5, -0.5]\nangle = 30.0\n\
+                        radius = 2.0\nimage = \"a.png\"\nsize = 1.5\nthreshold = 0.2\nframes = 2\nframe = 1\n\
+                        frame_width = 4\nfold_offset = [1.0, 2.0, 3.0]\nslice = 0.5\niterations = 9\ndecay = 3.0\n\
+                        scale = 2.0\n\n[mask]\nquantity = \"distance\"\nbelow = 8.0\n";
+        assert_eq!(toml::to_string(&l).unwrap(), expected);
+        let only: LayerRaw = toml::from_str("kind = \"smooth\"\n").unwrap();
+        assert!(only.present().is_empty());
+        assert_eq!(toml::to_string(&only).unwrap(), "kind = \"smooth\"\n");
+        assert!(toml::from_str::<LayerRaw>("kind = \"smooth\"\ndensty = 1.0\n").is_err(), "unknown keys are refused");
     }
 }

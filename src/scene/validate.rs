@@ -4,84 +4,17 @@ use std::path::Path;
 
 use toml::Spanned;
 
-use super::raw::{CLI, SceneFile};
-use super::{
-    EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_LOG10_COORDINATE, MAX_LOG10_ZOOM, MAX_SAMPLES, MAX_SIDE,
-    Scene,
-};
+use super::context::{BitmapLoader, Ctx};
+use super::layer::{default_layer, layer};
+use super::raw::SceneFile;
+use super::{EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_LOG10_ZOOM, MAX_SAMPLES, MAX_SIDE, Scene};
 use crate::compose::Stack;
 use crate::field::transform::MAX_STRETCH_AMOUNT;
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
 use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
-use crate::palette::{self, color};
+use crate::palette;
 use crate::source::SourceError;
-use crate::trap::Bitmap;
-
-/// Loads a bitmap for a bitmap trap (provided by the I/O layer).
-pub type BitmapLoader<'a> = dyn Fn(&Path) -> Result<Bitmap, String> + 'a;
-
-pub(super) struct Ctx<'a> {
-    origin: &'a str,
-    text: &'a str,
-}
-
-impl Ctx<'_> {
-    pub(super) fn err<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SourceError> {
-        let message = message.into();
-        if span == CLI {
-            return Err(SourceError { origin: "command line".into(), position: None, message });
-        }
-        Err(SourceError::at(self.origin, self.text, Some(span), message))
-    }
-
-    pub(super) fn decimal(&self, s: &Spanned<String>, what: &str) -> Result<Decimal, SourceError> {
-        Decimal::parse(s.get_ref()).or_else(|e| self.err(s.span(), format!("{what}: {e}")))
-    }
-
-    pub(super) fn pair(&self, s: &Spanned<[String; 2]>, what: &str) -> Result<[Decimal; 2], SourceError> {
-        let [re, im] = s.get_ref();
-        let p = |t: &String| {
-            let d = Decimal::parse(t).or_else(|e| self.err(s.span(), format!("{what}: {e}")))?;
-            // Everything past a few units from the origin escapes at once, and a value of
-            // 1e100000 would cost a 330000-bit reference for nothing: refused before any
-            // big number is built from it.
-            if !d.is_zero() && d.log10_abs() > MAX_LOG10_COORDINATE {
-                return self.err(
-                    s.span(),
-                    format!(
-                        "{what}: {d} is too far from the origin; each part must lie within 1e{MAX_LOG10_COORDINATE:.0} (every sample beyond a few units escapes at the first iteration)"
-                    ),
-                );
-            }
-            Ok(d)
-        };
-        Ok([p(re)?, p(im)?])
-    }
-
-    pub(super) fn colour(&self, s: &Spanned<String>) -> Result<[f32; 4], SourceError> {
-        match color::parse_hex(s.get_ref()) {
-            Some(c) => Ok([color::srgb_to_linear(c[0]), color::srgb_to_linear(c[1]), color::srgb_to_linear(c[2]), 1.0]),
-            None => self.err(s.span(), format!("colour `{}` is not of the form \"#rrggbb\"", s.get_ref())),
-        }
-    }
-
-    pub(super) fn range_i(&self, v: &Spanned<i64>, lo: i64, hi: i64, what: &str) -> Result<i64, SourceError> {
-        let x = *v.get_ref();
-        if x < lo || x > hi {
-            return self.err(v.span(), format!("{what} must be in {lo} ..= {hi}, got {x}"));
-        }
-        Ok(x)
-    }
-
-    pub(super) fn finite(&self, v: &Spanned<f64>, lo: f64, hi: f64, what: &str) -> Result<f64, SourceError> {
-        let x = *v.get_ref();
-        if !(x.is_finite() && x >= lo && x <= hi) {
-            return self.err(v.span(), format!("{what} must be a finite number in [{lo}, {hi}], got {x}"));
-        }
-        Ok(x)
-    }
-}
 
 pub(super) fn validate(
     file: SceneFile,
@@ -90,7 +23,7 @@ pub(super) fn validate(
     base_dir: &Path,
     bitmaps: &BitmapLoader<'_>,
 ) -> Result<Scene, SourceError> {
-    let cx = Ctx { origin, text };
+    let cx = Ctx::new(origin, text);
     if *file.version.get_ref() != 1 {
         return cx
             .err(file.version.span(), format!("unsupported scene version {}; expected 1", file.version.get_ref()));
@@ -208,13 +141,10 @@ pub(super) fn validate(
 
     let mut traps = Vec::new();
     let mut layers = Vec::new();
-    let raw_layers = if file.layers.is_empty() {
-        vec![Spanned::new(0..0, super::layer::default_layer())]
-    } else {
-        file.layers.clone()
-    };
+    let raw_layers =
+        if file.layers.is_empty() { vec![Spanned::new(0..0, default_layer())] } else { file.layers.clone() };
     for l in &raw_layers {
-        layers.push(super::layer::layer(&cx, l, base_dir, bitmaps, cycle, &mut traps)?);
+        layers.push(layer(&cx, l, base_dir, bitmaps, cycle, &mut traps)?);
     }
 
     let png_bits = match &file.output.bits {

@@ -25,7 +25,7 @@ use crate::field::{Needs, Planes};
 use crate::palette::{self, Palette};
 use crate::render;
 use crate::scene::raw::{LayerRaw, cli};
-use crate::scene::{LAYER_KINDS, Scene, SceneFile};
+use crate::scene::{Scene, SceneFile};
 
 /// How the image area shows the fractal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -242,6 +242,11 @@ impl ViewerApp {
     pub fn julia_c(&self) -> Option<[String; 2]> {
         (self.file.formula.kind.get_ref() == "julia")
             .then(|| self.file.formula.c.as_ref().map(|c| c.get_ref().clone()))?
+    }
+
+    /// The scene as edited so far (its view is [`ViewerApp::nav`]).
+    pub fn scene_file(&self) -> &SceneFile {
+        &self.file
     }
 
     /// The palette of layer `k` (the editor's copy when it has one).
@@ -682,158 +687,7 @@ impl ViewerApp {
         }
         ui.separator();
         ui.heading("Layers");
-        let mut remove = None;
-        let mut changed = false;
-        let names = palette::builtin_names();
-        for k in 0..self.file.layers.len() {
-            let selected = self.selected_layer == k;
-            let l = self.file.layers[k].get_mut();
-            ui.horizontal(|ui| {
-                if ui.selectable_label(selected, format!("{k}: {}", l.kind.get_ref())).clicked() {
-                    self.selected_layer = k;
-                }
-                if ui.small_button("x").on_hover_text("remove this layer").clicked() {
-                    remove = Some(k);
-                }
-            });
-            if let Some(p) = &mut l.palette {
-                let mut name = p.get_ref().clone();
-                egui::ComboBox::new(("palette", k), "palette")
-                    .selected_text(self.overrides.get(&k).map_or(name.clone(), |o| format!("{} (edited)", o.name)))
-                    .show_ui(ui, |ui| {
-                        for n in &names {
-                            if ui.selectable_value(&mut name, n.to_string(), *n).clicked() {
-                                *p = cli(name.clone());
-                                self.overrides.remove(&k);
-                                changed = true;
-                            }
-                        }
-                    });
-            }
-            // Number fields, not sliders: a scene's value shows as it is, however large
-            // (bench-e1086's density is 5000), and drags scale with the value.
-            let numbers = [
-                ("density", &mut l.density),
-                ("offset", &mut l.offset),
-                ("k", &mut l.k),
-                ("width", &mut l.width),
-                ("height", &mut l.height),
-                ("strength", &mut l.strength),
-                ("frequency", &mut l.frequency),
-                ("angle", &mut l.angle),
-                ("radius", &mut l.radius),
-                ("size", &mut l.size),
-                ("threshold", &mut l.threshold),
-                ("slice", &mut l.slice),
-                ("decay", &mut l.decay),
-            ];
-            for (key, value) in numbers {
-                if let Some(v) = value {
-                    let mut x = *v.get_ref();
-                    let speed = (x.abs() * 0.01).max(1e-3);
-                    if number_field(ui, key, &mut x, speed) && x.is_finite() && (key != "density" || x > 0.0) {
-                        *v = cli(x);
-                        changed = true;
-                    }
-                }
-            }
-            let integers = [
-                ("frames", &mut l.frames),
-                ("frame", &mut l.frame),
-                ("frame_width", &mut l.frame_width),
-                ("iterations", &mut l.iterations),
-            ];
-            for (key, value) in integers {
-                if let Some(v) = value {
-                    let mut x = *v.get_ref();
-                    if number_field(ui, key, &mut x, 0.2) {
-                        *v = cli(x);
-                        changed = true;
-                    }
-                }
-            }
-            // Words (style, shape, colours as "#rrggbb"): edited as text, checked by the
-            // scene's validation when the field loses focus.
-            for (key, value) in [
-                ("style", &mut l.style),
-                ("shape", &mut l.shape),
-                ("interior", &mut l.interior),
-                ("color", &mut l.color),
-            ] {
-                if let Some(v) = value {
-                    let mut text = v.get_ref().clone();
-                    let (edited, done) = ui
-                        .horizontal(|ui| {
-                            let r = ui.add(egui::TextEdit::singleline(&mut text).desired_width(90.0));
-                            let label = ui.label(key);
-                            let r = r.labelled_by(label.id);
-                            (r.changed(), r.lost_focus())
-                        })
-                        .inner;
-                    // The text is kept as typed; the view renders once editing ends.
-                    if edited {
-                        *v = cli(text);
-                    }
-                    changed |= done;
-                }
-            }
-            if crate::scene::LAYER_KINDS
-                .iter()
-                .any(|(kind, keys)| *kind == l.kind.get_ref() && keys.contains(&"transfer"))
-            {
-                let mut t = l.transfer.as_ref().map_or_else(Default::default, |t| *t.get_ref());
-                let name = |t: crate::coloring::Transfer| {
-                    crate::coloring::Transfer::ALL.iter().find(|(x, _)| *x == t).map_or("linear", |(_, n)| *n)
-                };
-                egui::ComboBox::new(("transfer", k), "transfer").selected_text(name(t)).show_ui(ui, |ui| {
-                    for (v, n) in crate::coloring::Transfer::ALL {
-                        if ui.selectable_value(&mut t, v, n).clicked() {
-                            l.transfer = Some(cli(t));
-                            changed = true;
-                        }
-                    }
-                });
-            }
-            let mut opacity = l.opacity.as_ref().map_or(1.0, |o| *o.get_ref());
-            if k > 0 && ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0).text("opacity")).changed() {
-                l.opacity = Some(cli(opacity));
-                changed = true;
-            }
-        }
-        if let Some(k) = remove
-            && self.file.layers.len() > 1
-        {
-            self.file.layers.remove(k);
-            self.overrides = std::mem::take(&mut self.overrides)
-                .into_iter()
-                .filter(|(i, _)| *i != k)
-                .map(|(i, p)| (if i > k { i - 1 } else { i }, p))
-                .collect();
-            self.selected_layer = 0;
-            changed = true;
-        }
-        ui.horizontal(|ui| {
-            egui::ComboBox::new("add-layer", "add a layer").selected_text("kind…").show_ui(ui, |ui| {
-                for (kind, _) in LAYER_KINDS {
-                    if matches!(kind, "bitmap") {
-                        continue;
-                    }
-                    if ui.selectable_label(false, kind).clicked() {
-                        let mut l = LayerRaw::of_kind(kind);
-                        if !self.file.layers.is_empty() && kind != "interior" {
-                            l.blend = Some(cli(crate::compose::BlendMode::Multiply));
-                        }
-                        if matches!(kind, "smooth" | "histogram" | "angle" | "stripe") {
-                            l.palette = Some(cli("classic".into()));
-                            l.density = Some(cli(if kind == "smooth" { 0.05 } else { 1.0 }));
-                        }
-                        self.file.layers.push(Spanned::new(0..0, l));
-                        changed = true;
-                    }
-                }
-            });
-        });
-        if changed {
+        if super::layers_panel::show(ui, &mut self.file.layers, &mut self.overrides, &mut self.selected_layer) {
             self.changed();
         }
         ui.separator();
@@ -1310,15 +1164,6 @@ fn fmt_zoom(log10: f64) -> String {
 }
 
 /// A labelled number field (drag or type); true when the value changed.
-fn number_field<N: egui::emath::Numeric>(ui: &mut egui::Ui, key: &str, x: &mut N, speed: f64) -> bool {
-    ui.horizontal(|ui| {
-        let r = ui.add(egui::DragValue::new(x).speed(speed).max_decimals(6));
-        let label = ui.label(key);
-        r.labelled_by(label.id).changed()
-    })
-    .inner
-}
-
 #[cfg(test)]
 mod saved_tests {
     use super::*;

@@ -6,6 +6,7 @@
 //! - [`newton`]: Newton zooming to the minibrot or Misiurewicz point near a pixel;
 //! - [`worker`]: progressive rendering on a background thread, cancelled by newer views;
 //! - [`app`]: the window: image, panels, input, recolouring, Julia preview, GPU modes;
+//! - [`layers_panel`]: the layers panel, a control for every key each layer's kind takes;
 //! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export;
 //! - [`difference`]: the CPU-vs-GPU per-pixel difference view.
 //!
@@ -14,6 +15,7 @@
 pub mod app;
 pub mod difference;
 pub mod export;
+pub mod layers_panel;
 pub mod nav;
 pub mod newton;
 pub mod palette_editor;

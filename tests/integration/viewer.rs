@@ -384,3 +384,34 @@ fn layer_controls_show_the_scene_values() {
     assert_eq!(values[..2], [5000.0, 0.125]);
     assert_eq!(h.get_by_label("style").value().as_deref(), Some("log"));
 }
+
+/// Every key a layer's kind takes has a control, a key the scene leaves out showing the value
+/// validation uses (a smooth layer's density is 0.05) without being written into the scene,
+/// and a value the scene sets shows as it is (5000, not clamped to a slider's range).
+#[test]
+fn layer_controls_show_defaults_for_keys_left_out() {
+    let dir = scratch("viewer-layer-defaults");
+    let scene = "version = 1\n[iteration]\nmax = 200\n[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"smooth\"\ndensity = 5000\nblend = \"multiply\"\n";
+    let mut h = harness(&dir, scene);
+    let values: Vec<f64> = h.get_all_by_label("density").filter_map(|n| n.accesskit_node().numeric_value()).collect();
+    // The layers' two, then the palette editor's own density.
+    assert_eq!(values[..2], [0.05, 5000.0]);
+    let offsets: Vec<f64> = h.get_all_by_label("offset").filter_map(|n| n.accesskit_node().numeric_value()).collect();
+    assert_eq!(offsets[..2], [0.0, 0.0], "keys no layer sets have controls too");
+    assert_eq!(h.get_all_by_label("interior").filter_map(|n| n.value()).collect::<Vec<_>>(), ["#000000"; 2]);
+    let layers = &h.state().scene_file().layers;
+    let bottom = layers[0].get_ref();
+    assert!(bottom.density.is_none() && bottom.offset.is_none() && bottom.interior.is_none(), "showing writes nothing");
+    assert_eq!(layers[1].get_ref().density.as_ref().map(|d| *d.get_ref()), Some(5000.0));
+    // An edit writes the key, and only that one.
+    let before = h.state().counters();
+    h.get_all_by_label("density")
+        .find(|n| n.accesskit_node().numeric_value() == Some(0.05))
+        .unwrap()
+        .set_value_accesskit(0.2);
+    settle(&mut h);
+    let bottom = h.state().scene_file().layers[0].get_ref().clone();
+    assert_eq!(bottom.density.as_ref().map(|d| *d.get_ref()), Some(0.2));
+    assert!(bottom.offset.is_none() && bottom.interior.is_none() && bottom.palette.is_none());
+    assert_eq!(h.state().counters().renders, before.renders, "a density edit recolours without rendering");
+}
