@@ -8,6 +8,7 @@
 pub mod bigfloat;
 pub mod bla;
 pub mod fixed;
+pub mod interior;
 #[cfg(feature = "mpfr")]
 pub mod mpfr;
 pub mod perturb;
