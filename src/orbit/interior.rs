@@ -1,5 +1,6 @@
 //! Interior detection in the perturbation engines: a sample whose orbit has contracted by a
-//! factor the iteration limit makes decisive is stopped and reported as interior.
+//! factor the iteration limit makes decisive, or that Newton's method shows attracted by a
+//! cycle, is stopped and reported as interior.
 //!
 //! Along an orbit z_k the derivative with respect to its own start (z_1 = c for the
 //! Mandelbrot set, z_0 for Julia sets) is dz_n/dz_start = prod 2 z_k, and through a BLA step
@@ -17,10 +18,11 @@
 //! parabolic point (parameters just outside a cusp) is slowed there, and its derivative
 //! falls to about 16 ε (c = 1/4 + ε, from the flow w' = w^2 + ε: ∂w(t)/∂w(0) =
 //! g(w(t))/g(w(0))) while it escapes after about π/√ε iterations. Measured on the cusp of
-//! the main cardioid (ε = 1e-4 .. 1e-10) and of the period-3 bulb, along the main cardioid
-//! and on 150 000 random escaping parameters: min_n |dz_n/dz_1|^2 · N^4 >= 1.2e4 for every
-//! escaping orbit (N its escape index); the cusp is the worst case (a minibrot's cusp is the
-//! same with N counted in periods, so its N is P times longer for the same dip). A fixed
+//! the main cardioid (ε = 1e-4 .. 1e-10), the root of the period-3 bulb and outside the main
+//! cardioid: min_n |dz_n/dz_1|^2 · N^4 >= 1.2e4 for every escaping orbit (N its escape
+//! index), the cusp the worst case (a minibrot's cusp is the same with N counted in periods,
+//! so its N is P times longer for the same dip); of 150 000 random escaping parameters (limit
+//! 10^5) none dipped below 1e-12 at all. A fixed
 //! threshold is therefore wrong at some iteration limit (1e-12 calls c = 1/4 + 1e-8,
 //! which escapes at 31418, interior). The threshold here is |dz/dz|^2 < min(1e-12,
 //! max_iter^-4): an orbit that dips below it either never escapes or escapes later than
@@ -34,6 +36,16 @@
 //! escape soon (c = 0.28 + 0.008i: a dip of 9.4e-6 and an escape at 42). So a Julia set is
 //! checked only when its critical orbit (the reference orbit of 0 the engine has anyway)
 //! meets the Mandelbrot criterion at c, [`orbit_contracts`].
+//!
+//! # Newton's test
+//!
+//! The contraction needs log(threshold) / log|λ| periods: hundreds for |λ| = 0.9, more than
+//! the limit allows near a component's edge. In a view centred on a nucleus (the reference
+//! is one period p, and every sample comes back near 0 at the end of each turn) the loop
+//! also tries, at those ends, Newton's method for an attracting cycle of period k p
+//! ([`newton_attracting`], the test of interior distance estimation): an attracting cycle
+//! at c is a proof that c is interior, found within a few periods whatever |λ| is up to
+//! 0.999. The contraction criterion still decides everywhere else.
 //!
 //! # Representation
 //!
@@ -204,6 +216,58 @@ pub fn orbit_contracts(orbit: &Reference, check: Check) -> bool {
     })
 }
 
+/// Newton's method for an attracting cycle: `map` gives f^p(w) and d(f^p)/dw at w (None
+/// where it cannot follow the orbit). From `w`, w <- w - (f^p(w) - w) / (f^p'(w) - 1) until a
+/// step is below [`NEWTON_CONVERGED`] of |w| (within [`NEWTON_STEPS`] steps); true when the
+/// point converged to has a multiplier below [`NEWTON_MULTIPLIER`] in modulus and is a
+/// fixed point of f^p to within [`NEWTON_CONVERGED`] of |w|.
+///
+/// This is the test behind interior distance estimation (Claude Heiland-Allen's
+/// mandelbrot-numerics, `m_d_interior_de`: the periodic point by Newton's method, then
+/// |λ| <= 1), used here as a proof of interior: for the Mandelbrot set an attracting cycle
+/// at parameter c puts c inside a hyperbolic component, whose critical orbit never escapes.
+/// The margins leave room for what f^p is computed with (rounding, BLA steps of relative
+/// accuracy 1e-14, so a residual floor of about 1e-14 / |1 - λ|) and for Kantorovich's
+/// condition: near the cycle f^p is a quadratic-like map whose second derivative is about
+/// |λ| / |w|, so h = |F| |F''| / |F' - 1|^2 <= 1e-9 / 1e-6 = 1e-3, far below 1/2: a true
+/// fixed point lies within about 1e-6 |w| of the one found, where the multiplier differs
+/// by about as little, well inside the margin to 1. (With |λ| allowed to 1 - 1e-5 the
+/// residual floor alone would be 1e-9 and h could reach 10: no proof.)
+pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2]) -> Option<([f64; 2], [FloatExp; 2])>) -> bool {
+    let size = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
+    for _ in 0..NEWTON_STEPS {
+        let Some((fw, d)) = map(w) else { return false };
+        let f = cconv::<f64, FloatExp>([fw[0] - w[0], fw[1] - w[1]]);
+        let slope = [d[0] - FloatExp::ONE, d[1]];
+        let n2 = norm2(slope);
+        if n2.is_zero() {
+            return false;
+        }
+        // f / slope = f conj(slope) / |slope|^2.
+        let q = cmul(f, [slope[0], -slope[1]]);
+        let step = [(q[0] / n2).to_f64(), (q[1] / n2).to_f64()];
+        w = [w[0] - step[0], w[1] - step[1]];
+        let scale = size(w);
+        if !(scale.is_finite() && step[0].is_finite() && step[1].is_finite()) {
+            return false;
+        }
+        if size(step) <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale {
+            let Some((fw, lambda)) = map(w) else { return false };
+            let residual = size([fw[0] - w[0], fw[1] - w[1]]);
+            return norm2(lambda) < FloatExp::from(NEWTON_MULTIPLIER * NEWTON_MULTIPLIER)
+                && residual <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale;
+        }
+    }
+    false
+}
+
+/// Newton's steps at most, per attempt.
+pub const NEWTON_STEPS: u32 = 16;
+/// A step below this fraction of |w| has converged.
+pub const NEWTON_CONVERGED: f64 = 1e-9;
+/// The largest |λ| accepted as attracting.
+pub const NEWTON_MULTIPLIER: f64 = 0.999;
+
 /// Claude Heiland-Allen's size estimate ("Minibrot size estimates") of the minibrot of
 /// period p from its nucleus's orbit z_1 .. z_(p-1): with l_n = prod_(k=1..n) 2 z_k and
 /// b = 1 + sum_(n=1..p-1) 1 / l_n, the complex number 1 / (b l_(p-1)^2), whose modulus is
@@ -337,6 +401,25 @@ mod tests {
             z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
         }
         (false, false)
+    }
+
+    /// The return map of z -> z^2 + c itself (p = 1): Newton finds the attracting fixed
+    /// point inside the main cardioid and nothing outside it, nor on its edge.
+    #[test]
+    fn newton_finds_attracting_fixed_points_only() {
+        let map = |c: [f64; 2]| {
+            move |w: [f64; 2]| -> Option<([f64; 2], [FloatExp; 2])> {
+                let z = [w[0] * w[0] - w[1] * w[1] + c[0], 2.0 * w[0] * w[1] + c[1]];
+                Some((z, [FloatExp::from(2.0 * w[0]), FloatExp::from(2.0 * w[1])]))
+            }
+        };
+        for c in [[0.0, 0.0], [-0.5, 0.3], [0.2, 0.0], [-0.7, 0.1], [0.2499, 0.0]] {
+            assert!(newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
+        }
+        // Outside (the fixed points repel), and at the cusp (|λ| = 1).
+        for c in [[0.3, 0.0], [-0.8, 0.0], [-0.75, 0.2], [0.25, 0.0], [-1.0, 0.0]] {
+            assert!(!newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
+        }
     }
 
     #[test]

@@ -27,18 +27,24 @@
 //! interior once that falls below the threshold: a single step multiplies it by 4 |z|^2
 //! (the |z|^2 of the escape test), a BLA step by the squared modulus of the step's Jacobian
 //! in the delta, and a rebase leaves it alone (the sample's z does not change, only the
-//! reference index). It is off with traps, which must see every iteration.
+//! reference index). Where the reference is one period of a nucleus, each end of a turn
+//! may also try Newton's method for an attracting cycle (`Perturbation::newton_probe`).
+//! It is off with traps, which must see every iteration.
 
 mod lanes;
 
 use super::bla::{BlaTable, Step};
-use super::interior::{Check, Contraction, Decision, Detection};
+use super::interior::{self, Check, Contraction, Decision, Detection};
 use super::reference::Reference;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
+
+/// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
+/// reference (bulbs of the minibrot up to this period).
+const MAX_CYCLE_PERIODS: u32 = 8;
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
@@ -94,6 +100,8 @@ pub struct Counters {
     pub glitches: u64,
     /// Samples interior detection stopped before the iteration limit.
     pub interior: u64,
+    /// Of those, samples Newton's test found (the rest: the contraction criterion).
+    pub newton: u64,
 }
 
 impl Counters {
@@ -107,6 +115,7 @@ impl Counters {
         self.rebases += o.rebases;
         self.glitches += o.glitches;
         self.interior += o.interior;
+        self.newton += o.newton;
     }
 }
 
@@ -318,12 +327,27 @@ struct Sample<D> {
     single: bool,
     /// |dz/dz|^2 from the orbit's start (interior detection; unused without it).
     shrink: Contraction,
+    /// Interior detection's Newton test ([`Perturbation::newton_probe`]).
+    probe: Probe,
+}
+
+/// What a sample remembers for interior detection's Newton test, at the ends of the periods
+/// of a nucleus's reference: the iteration from which it may run, and an anchor (an end
+/// earlier, its full value, the binary exponent of |dz/dz|^2 there, and the squared distance
+/// from its value to the next end's).
+#[derive(Debug, Clone, Copy)]
+struct Probe {
+    at: u32,
+    anchor_n: u32,
+    anchor_exp: i32,
+    anchor: [f64; 2],
+    first2: f64,
 }
 
 impl<D: Real> Sample<D> {
     fn convert<E: Real>(&self) -> Sample<E> {
-        let (m, which, n, single, shrink) = (self.m, self.which, self.n, self.single, self.shrink);
-        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m, which, n, single, shrink }
+        let (m, which, n, single, shrink, probe) = (self.m, self.which, self.n, self.single, self.shrink, self.probe);
+        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m, which, n, single, shrink, probe }
     }
 }
 
@@ -513,10 +537,13 @@ impl Perturbation {
         // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
         let d = if self.origin == [zero; 2] { d } else { cadd(self.origin, d) };
         let shrink = self.interior.map_or(Contraction::IDLE, |c| Contraction::new(FloatExp::ONE, c));
+        // The first Newton test at the end of the second period, if the first contracted.
+        let at = self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2));
+        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0 };
         let (mut start, add_fe) = if self.mandelbrot {
-            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink }, self.spacing)
+            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink, probe }, self.spacing)
         } else {
-            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink }, zero)
+            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
         };
         let mut der = [self.spacing, zero];
         if let (true, Some(k)) = (skip, &self.skip) {
@@ -535,6 +562,98 @@ impl Perturbation {
             }
         }
         (start, Der::from_fe(der, add_fe), add_fe)
+    }
+
+    /// The period of the reference when interior detection may use Newton's test: a
+    /// Mandelbrot view centred on a nucleus (its reference is one period).
+    fn newton_period(&self) -> Option<u32> {
+        self.refs[0].period().filter(|_| self.mandelbrot && self.interior.is_some())
+    }
+
+    /// Interior detection's Newton test, at the end of a period of a nucleus's reference
+    /// (the sample has just rebased to Z_0 = 0 with δ its full value, near 0).
+    ///
+    /// A sample inside the minibrot's cardioid is attracted by a cycle of the reference's
+    /// period p; inside one of its bulbs, by a cycle of period k p, whose point near 0 the
+    /// sample comes back to every k ends. So the sample keeps an anchor (an earlier end):
+    /// one end after it, it may be a cycle of period p; later, k ends after it, one of
+    /// period k p where its value has come back to the anchor's four times closer than it
+    /// went away at the first end. Where that holds, |dz/dz|^2 shrank since the anchor, and
+    /// the iteration count has reached the sample's `at`, Newton's method looks for an
+    /// attracting cycle of period k p from the value ([`interior::newton_attracting`]).
+    /// Found, the sample is interior (its parameter lies in a hyperbolic component); else
+    /// the next test waits until the iteration count has doubled, from a new anchor. This
+    /// finds most interior samples within a few periods, where the contraction criterion
+    /// needs log(threshold) / log|λ| of them (hundreds, and more than the limit allows near
+    /// a component's edge); the contraction criterion still decides everywhere else.
+    fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
+        let Some(p) = self.newton_period() else { return false };
+        let exp = s.shrink.value().exponent();
+        let w = cto_f64(s.dz);
+        let pr = &mut s.probe;
+        let away2 = |a: [f64; 2]| (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
+        let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
+        let candidate = match k {
+            0 => false,
+            1 => {
+                pr.first2 = away2(pr.anchor);
+                true
+            }
+            _ => away2(pr.anchor) * 16.0 < pr.first2,
+        };
+        if candidate && exp < pr.anchor_exp && s.n >= pr.at {
+            pr.at = s.n.saturating_mul(2);
+            let dc = cto_f64(s.dc);
+            if interior::newton_attracting(w, |w| self.return_map(w, dc, p, k)) {
+                return true;
+            }
+        } else if k != 0 && k < MAX_CYCLE_PERIODS {
+            return false;
+        }
+        *pr = Probe { anchor_n: s.n, anchor_exp: exp, anchor: w, ..*pr };
+        false
+    }
+
+    /// f^(k p)(w) and its derivative in w, for a full value w near 0 and the sample offset
+    /// `dc`, by perturbation against k turns of one period p of a nucleus's reference from
+    /// Z_0 = 0 (each turn ending at Z_p, near 0, where the next begins from Z_0 with δ the
+    /// full value): BLA steps where the f64 tables have them, single steps elsewhere. None
+    /// where the orbit of w escapes or leaves the reference within a turn (it would rebase
+    /// elsewhere than at Z_p).
+    fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32) -> Option<([f64; 2], [FloatExp; 2])> {
+        let r = &self.refs[0];
+        let table = self.bla_f64[0].as_ref();
+        let mut z = w;
+        let mut der = [FloatExp::ONE, FloatExp::ZERO];
+        for _ in 0..k {
+            let (mut dz, mut m) = (z, 0u32);
+            while m < p {
+                let zm = r.get(m);
+                let full = cadd(zm, dz);
+                let (f2, d2) = (norm2(full), norm2(dz));
+                if f2 > self.escape2 || (m > 0 && f2 < d2) {
+                    return None;
+                }
+                if let Some(t) = table
+                    && let Some((e, len)) = t.lookup(m, d2, p - m)
+                {
+                    let (next, jac) = if e.linear(d2) {
+                        (cadd(cmul(e.first.a, dz), cmul(e.first.b, dc)), e.first.a)
+                    } else {
+                        let (next, jac, _) = e.apply_with_jacobian(dz, dc);
+                        (next, jac)
+                    };
+                    der = cmul(cconv(jac), der);
+                    (dz, m) = (next, m + len);
+                    continue;
+                }
+                der = cmul(cconv([full[0] * 2.0, full[1] * 2.0]), der);
+                dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
+                m += 1;
+            }
+            z = cadd(r.get(p), dz);
+        }
+        Some((z, der))
     }
 
     /// Interior detection's check (one that never fires when it is off).
@@ -871,7 +990,8 @@ impl Perturbation {
         }
         let d2 = norm2(s.dz);
         let f2 = norm2(full);
-        let rebase = f2 < d2 || s.m >= r.last();
+        let end = s.m >= r.last();
+        let rebase = f2 < d2 || end;
         let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
         if rebase || glitch {
             local.glitches += glitch as u64;
@@ -881,6 +1001,11 @@ impl Perturbation {
             s.which = self.refs.len() - 1;
             s.single = false;
             zm = [D::ZERO; 2];
+            if INT && end && !full_range && self.newton_probe(s) {
+                local.interior += 1;
+                local.newton += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
             if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
             }
@@ -1137,6 +1262,7 @@ mod tests {
                     assert_eq!(steps(&c_many), steps(&c_one), "{what} {simd}: step counts");
                     assert_eq!(c_many.rebases, c_one.rebases, "{what} {simd}: rebases");
                     assert_eq!(c_many.interior, c_one.interior, "{what} {simd}: samples found interior");
+                    assert_eq!(c_many.newton, c_one.newton, "{what} {simd}: samples found by Newton's test");
                 }
                 assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
                 match &without {

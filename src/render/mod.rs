@@ -169,6 +169,8 @@ pub struct DeepStats {
     pub interior_threshold: Option<f64>,
     /// Samples it stopped before the iteration limit.
     pub interior_samples: u64,
+    /// Of those, the samples Newton's test found (in views centred on a nucleus).
+    pub interior_newton_samples: u64,
 }
 
 /// What a render did.
@@ -510,6 +512,7 @@ pub fn render<P: Send>(
             interior_detection: d.interior_decision,
             interior_threshold: d.interior.map(|c| c.below2.to_f64()),
             interior_samples: c.interior,
+            interior_newton_samples: c.newton,
         }
     });
     let precision = match plan.kind {

@@ -190,6 +190,8 @@ fn interior_detection_is_a_scene_key_and_a_flag_shown_in_statistics() {
         assert_eq!(json["deep"]["interior_detection"], decision, "{json}");
         let stopped = json["deep"]["interior_samples"].as_u64().unwrap();
         assert_eq!(stopped > 100, flag != Some("off"), "{flag:?}: {stopped} samples stopped early");
+        let newton = json["deep"]["interior_newton_samples"].as_u64().unwrap();
+        assert!(newton <= stopped && (newton > 0) == (stopped > 0), "{flag:?}: {newton} by Newton's test");
         let embedded = deepfield::io::read_png_scene(&dir.join(&png)).unwrap().unwrap();
         let key = flag.map(|f| format!("interior_detection = {}", f == "on"));
         assert_eq!(embedded.contains("interior_detection"), key.is_some(), "{embedded}");

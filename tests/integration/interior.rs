@@ -63,9 +63,10 @@ fn render_n(text: &str, simd: SimdLevel) -> (Vec<u32>, Stats) {
 }
 
 /// Renders `v` with detection on, off and by default on every instruction set: one N
-/// plane for all. Returns it with the samples detection stopped early (the same on every
-/// instruction set) and what the default decided.
-fn render_all_ways(v: &View) -> (Vec<u32>, u64, Decision) {
+/// plane for all. Returns it with the samples detection stopped early and, of those, the
+/// samples Newton's test found (the same on every instruction set), and what the default
+/// decided.
+fn render_all_ways(v: &View) -> (Vec<u32>, (u64, u64), Decision) {
     let mut plane: Option<Vec<u32>> = None;
     let (mut stopped, mut default) = (None, None);
     for detection in [Some(true), Some(false), None] {
@@ -81,11 +82,12 @@ fn render_all_ways(v: &View) -> (Vec<u32>, u64, Decision) {
                     assert_eq!(differing, 0, "{what}: N differs on {differing} samples");
                 }
             }
-            assert_eq!(*counted.get_or_insert(deep.interior_samples), deep.interior_samples, "{what}: samples stopped");
+            let count = (deep.interior_samples, deep.interior_newton_samples);
+            assert_eq!(*counted.get_or_insert(count), count, "{what}: samples stopped");
             match detection {
                 Some(true) => {
                     assert_eq!(deep.interior_detection, Decision::On, "{what}");
-                    stopped = Some(deep.interior_samples);
+                    stopped = Some(count);
                 }
                 Some(false) => {
                     assert_eq!(deep.interior_detection, Decision::Off, "{what}");
@@ -127,10 +129,11 @@ fn against_big_floats(v: &View, n: &[u32], samples: u32) -> u32 {
 }
 
 /// A view centred on the period-1429 minibrot at zoom 1e102, about half of it interior, to
-/// 10^6 iterations (700 periods): the interior samples detection finds stop early, the
-/// others run to the limit, and every sampled pixel has the big-float N (each interior one
-/// iterated 10^6 times in 500-bit floats). The default turns
-/// detection on (the view is centred on a nucleus whose minibrot spans many samples).
+/// 10^6 iterations (700 periods): the interior samples detection finds stop early (most by
+/// Newton's test, the reference being one period of the nucleus), the others run to the
+/// limit, and every sampled pixel has the big-float N (each interior one iterated 10^6
+/// times in 500-bit floats). The default turns detection on (the view is centred on a
+/// nucleus whose minibrot spans many samples).
 #[test]
 fn minibrot_centred_view_at_1e102() {
     let v = View {
@@ -141,13 +144,16 @@ fn minibrot_centred_view_at_1e102() {
         size: (40, 30),
         engine: "auto",
     };
-    let (n, stopped, default) = render_all_ways(&v);
+    let (n, (stopped, newton), default) = render_all_ways(&v);
     let interior = n.iter().filter(|&&x| x == INTERIOR).count();
     assert!(interior > 200 && interior < 1000, "{interior} interior samples of 1200");
-    assert!(stopped > interior as u64 * 3 / 4, "only {stopped} of {interior} interior samples stopped early");
+    assert!(stopped > interior as u64 * 9 / 10, "only {stopped} of {interior} interior samples stopped early");
+    assert!(newton > stopped / 2, "only {newton} of {stopped} by Newton's test");
     assert_eq!(default, Decision::AutoOn);
     let sampled = against_big_floats(&v, &n, 16);
-    eprintln!("minibrot 1e102: {interior} interior samples, {stopped} stopped early; {sampled} of 16 sampled interior");
+    eprintln!(
+        "minibrot 1e102: {interior} interior samples, {stopped} stopped early ({newton} by Newton's test); {sampled} of 16 sampled interior"
+    );
     assert!(sampled >= 4, "the sample must hold interior pixels ({sampled})");
 }
 
@@ -174,7 +180,8 @@ fn shallow_views_with_interior() {
         engine: "perturb-f64",
     };
     for v in [mandelbrot, rabbit] {
-        let (n, stopped, _) = render_all_ways(&v);
+        let (n, (stopped, newton), _) = render_all_ways(&v);
+        assert_eq!(newton, 0, "{}: Newton's test needs a nucleus's reference", v.radius);
         let interior = n.iter().filter(|&&x| x == INTERIOR).count() as u64;
         assert!(stopped > interior * 9 / 10, "{}: {stopped} of {interior} interior samples stopped early", v.radius);
         let sampled = against_big_floats(&v, &n, 80);
