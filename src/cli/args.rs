@@ -414,6 +414,11 @@ pub struct SceneArgs {
     /// BLA tolerance ε (relative size of the dropped term per step; default 1e-14).
     #[arg(long, value_name = "EPS", value_parser = parse_tolerance)]
     pub bla_tolerance: Option<f64>,
+    /// Interior detection in the perturbation engines: stop samples whose orbit contracts
+    /// onto an attracting cycle (render.interior_detection). auto (the default): where the
+    /// view's centre is interior; on; off (samples inside a minibrot run to the limit).
+    #[arg(long, value_name = "WHEN", value_parser = ["auto", "on", "off"])]
+    pub interior_detection: Option<String>,
     /// Palette for every layer that uses one: a built-in name or a palette file.
     #[arg(long, value_name = "NAME|FILE")]
     pub palette: Option<String>,

@@ -193,6 +193,14 @@ fn report(
                 d.bla_iterations,
                 d.rebases
             ));
+            text.push_str(&format!("interior    detection {}", d.interior_detection.describe()));
+            text.push_str(&match d.interior_threshold {
+                Some(t) => format!(
+                    ", |dz/dz|^2 < {t:.1e}: {} samples stopped early ({} by Newton's test)\n",
+                    d.interior_samples, d.interior_newton_samples
+                ),
+                None => "\n".to_string(),
+            });
         }
         out.write_all(text.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }

@@ -162,6 +162,13 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
     if let Some(t) = a.bla_tolerance {
         file.render.bla_tolerance = Some(cli(t));
     }
+    if let Some(w) = &a.interior_detection {
+        file.render.interior_detection = match w.as_str() {
+            "on" => Some(cli(true)),
+            "off" => Some(cli(false)),
+            _ => None,
+        };
+    }
     if let Some(e) = &a.engine {
         file.render.engine = cli(e.clone());
     }

@@ -58,17 +58,11 @@ pub fn newton(start: &BigC, period: u32, max_steps: u32) -> Option<BigC> {
 
 /// The complex size estimate of the minibrot whose nucleus is `c` (period `period`).
 pub fn size(c: &BigC, period: u32) -> [FloatExp; 2] {
-    let bits = c.bits;
-    let mut z = BigC::zero(bits);
-    let (mut l, mut b) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ONE, FloatExp::ZERO]);
-    for _ in 1..period {
+    let mut z = BigC::zero(c.bits);
+    crate::orbit::interior::size_estimate((1..period).map(|_| {
         z = z.square().add(c);
-        let zf = z.to_fe();
-        l = cmul(l, [zf[0].ldexp(1), zf[1].ldexp(1)]);
-        let inv = cinv(l);
-        b = [b[0] + inv[0], b[1] + inv[1]];
-    }
-    cinv(cmul(b, cmul(l, l)))
+        z.to_fe()
+    }))
 }
 
 /// Finds the minibrot of period `period` whose nucleus Newton's method reaches from `start`:
@@ -89,18 +83,6 @@ pub fn minibrot(start: &BigC, period: u32) -> Option<Minibrot> {
         }
         c = newton(&c.with_bits(needed + 32), period, 64)?;
     }
-}
-
-fn cmul(a: [FloatExp; 2], b: [FloatExp; 2]) -> [FloatExp; 2] {
-    [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
-}
-
-fn cinv(a: [FloatExp; 2]) -> [FloatExp; 2] {
-    let d = a[0] * a[0] + a[1] * a[1];
-    if d.is_zero() {
-        return [FloatExp::ZERO; 2];
-    }
-    [a[0] / d, -(a[1] / d)]
 }
 
 #[cfg(test)]

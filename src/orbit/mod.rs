@@ -8,6 +8,7 @@
 pub mod bigfloat;
 pub mod bla;
 pub mod fixed;
+pub mod interior;
 #[cfg(feature = "mpfr")]
 pub mod mpfr;
 pub mod perturb;
@@ -85,6 +86,9 @@ pub struct DeepSpec {
     pub derivative: bool,
     /// BLA tolerance, or None for no BLA.
     pub bla: Option<f64>,
+    /// Stop samples whose orbit has contracted onto an attracting cycle and report them as
+    /// interior: always, never, or where the view shows interior ([`interior::decide`]).
+    pub interior: interior::Detection,
     /// Delta number types.
     pub numbers: Numbers,
     /// The instruction set the reference orbit's squares run with (the same bits on every
@@ -224,6 +228,8 @@ pub fn prepare(
         }
     }
     let single_d2 = perturb::single_step_threshold(&bla_f64);
+    let check = interior::Check::new(spec.max_iter, spec.escape_radius);
+    let interior_decision = interior::decide(spec.interior, &refs, mandelbrot, spec.spacing, check);
     Ok(Perturbation {
         refs,
         bla_fe: std::sync::Arc::new(bla_fe),
@@ -235,6 +241,9 @@ pub fn prepare(
         max_iter: spec.max_iter,
         escape2: spec.escape_radius * spec.escape_radius,
         derivative: spec.derivative,
+        interior: interior_decision.runs().then_some(check),
+        interior_asked: spec.interior,
+        interior_decision,
         numbers: spec.numbers,
         skip,
         single_d2,

@@ -21,16 +21,30 @@
 //! overflows f64 long before deltas do (it grows like 4^n where |z| lingers near 2).
 //! Traps observe z = Z_m + δ in f64 at every iteration, so BLA (which skips iterations) is
 //! off when traps are on.
+//!
+//! With interior detection ([`super::interior`]) each sample also carries |dz/dz|^2, the
+//! squared modulus of its orbit's derivative with respect to its own start, and stops as
+//! interior once that falls below the threshold: a single step multiplies it by 4 |z|^2
+//! (the |z|^2 of the escape test), a BLA step by the squared modulus of the step's Jacobian
+//! in the delta, and a rebase leaves it alone (the sample's z does not change, only the
+//! reference index). Where the reference is one period of a nucleus, each end of a turn
+//! may also try Newton's method for an attracting cycle (`Perturbation::newton_probe`).
+//! It is off with traps, which must see every iteration.
 
 mod lanes;
 
 use super::bla::{BlaTable, Step};
+use super::interior::{self, Check, Contraction, Decision, Detection};
 use super::reference::Reference;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
+
+/// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
+/// reference (bulbs of the minibrot up to this period).
+const MAX_CYCLE_PERIODS: u32 = 8;
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
@@ -84,6 +98,10 @@ pub struct Counters {
     pub rebases: u64,
     /// Samples Pauldelbrot's criterion flagged (each was fixed by rebasing).
     pub glitches: u64,
+    /// Samples interior detection stopped before the iteration limit.
+    pub interior: u64,
+    /// Of those, samples Newton's test found (the rest: the contraction criterion).
+    pub newton: u64,
 }
 
 impl Counters {
@@ -96,6 +114,8 @@ impl Counters {
         self.bla_iterations += o.bla_iterations;
         self.rebases += o.rebases;
         self.glitches += o.glitches;
+        self.interior += o.interior;
+        self.newton += o.newton;
     }
 }
 
@@ -127,6 +147,13 @@ pub struct Perturbation {
     pub escape2: f64,
     /// Carry the derivative.
     pub derivative: bool,
+    /// Interior detection's threshold and window (see [`super::interior`]); None: off (not
+    /// asked for, or a Julia set whose parameter is not inside the Mandelbrot set).
+    pub interior: Option<Check>,
+    /// What the scene asked of interior detection.
+    pub interior_asked: Detection,
+    /// What was decided, and why.
+    pub interior_decision: Decision,
     /// Delta number types.
     pub numbers: Numbers,
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
@@ -204,6 +231,9 @@ pub struct Skip {
     /// δ_m = K1 u + K2 u^2 (u = δc for the Mandelbrot set, δ_0 for Julia sets), and the
     /// scaled derivative is (K1 + 2 K2 u) times the spacing.
     pub k: [[FloatExp; 2]; 2],
+    /// d(δ_m)/d(δ_start) = D1 + D2 u to first order in u (the derivative with respect to the
+    /// orbit's start that interior detection carries, [`super::interior`]).
+    pub d: [[FloatExp; 2]; 2],
     /// BLA steps composed.
     pub steps: u32,
 }
@@ -220,6 +250,7 @@ impl Skip {
     /// |R(u)| / |δ(u)| <= E / (|K1| u_max - |K2| u_max^2). That ratio is held to ε / 4.
     pub fn find(table: &BlaTable<FloatExp>, start: u32, u_max: FloatExp, max_iter: u32, eps: f64) -> Option<Skip> {
         let (mut k1, mut k2) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
+        let (mut d1, mut d2) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
         let (mut m, mut bound, mut steps) = (start, u_max, 0);
         let mut rem = FloatExp::ZERO;
         let abs = |v: [FloatExp; 2]| norm2(v).sqrt();
@@ -241,12 +272,15 @@ impl Skip {
             if floor <= FloatExp::ZERO || next > floor.mul_f64(limit) {
                 break;
             }
+            // d(δ')/d(δ) = A + 2 A2 δ + AB u = A + (2 A2 K1 + AB) u + O(u^2).
+            let slope = cadd(cmul([q.a2[0].ldexp(1), q.a2[1].ldexp(1)], k1), q.ab);
+            (d1, d2) = (cmul(f.a, d1), cadd(cmul(f.a, d2), cmul(slope, d1)));
             (k1, k2, rem) = (n1, n2, next);
             bound = abs(k1) * u + abs(k2) * u2 + rem;
             m += len;
             steps += 1;
         }
-        (steps > 0).then_some(Skip { m, k: [k1, k2], steps })
+        (steps > 0).then_some(Skip { m, k: [k1, k2], d: [d1, d2], steps })
     }
 }
 
@@ -291,11 +325,29 @@ struct Sample<D> {
     n: u32,
     /// The delta went above `single_d2`: single steps only, until the next rebase.
     single: bool,
+    /// |dz/dz|^2 from the orbit's start (interior detection; unused without it).
+    shrink: Contraction,
+    /// Interior detection's Newton test ([`Perturbation::newton_probe`]).
+    probe: Probe,
+}
+
+/// What a sample remembers for interior detection's Newton test, at the ends of the periods
+/// of a nucleus's reference: the iteration from which it may run, and an anchor (an end
+/// earlier, its full value, the binary exponent of |dz/dz|^2 there, and the squared distance
+/// from its value to the next end's).
+#[derive(Debug, Clone, Copy)]
+struct Probe {
+    at: u32,
+    anchor_n: u32,
+    anchor_exp: i32,
+    anchor: [f64; 2],
+    first2: f64,
 }
 
 impl<D: Real> Sample<D> {
     fn convert<E: Real>(&self) -> Sample<E> {
-        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m: self.m, which: self.which, n: self.n, single: self.single }
+        let (m, which, n, single, shrink, probe) = (self.m, self.which, self.n, self.single, self.shrink, self.probe);
+        Sample { dz: cconv(self.dz), dc: cconv(self.dc), m, which, n, single, shrink, probe }
     }
 }
 
@@ -484,10 +536,14 @@ impl Perturbation {
         let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
         let d = if self.origin == [zero; 2] { d } else { cadd(self.origin, d) };
+        let shrink = self.interior.map_or(Contraction::IDLE, |c| Contraction::new(FloatExp::ONE, c));
+        // The first Newton test at the end of the second period, if the first contracted.
+        let at = self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2));
+        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0 };
         let (mut start, add_fe) = if self.mandelbrot {
-            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false }, self.spacing)
+            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink, probe }, self.spacing)
         } else {
-            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false }, zero)
+            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
         };
         let mut der = [self.spacing, zero];
         if let (true, Some(k)) = (skip, &self.skip) {
@@ -500,8 +556,109 @@ impl Perturbation {
             start.n = k.m;
             let k2d = cmul(k2, d);
             der = cmul(cadd(k1, [k2d[0].ldexp(1), k2d[1].ldexp(1)]), der);
+            if let Some(c) = self.interior {
+                let [d1, d2] = k.d;
+                start.shrink = Contraction::new(norm2(cadd(d1, cmul(d2, d))), c);
+            }
         }
         (start, Der::from_fe(der, add_fe), add_fe)
+    }
+
+    /// The period of the reference when interior detection may use Newton's test: a
+    /// Mandelbrot view centred on a nucleus (its reference is one period).
+    fn newton_period(&self) -> Option<u32> {
+        self.refs[0].period().filter(|_| self.mandelbrot && self.interior.is_some())
+    }
+
+    /// Interior detection's Newton test, at the end of a period of a nucleus's reference
+    /// (the sample has just rebased to Z_0 = 0 with δ its full value, near 0).
+    ///
+    /// A sample inside the minibrot's cardioid is attracted by a cycle of the reference's
+    /// period p; inside one of its bulbs, by a cycle of period k p, whose point near 0 the
+    /// sample comes back to every k ends. So the sample keeps an anchor (an earlier end):
+    /// one end after it, it may be a cycle of period p; later, k ends after it, one of
+    /// period k p where its value has come back to the anchor's four times closer than it
+    /// went away at the first end. Where that holds, |dz/dz|^2 shrank since the anchor, and
+    /// the iteration count has reached the sample's `at`, Newton's method looks for an
+    /// attracting cycle of period k p from the value ([`interior::newton_attracting`]).
+    /// Found, the sample is interior (its parameter lies in a hyperbolic component); else
+    /// the next test waits until the iteration count has doubled, from a new anchor. This
+    /// finds most interior samples within a few periods, where the contraction criterion
+    /// needs log(threshold) / log|λ| of them (hundreds, and more than the limit allows near
+    /// a component's edge); the contraction criterion still decides everywhere else.
+    fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
+        let Some(p) = self.newton_period() else { return false };
+        let exp = s.shrink.value().exponent();
+        let w = cto_f64(s.dz);
+        let pr = &mut s.probe;
+        let away2 = |a: [f64; 2]| (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
+        let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
+        let candidate = match k {
+            0 => false,
+            1 => {
+                pr.first2 = away2(pr.anchor);
+                true
+            }
+            _ => away2(pr.anchor) * 16.0 < pr.first2,
+        };
+        if candidate && exp < pr.anchor_exp && s.n >= pr.at {
+            pr.at = s.n.saturating_mul(2);
+            let dc = cto_f64(s.dc);
+            if interior::newton_attracting(w, |w| self.return_map(w, dc, p, k)) {
+                return true;
+            }
+        } else if k != 0 && k < MAX_CYCLE_PERIODS {
+            return false;
+        }
+        *pr = Probe { anchor_n: s.n, anchor_exp: exp, anchor: w, ..*pr };
+        false
+    }
+
+    /// f^(k p)(w) and its derivative in w, for a full value w near 0 and the sample offset
+    /// `dc`, by perturbation against k turns of one period p of a nucleus's reference from
+    /// Z_0 = 0 (each turn ending at Z_p, near 0, where the next begins from Z_0 with δ the
+    /// full value): BLA steps where the f64 tables have them, single steps elsewhere. None
+    /// where the orbit of w escapes or leaves the reference within a turn (it would rebase
+    /// elsewhere than at Z_p).
+    fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32) -> Option<([f64; 2], [FloatExp; 2])> {
+        let r = &self.refs[0];
+        let table = self.bla_f64[0].as_ref();
+        let mut z = w;
+        let mut der = [FloatExp::ONE, FloatExp::ZERO];
+        for _ in 0..k {
+            let (mut dz, mut m) = (z, 0u32);
+            while m < p {
+                let zm = r.get(m);
+                let full = cadd(zm, dz);
+                let (f2, d2) = (norm2(full), norm2(dz));
+                if f2 > self.escape2 || (m > 0 && f2 < d2) {
+                    return None;
+                }
+                if let Some(t) = table
+                    && let Some((e, len)) = t.lookup(m, d2, p - m)
+                {
+                    let (next, jac) = if e.linear(d2) {
+                        (cadd(cmul(e.first.a, dz), cmul(e.first.b, dc)), e.first.a)
+                    } else {
+                        let (next, jac, _) = e.apply_with_jacobian(dz, dc);
+                        (next, jac)
+                    };
+                    der = cmul(cconv(jac), der);
+                    (dz, m) = (next, m + len);
+                    continue;
+                }
+                der = cmul(cconv([full[0] * 2.0, full[1] * 2.0]), der);
+                dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
+                m += 1;
+            }
+            z = cadd(r.get(p), dz);
+        }
+        Some((z, der))
+    }
+
+    /// Interior detection's check (one that never fires when it is off).
+    fn check(&self) -> Check {
+        self.interior.unwrap_or(Check::OFF)
     }
 
     /// True when a sample starting at `s` must begin in FloatExp.
@@ -534,16 +691,23 @@ impl Perturbation {
         if lanes::orbits(self, offsets, out, counters, simd) {
             return;
         }
-        if self.derivative {
-            self.orbits_with::<true>(offsets, out, counters);
-        } else {
-            self.orbits_with::<false>(offsets, out, counters);
+        match (self.derivative, self.interior.is_some()) {
+            (false, false) => self.orbits_with::<false, false>(offsets, out, counters),
+            (true, false) => self.orbits_with::<true, false>(offsets, out, counters),
+            (false, true) => self.orbits_with::<false, true>(offsets, out, counters),
+            (true, true) => self.orbits_with::<true, true>(offsets, out, counters),
         }
     }
 
-    /// [`Perturbation::orbits`] with the derivative carried or not (`DER`, compiled apart so
-    /// that the common case has no derivative branches in its loop).
-    fn orbits_with<const DER: bool>(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters) {
+    /// [`Perturbation::orbits`] with the derivative carried or not (`DER`) and interior
+    /// detection on or off (`INT`), compiled apart so that the common case has no branches of
+    /// either in its loop.
+    fn orbits_with<const DER: bool, const INT: bool>(
+        &self,
+        offsets: &[[f64; 2]],
+        out: &mut [Orbit],
+        counters: &mut Counters,
+    ) {
         let add_fe = self.add_fe();
         let c64 = self.ctx(&self.bla_f64, true, add_fe);
         let mut lanes: [Option<Lane>; LANES] = [None; LANES];
@@ -579,10 +743,12 @@ impl Perturbation {
                 [Some(a), Some(b)] => {
                     let (mut a2, mut b2) = (*a, *b);
                     let r = loop {
-                        if let Some(e) = self.op::<f64, DER>(&mut a2.s, &mut a2.der, c64, &[], &mut [], &mut local) {
+                        if let Some(e) = self.op::<f64, DER, INT>(&mut a2.s, &mut a2.der, c64, &[], &mut [], &mut local)
+                        {
                             break (0, e);
                         }
-                        if let Some(e) = self.op::<f64, DER>(&mut b2.s, &mut b2.der, c64, &[], &mut [], &mut local) {
+                        if let Some(e) = self.op::<f64, DER, INT>(&mut b2.s, &mut b2.der, c64, &[], &mut [], &mut local)
+                        {
                             break (1, e);
                         }
                     };
@@ -592,7 +758,7 @@ impl Perturbation {
                 _ => {
                     let l = lanes.iter().position(Option::is_some).unwrap_or(0);
                     let Some(lane) = &mut lanes[l] else { continue };
-                    (l, self.steps::<f64, DER>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local))
+                    (l, self.steps::<f64, DER, INT>(&mut lane.s, &mut lane.der, c64, &[], &mut [], &mut local))
                 }
             };
             if let Some(lane) = &mut lanes[l] {
@@ -664,8 +830,9 @@ impl Perturbation {
 
     /// Continues a sample the vector lanes handed back: after a renormalisation of its
     /// derivative (`renorm`), or else at an event the lanes do not handle (escape, the
-    /// iteration limit, a rebase or glitch, the reference's end), which one full pass of the
-    /// scalar loop takes care of before the sample runs on as [`Perturbation::begin`]'s do.
+    /// iteration limit, a rebase or glitch, the reference's end, |dz/dz|^2 out of its
+    /// window or below the threshold), which one full pass of the scalar loop takes care of
+    /// before the sample runs on as [`Perturbation::begin`]'s do.
     fn resume(&self, mut h: Held, out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
         let add_fe = self.add_fe();
         let phase = if h.renorm {
@@ -675,10 +842,12 @@ impl Perturbation {
             let c64 = self.ctx(&self.bla_f64, true, add_fe);
             let n0 = h.s.n;
             let mut local = Counters::default();
-            let exit = if self.derivative {
-                self.op::<f64, true>(&mut h.s, &mut h.der, c64, &[], &mut [], &mut local)
-            } else {
-                self.op::<f64, false>(&mut h.s, &mut h.der, c64, &[], &mut [], &mut local)
+            let (s, der, l) = (&mut h.s, &mut h.der, &mut local);
+            let exit = match (self.derivative, self.interior.is_some()) {
+                (false, false) => self.op::<f64, false, false>(s, der, c64, &[], &mut [], l),
+                (true, false) => self.op::<f64, true, false>(s, der, c64, &[], &mut [], l),
+                (false, true) => self.op::<f64, false, true>(s, der, c64, &[], &mut [], l),
+                (true, true) => self.op::<f64, true, true>(s, der, c64, &[], &mut [], l),
             };
             local.iterations = (h.s.n - n0) as u64;
             counters.add(&local);
@@ -743,10 +912,14 @@ impl Perturbation {
         let start_n = s.n;
         // Counted locally and added on exit: the loop's state stays in registers.
         let mut local = Counters::default();
-        let exit = if self.derivative {
-            self.steps::<D, true>(&mut s, der, ctx, traps, states, &mut local)
-        } else {
-            self.steps::<D, false>(&mut s, der, ctx, traps, states, &mut local)
+        // Traps must see every iteration: no interior detection with them.
+        let int = self.interior.is_some() && traps.is_empty();
+        let (sm, l) = (&mut s, &mut local);
+        let exit = match (self.derivative, int) {
+            (false, false) => self.steps::<D, false, false>(sm, der, ctx, traps, states, l),
+            (true, false) => self.steps::<D, true, false>(sm, der, ctx, traps, states, l),
+            (false, true) => self.steps::<D, false, true>(sm, der, ctx, traps, states, l),
+            (true, true) => self.steps::<D, true, true>(sm, der, ctx, traps, states, l),
         };
         if D::NAME == FloatExp::NAME {
             local.floatexp_steps = local.steps;
@@ -758,7 +931,7 @@ impl Perturbation {
 
     /// Passes of the loop until the sample ends or must change number type.
     #[inline(always)]
-    fn steps<D: Real, const DER: bool>(
+    fn steps<D: Real, const DER: bool, const INT: bool>(
         &self,
         s: &mut Sample<D>,
         der: &mut Der,
@@ -768,16 +941,17 @@ impl Perturbation {
         local: &mut Counters,
     ) -> Exit<D> {
         loop {
-            if let Some(exit) = self.op::<D, DER>(s, der, ctx, traps, states, local) {
+            if let Some(exit) = self.op::<D, DER, INT>(s, der, ctx, traps, states, local) {
                 return exit;
             }
         }
     }
 
-    /// One pass of the loop: the end tests, then a rebase, a BLA step or a perturbation
-    /// step. Returns the exit when the sample ends or must change number type.
+    /// One pass of the loop: the end tests (with `INT` first of all, whether the sample has
+    /// been found interior), then a rebase, a BLA step or a perturbation step. Returns the
+    /// exit when the sample ends or must change number type.
     #[inline(always)]
-    fn op<D: Real, const DER: bool>(
+    fn op<D: Real, const DER: bool, const INT: bool>(
         &self,
         s: &mut Sample<D>,
         der: &mut Der,
@@ -786,6 +960,12 @@ impl Perturbation {
         states: &mut [TrapState],
         local: &mut Counters,
     ) -> Option<Exit<D>> {
+        // The previous step may have brought |dz/dz|^2 below the threshold (or out of its
+        // window): decided first, as the vector lanes do before their other events.
+        if INT && s.shrink.interior(self.check()) {
+            local.interior += 1;
+            return Some(Exit::Done(Orbit::interior()));
+        }
         let full_range = D::NAME == FloatExp::NAME;
         let r = &self.refs[s.which];
         let mut zm: [D; 2] = if full_range {
@@ -810,7 +990,8 @@ impl Perturbation {
         }
         let d2 = norm2(s.dz);
         let f2 = norm2(full);
-        let rebase = f2 < d2 || s.m >= r.last();
+        let end = s.m >= r.last();
+        let rebase = f2 < d2 || end;
         let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
         if rebase || glitch {
             local.glitches += glitch as u64;
@@ -820,6 +1001,11 @@ impl Perturbation {
             s.which = self.refs.len() - 1;
             s.single = false;
             zm = [D::ZERO; 2];
+            if INT && end && !full_range && self.newton_probe(s) {
+                local.interior += 1;
+                local.newton += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
             if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
             }
@@ -831,7 +1017,7 @@ impl Perturbation {
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            self.apply_bla::<D, DER>(e, s, d2, der, ctx.add_fe);
+            self.apply_bla::<D, DER, INT>(e, s, d2, der, ctx.add_fe);
             s.m += len;
             s.n += len;
             local.bla_steps += 1;
@@ -840,6 +1026,9 @@ impl Perturbation {
         }
         if DER {
             der.step(z, full, ctx.add_fe);
+        }
+        if INT {
+            s.shrink.step(full, f2, self.check());
         }
         let two = D::from_f64(2.0);
         s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
@@ -854,9 +1043,12 @@ impl Perturbation {
 
     /// δ -> A δ + B δc + A2 δ^2 + AB δ δc + B2 δc^2 (first order only where that is valid
     /// for |δ|^2 = `d2`), and the derivative by the step's Jacobian: in f64 when its entries
-    /// are moderate (the common case), else in FloatExp (they may be huge at depth).
+    /// are moderate (the common case), else in FloatExp (they may be huge at depth). With
+    /// `INT`, |dz/dz|^2 is multiplied by |d(δ')/d(δ)|^2 (A + 2 A2 δ + AB δc, or A for a
+    /// first-order step). The new δ is the same bits whether or not the Jacobian is
+    /// computed.
     #[inline]
-    fn apply_bla<D: Real, const DER: bool>(
+    fn apply_bla<D: Real, const DER: bool, const INT: bool>(
         &self,
         e: Step<'_, D>,
         s: &mut Sample<D>,
@@ -865,7 +1057,7 @@ impl Perturbation {
         add_fe: FloatExp,
     ) {
         let linear = e.linear(d2);
-        if !DER {
+        if !DER && !INT {
             s.dz = if linear { cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)) } else { e.apply(s.dz, s.dc) };
             return;
         }
@@ -874,8 +1066,13 @@ impl Perturbation {
         } else {
             e.apply_with_jacobian(s.dz, s.dc)
         };
-        der.jacobian(cto_f64(m), cto_f64(n), || (cconv(m), cconv(n)), add_fe);
+        if DER {
+            der.jacobian(cto_f64(m), cto_f64(n), || (cconv(m), cconv(n)), add_fe);
+        }
         s.dz = dz;
+        if INT {
+            s.shrink.bla_step(m, self.check());
+        }
     }
 }
 
@@ -901,6 +1098,12 @@ mod tests {
     const E50: [&str; 2] = [
         "-0.04947002906310409375169222672735363011874571248822487931810494023264219477268690",
         "-0.67478757584467536401139205313059765633477070682240348069799979479099419834548451",
+    ];
+    /// The nucleus of a period-1429 minibrot near the all-seeing-eye location (`deepfield
+    /// find scenes/locations/all-seeing-eye.toml --zoom 1e70`), size 1.6e-102.
+    const EYE_MINIBROT: [&str; 2] = [
+        "-0.83031842675693053553109980802050591726924580592100415017586803599827560339120465373468510811787516730515186454892834980632246054605795",
+        "0.23612476396680780363307856325882633547132442124365456398110558858530832926040168389957117374824216611986058042279006600832794659929318",
     ];
     const JULIA_CENTER: [&str; 2] = [
         "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
@@ -963,6 +1166,7 @@ mod tests {
                 escape_radius: 65536.0,
                 derivative: false,
                 bla: Some(eps),
+                interior: Detection::Off,
                 numbers: Numbers::FloatExp,
                 simd: SimdLevel::detect(),
                 references: None,
@@ -1003,8 +1207,10 @@ mod tests {
 
     /// Every sample of a 32x24 view through `orbits` with every instruction set this CPU
     /// runs (the vector lanes of each width, and the two-sample scalar loop) and one at a
-    /// time through `orbit`: bit for bit the same escape, z_n and derivative, and the same
-    /// iteration count.
+    /// time through `orbit`, with interior detection off and on: bit for bit the same
+    /// escape, z_n and derivative, and the same iteration, step and interior counts. Interior
+    /// detection changes no sample's end but for stopping interior ones earlier (same N,
+    /// INTERIOR). Returns the samples found interior by detection.
     fn same_both_ways(
         center: [&str; 2],
         julia: Option<[&str; 2]>,
@@ -1012,45 +1218,68 @@ mod tests {
         max_iter: u32,
         numbers: Numbers,
         bla: Option<f64>,
-    ) {
+    ) -> u64 {
         let (w, h) = (32i32, 24i32);
+        let mut found = 0;
         for derivative in [false, true] {
-            let spec = DeepSpec {
-                center: dec(center),
-                julia: julia.map(dec),
-                spacing: Scale::Radius(Decimal::parse(radius).unwrap()).spacing(h as u32),
-                max_offset: ((w * w + h * h) as f64).sqrt() / 2.0,
-                max_iter,
-                escape_radius: 2.0,
-                derivative,
-                bla,
-                numbers,
-                simd: SimdLevel::detect(),
-                references: None,
-            };
-            let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
-            let offsets: Vec<[f64; 2]> = (0..h)
-                .flat_map(|j| (0..w).map(move |i| [i as f64 - w as f64 / 2.0 + 0.5, j as f64 - h as f64 / 2.0 + 0.5]))
-                .collect();
-            let mut c_one = Counters::default();
-            let mut escaped = 0;
-            let one: Vec<Orbit> = offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one)).collect();
-            let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
-            for simd in SimdLevel::usable() {
-                let mut many = vec![Orbit::interior(); offsets.len()];
-                let mut c_many = Counters::default();
-                p.orbits(&offsets, &mut many, &mut c_many, simd);
-                for k in 0..offsets.len() {
-                    assert_eq!(bits(&many[k]), bits(&one[k]), "{radius} {simd} derivative {derivative}: sample {k}");
-                    escaped += (one[k].n != crate::formula::end::INTERIOR) as u32;
+            let mut without: Option<Vec<Orbit>> = None;
+            for interior in [Detection::Off, Detection::On] {
+                let spec = DeepSpec {
+                    center: dec(center),
+                    julia: julia.map(dec),
+                    spacing: Scale::Radius(Decimal::parse(radius).unwrap()).spacing(h as u32),
+                    max_offset: ((w * w + h * h) as f64).sqrt() / 2.0,
+                    max_iter,
+                    escape_radius: 2.0,
+                    derivative,
+                    bla,
+                    interior,
+                    numbers,
+                    simd: SimdLevel::detect(),
+                    references: None,
+                };
+                let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+                let offsets: Vec<[f64; 2]> = (0..h)
+                    .flat_map(|j| {
+                        (0..w).map(move |i| [i as f64 - w as f64 / 2.0 + 0.5, j as f64 - h as f64 / 2.0 + 0.5])
+                    })
+                    .collect();
+                let mut c_one = Counters::default();
+                let mut escaped = 0;
+                let one: Vec<Orbit> = offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one)).collect();
+                let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
+                let what = format!("{radius} derivative {derivative} interior {interior:?}");
+                for simd in SimdLevel::usable() {
+                    let mut many = vec![Orbit::interior(); offsets.len()];
+                    let mut c_many = Counters::default();
+                    p.orbits(&offsets, &mut many, &mut c_many, simd);
+                    for k in 0..offsets.len() {
+                        assert_eq!(bits(&many[k]), bits(&one[k]), "{what} {simd}: sample {k}");
+                        escaped += (one[k].n != crate::formula::end::INTERIOR) as u32;
+                    }
+                    assert_eq!(c_many.iterations, c_one.iterations, "{what} {simd}: iteration counts");
+                    let steps = |c: &Counters| c.steps + c.bla_steps;
+                    assert_eq!(steps(&c_many), steps(&c_one), "{what} {simd}: step counts");
+                    assert_eq!(c_many.rebases, c_one.rebases, "{what} {simd}: rebases");
+                    assert_eq!(c_many.interior, c_one.interior, "{what} {simd}: samples found interior");
+                    assert_eq!(c_many.newton, c_one.newton, "{what} {simd}: samples found by Newton's test");
                 }
-                assert_eq!(c_many.iterations, c_one.iterations, "{radius} {simd}: iteration counts");
-                let steps = |c: &Counters| c.steps + c.bla_steps;
-                assert_eq!(steps(&c_many), steps(&c_one), "{radius} {simd}: step counts");
-                assert_eq!(c_many.rebases, c_one.rebases, "{radius} {simd}: rebases");
+                assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
+                match &without {
+                    None => {
+                        assert_eq!(c_one.interior, 0, "{what}");
+                        without = Some(one);
+                    }
+                    Some(off) => {
+                        for k in 0..offsets.len() {
+                            assert_eq!(bits(&one[k]), bits(&off[k]), "{what}: sample {k} differs from detection off");
+                        }
+                        found += c_one.interior;
+                    }
+                }
             }
-            assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
         }
+        found
     }
 
     #[test]
@@ -1065,5 +1294,20 @@ mod tests {
         same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, None);
         same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, eps);
         same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, None);
+    }
+
+    /// The period-1429 minibrot of the all-seeing-eye location (size 1.6e-102): its
+    /// interior samples are found by detection in the vector lanes, the two-sample loop and
+    /// one at a time alike, with f64 and FloatExp deltas, with and without BLA.
+    #[test]
+    fn lanes_match_one_sample_at_a_time_with_interior_found() {
+        let eps = Some(crate::orbit::DEFAULT_BLA_TOLERANCE);
+        for (numbers, bla) in [(Numbers::F64, eps), (Numbers::FloatExp, eps), (Numbers::F64, None)] {
+            let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, numbers, bla);
+            assert!(found > 100, "{numbers:?} {bla:?}: {found} samples found interior");
+        }
+        // The whole of a Julia set whose parameter is inside the period-3 bulb (the rabbit).
+        let found = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps);
+        assert!(found > 100, "rabbit: {found} samples found interior");
     }
 }

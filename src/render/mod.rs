@@ -162,6 +162,16 @@ pub struct DeepStats {
     pub bla_iterations: u64,
     /// Rebases.
     pub rebases: u64,
+    /// Whether interior detection ran, and why (`on`, `auto-on`, `off`,
+    /// `auto-exterior-centre`, `auto-minibrot-below-sample`, `julia-no-interior`).
+    pub interior_detection: orbit::interior::Decision,
+    /// Its threshold on |dz/dz|^2 (see `orbit::interior`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interior_threshold: Option<f64>,
+    /// Samples it stopped before the iteration limit.
+    pub interior_samples: u64,
+    /// Of those, the samples Newton's test found (in views centred on a nucleus).
+    pub interior_newton_samples: u64,
 }
 
 /// What a render did.
@@ -279,6 +289,7 @@ pub fn deep_spec(scene: &Scene, plan: &EnginePlan, options: &Options) -> (FieldP
         escape_radius: scene.escape_radius,
         derivative: params.needs.de,
         bla,
+        interior: scene.interior_detection,
         numbers,
         simd: params.orbit.simd,
         references: None,
@@ -305,8 +316,14 @@ pub fn prepare_field(
             spec.references = Some(saved.refs.clone());
         }
         let shared = options.deep.as_ref().filter(|d| {
-            (d.max_iter, d.escape2, d.derivative, d.mandelbrot)
-                == (spec.max_iter, spec.escape_radius * spec.escape_radius, spec.derivative, spec.julia.is_none())
+            (d.max_iter, d.escape2, d.derivative, d.mandelbrot, d.interior_asked)
+                == (
+                    spec.max_iter,
+                    spec.escape_radius * spec.escape_radius,
+                    spec.derivative,
+                    spec.julia.is_none(),
+                    spec.interior,
+                )
         });
         if let Some(q) = shared.and_then(|d| d.with_spacing(spec.spacing, params.grid.max_offset())) {
             params.deep = Some(Arc::new(q));
@@ -494,6 +511,10 @@ pub fn render<P: Send>(
             bla_steps: c.bla_steps,
             bla_iterations: c.bla_iterations,
             rebases: c.rebases,
+            interior_detection: d.interior_decision,
+            interior_threshold: d.interior.map(|c| c.below2.to_f64()),
+            interior_samples: c.interior,
+            interior_newton_samples: c.newton,
         }
     });
     let precision = match plan.kind {

@@ -255,6 +255,9 @@ pub struct Scene {
     pub engine: EngineChoice,
     /// BLA tolerance for the perturbation engines (None: BLA off).
     pub bla: Option<f64>,
+    /// Interior detection in the perturbation engines (`[render] interior_detection`:
+    /// true, false, or absent for the default).
+    pub interior_detection: crate::orbit::interior::Detection,
     /// The view's scale as written (exact, for deep engines).
     pub scale: Scale,
     /// Colouring layers.

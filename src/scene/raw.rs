@@ -172,6 +172,10 @@ pub struct RenderRaw {
     /// BLA tolerance ε (default 1e-14).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bla_tolerance: Option<Spanned<f64>>,
+    /// Interior detection in the perturbation engines (absent: where the view's centre is
+    /// interior).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interior_detection: Option<Spanned<bool>>,
     /// Palette cycling: added to the offset of every palette, in cycles (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cycle: Option<Spanned<f64>>,
@@ -197,6 +201,7 @@ impl Default for RenderRaw {
             engine: default_engine(),
             bla: None,
             bla_tolerance: None,
+            interior_detection: None,
             cycle: None,
             background: default_background(),
         }

@@ -12,6 +12,7 @@ use crate::compose::Stack;
 use crate::field::transform::MAX_STRETCH_AMOUNT;
 use crate::field::{Channel, ChannelSet};
 use crate::num::Decimal;
+use crate::orbit::interior::Detection;
 use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
 use crate::palette;
 use crate::source::SourceError;
@@ -133,6 +134,11 @@ pub(super) fn validate(
         None => DEFAULT_BLA_TOLERANCE,
     };
     let bla = bla_on.then_some(tolerance);
+    let interior_detection = match file.render.interior_detection.as_ref().map(|b| *b.get_ref()) {
+        None => Detection::Auto,
+        Some(true) => Detection::On,
+        Some(false) => Detection::Off,
+    };
     let bg = cx.colour(&file.render.background)?;
     let cycle = match &file.render.cycle {
         Some(c) => cx.finite(c, -1e9, 1e9, "render.cycle")?,
@@ -190,6 +196,7 @@ pub(super) fn validate(
         aa,
         engine,
         bla,
+        interior_detection,
         scale,
         stack: Stack { layers, background: [bg[0], bg[1], bg[2]] },
         traps,

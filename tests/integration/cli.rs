@@ -162,6 +162,47 @@ fn deep_views_render_with_perturbation_and_report_it() {
     assert!(json["deep"]["reference_bits"].as_u64().unwrap() > 1096);
 }
 
+/// Interior detection: by default on a view centred on a minibrot, `--interior-detection
+/// off` and `on` override it (and the PNG carries the scene key), `--stats` and
+/// `--stats-json` say what was decided and how many samples stopped early, the picture is
+/// the same either way, and a key that is not a boolean is refused with its place.
+#[test]
+fn interior_detection_is_a_scene_key_and_a_flag_shown_in_statistics() {
+    let dir = scratch("cli-interior");
+    let scene = "version = 1\n[view]\ncenter = [\"-0.83031842675693053553109980802050591726924580592100415017586803599827560339120465373468510811787516730515186454892834980632246054605795\", \"0.23612476396680780363307856325882633547132442124365456398110558858530832926040168389957117374824216611986058042279006600832794659929318\"]\nradius = \"1.2e-102\"\nwidth = 32\nheight = 24\n[iteration]\nmax = 200000\n";
+    write(&dir, "scene.toml", scene);
+    let mut pictures = Vec::new();
+    for (flag, decision, text) in [
+        (None, "auto-on", "detection on (by default"),
+        (Some("off"), "off", "detection off (render.interior_detection = false)"),
+        (Some("on"), "on", "detection on (asked for)"),
+    ] {
+        let png = format!("{decision}.png");
+        let mut args = vec!["render", "scene.toml", "-o", &png, "--stats", "--stats-json", "s.json"];
+        if let Some(f) = flag {
+            args.extend_from_slice(&["--interior-detection", f]);
+        }
+        let o = deepfield(&args, &dir);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains(text), "{flag:?}: {stdout}");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+        assert_eq!(json["deep"]["interior_detection"], decision, "{json}");
+        let stopped = json["deep"]["interior_samples"].as_u64().unwrap();
+        assert_eq!(stopped > 100, flag != Some("off"), "{flag:?}: {stopped} samples stopped early");
+        let newton = json["deep"]["interior_newton_samples"].as_u64().unwrap();
+        assert!(newton <= stopped && (newton > 0) == (stopped > 0), "{flag:?}: {newton} by Newton's test");
+        let embedded = deepfield::io::read_png_scene(&dir.join(&png)).unwrap().unwrap();
+        let key = flag.map(|f| format!("interior_detection = {}", f == "on"));
+        assert_eq!(embedded.contains("interior_detection"), key.is_some(), "{embedded}");
+        assert!(key.is_none_or(|k| embedded.contains(&k)), "{embedded}");
+        pictures.push(image::open(dir.join(&png)).unwrap().into_rgb8().into_raw());
+    }
+    assert!(pictures.iter().all(|p| p == &pictures[0]), "the picture depends on interior detection");
+    rejects("interior-type", Some("version = 1\n[render]\ninterior_detection = \"yes\"\n"), &[], "scene.toml:3:22");
+    rejects("interior-flag", None, &["--interior-detection", "maybe"], "--interior-detection");
+}
+
 /// A Kalles Fraktaler location renders as a scene.
 #[test]
 fn kfr_locations_are_scenes() {

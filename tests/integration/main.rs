@@ -10,6 +10,7 @@ mod golden;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod import;
+mod interior;
 mod reference;
 mod units;
 mod util;

@@ -14,8 +14,8 @@
 //! steps of different lengths), tests for anything that is not a plain step, and steps. A
 //! rebase that keeps the sample in single steps happens in the lane. A lane that meets an
 //! escape, the iteration limit, the reference's end, a rebase into FloatExp range or back to
-//! BLA steps, or a derivative that leaves its exponent window hands its sample back to the
-//! scalar loop ([`Perturbation::resume`]), which handles the event with its own code and
+//! BLA steps, or a derivative or |dz/dz|^2 (interior detection) that leaves its exponent
+//! window hands its sample back to the scalar loop ([`Perturbation::resume`]), which handles the event with its own code and
 //! returns the sample (when it is again in single steps) or the next one. Nothing else
 //! leaves a lane, so no lane idles while its neighbours run long. Positions are addresses
 //! kept per lane in scalars (`at0[i] + t16`), and the iteration limit and the reference's
@@ -43,6 +43,10 @@
 use pulp::Simd;
 
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
+use crate::orbit::interior;
+
+// The lanes hand a step back for either reason with one comparison.
+const _: () = assert!(DER_TINY_Z2 == interior::TINY2);
 use crate::formula::end::Orbit;
 use crate::simd_level::SimdLevel;
 
@@ -217,10 +221,12 @@ impl<U: Unit, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>> pulp::WithS
     #[inline(always)]
     fn with_simd<S: Simd>(self, _: S) {
         // `vectorize` passes the unit itself; its typed token is the one kept here.
-        if self.p.derivative {
-            run::<U, true, F>(self.unit, self.p, self.feed, self.counters);
-        } else {
-            run::<U, false, F>(self.unit, self.p, self.feed, self.counters);
+        let (u, p, feed, c) = (self.unit, self.p, self.feed, self.counters);
+        match (p.derivative, p.interior.is_some()) {
+            (false, false) => run::<U, false, false, F>(u, p, feed, c),
+            (true, false) => run::<U, true, false, F>(u, p, feed, c),
+            (false, true) => run::<U, false, true, F>(u, p, feed, c),
+            (true, true) => run::<U, true, true, F>(u, p, feed, c),
         }
     }
 }
@@ -288,7 +294,8 @@ impl Refs {
 }
 
 /// One vector of lanes: the delta and offset, the derivative's mantissa and what a step
-/// adds to it, and which lanes hold a sample. Positions are kept per lane in scalars, since
+/// adds to it, the mantissa of |dz/dz|^2 and the bottom of its window, and which lanes hold
+/// a sample. Positions are kept per lane in scalars, since
 /// every lane advances one step at a time: `t16` counts the bytes stepped (16 per step),
 /// lane i's Z_m lies at address `at0[i] + t16` and its iteration count is
 /// `n0[i] + t16 / 16`, and the lane must leave when `t16` reaches `stop[i]` (the iteration
@@ -302,6 +309,8 @@ struct Lanes<S: Simd> {
     der_r: S::f64s,
     der_i: S::f64s,
     add: S::f64s,
+    shrink: S::f64s,
+    shrink_lo: S::f64s,
     act: u32,
     /// Lanes that rebased in the lane and have not yet taken their first step from Z_0.
     fresh: u32,
@@ -334,6 +343,8 @@ impl<S: Simd> Lanes<S> {
             der_r: z,
             der_i: z,
             add: z,
+            shrink: z,
+            shrink_lo: z,
             act: 0,
             fresh: 0,
             t16: 0,
@@ -353,6 +364,8 @@ impl<S: Simd> Lanes<S> {
         *lane::<S>(&mut self.der_r, i) = h.der.mant[0];
         *lane::<S>(&mut self.der_i, i) = h.der.mant[1];
         *lane::<S>(&mut self.add, i) = h.der.add;
+        *lane::<S>(&mut self.shrink, i) = h.s.shrink.mant;
+        *lane::<S>(&mut self.shrink_lo, i) = h.s.shrink.lo;
         self.place(i, h.s.which, h.s.m, h.s.n, p, refs);
         self.act |= 1 << i;
     }
@@ -362,6 +375,7 @@ impl<S: Simd> Lanes<S> {
     fn take(&mut self, i: usize, h: &mut Held, refs: &Refs) -> u32 {
         h.s.dz = [*lane::<S>(&mut self.dzr, i), *lane::<S>(&mut self.dzi, i)];
         h.der.mant = [*lane::<S>(&mut self.der_r, i), *lane::<S>(&mut self.der_i, i)];
+        h.s.shrink.mant = *lane::<S>(&mut self.shrink, i);
         h.s.m = ((self.at0[i] + self.t16 - refs.start[h.s.which]) / 16) as u32;
         let n = (self.n0[i] + self.t16 / 16) as u32;
         let steps = n - h.s.n;
@@ -406,7 +420,8 @@ impl<S: Simd> Lanes<S> {
 }
 
 /// Hands the samples of `lanes` in `mask` back to the scalar loop (`renorm`: for their
-/// derivative's renormalisation) and refills those lanes from `feed`.
+/// derivative's or |dz/dz|^2's renormalisation, or the interior verdict) and refills those
+/// lanes from `feed`.
 #[inline(never)]
 fn hand_back<S: Simd>(
     lanes: &mut Lanes<S>,
@@ -478,12 +493,14 @@ struct Consts<S: Simd> {
     hi: S::f64s,
     zero: S::f64s,
     tiny: S::f64s,
+    four: S::f64s,
+    shrink_hi: S::f64s,
 }
 
 /// The lanes' loop: fills every lane, steps them, hands samples back at events, until
 /// `feed` has no more samples and every lane is empty.
 #[inline(always)]
-fn run<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
+fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
     unit: U,
     p: &Perturbation,
     feed: &mut F,
@@ -510,6 +527,8 @@ fn run<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option
         hi: s(DER_HI),
         zero: s(0.0),
         tiny: s(DER_TINY_Z2),
+        four: s(4.0),
+        shrink_hi: s(p.interior.map_or(0.0, |c| c.hi)),
     };
     let full = Lanes::<U>::FULL;
     while lanes.iter().any(|l| l.act != 0) {
@@ -525,15 +544,15 @@ fn run<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option
                 // SAFETY: every lane is active, `at[i]` is its Z_m's address, and Z_m+1
                 // follows it in the same reference (m + 1 <= last, see above).
                 let (z0, z1) = unsafe { unit.load_pair(&at) };
-                if step::<U, DER, F>(unit, l, m, z0, &k, p, &refs, feed, counters) {
-                    step::<U, DER, F>(unit, l, m, z1, &k, p, &refs, feed, counters);
+                if step::<U, DER, INT, F>(unit, l, m, z0, &k, p, &refs, feed, counters) {
+                    step::<U, DER, INT, F>(unit, l, m, z1, &k, p, &refs, feed, counters);
                 }
                 continue;
             }
             // SAFETY: an active lane's address is its Z_m inside its reference (module
             // docs); an empty lane's is the parking block.
             let z = unsafe { unit.load_z(&at) };
-            step::<U, DER, F>(unit, l, m, z, &k, p, &refs, feed, counters);
+            step::<U, DER, INT, F>(unit, l, m, z, &k, p, &refs, feed, counters);
         }
     }
 }
@@ -543,7 +562,7 @@ fn run<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option
 /// rebase, a hand-back): values loaded ahead are then stale.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn step<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
+fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
     u: U,
     l: &mut Lanes<U>,
     m: &mut [Option<Held>; MAX_W],
@@ -564,13 +583,27 @@ fn step<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Optio
     let fi = add(zi, l.dzi);
     let f2 = add(mul(fr, fr), mul(fi, fi));
     let d2 = add(mul(l.dzr, l.dzr), mul(l.dzi, l.dzi));
-    let esc = u.bits(u.greater_than_f64s(f2, k.esc2)) & l.act;
-    let reb = u.bits(u.less_than_f64s(f2, d2)) & l.act;
+    let esc_m = u.greater_than_f64s(f2, k.esc2);
+    let reb_m = u.less_than_f64s(f2, d2);
+    // With the derivative or interior detection, a step from |z|^2 below DER_TINY_Z2 (the
+    // same as `interior::TINY2`) is the scalar loop's (it updates both in FloatExp); with
+    // interior detection, so is a pass that begins with |dz/dz|^2 out of its window (the
+    // test at the top of `op`). All of them rare: one mask, and the parts only when it fires.
+    let tiny_m = u.less_than_f64s(f2, k.tiny);
+    let window_m = u.or_m64s(u.less_than_f64s(l.shrink, l.shrink_lo), u.greater_than_f64s(l.shrink, k.shrink_hi));
+    let ev = match (DER || INT, INT) {
+        (false, _) => u.or_m64s(esc_m, reb_m),
+        // f2 < max(d2, TINY) is a rebase or a tiny step.
+        (true, false) => u.or_m64s(esc_m, u.less_than_f64s(f2, u.max_f64s(d2, k.tiny))),
+        (true, true) => u.or_m64s(u.or_m64s(esc_m, u.less_than_f64s(f2, u.max_f64s(d2, k.tiny))), window_m),
+    };
     let stopped = if l.t16 >= l.next_stop { l.stopped() } else { 0 };
-    // With the derivative, a step from |z|^2 below DER_TINY_Z2 is the scalar loop's (it
-    // updates the derivative in FloatExp).
-    let tiny = if DER { u.bits(u.less_than_f64s(f2, k.tiny)) & l.act } else { 0 };
-    if esc | reb | stopped | tiny != 0 {
+    if (u.bits(ev) & l.act) | stopped != 0 {
+        let esc = u.bits(esc_m) & l.act;
+        let reb = u.bits(reb_m) & l.act;
+        // Steps for the scalar loop: tiny ones, and passes that begin unsettled.
+        let tiny = if DER || INT { u.bits(tiny_m) & l.act } else { 0 };
+        let tiny = if INT { tiny | (u.bits(window_m) & l.act) } else { tiny };
         // A plain rebase stays in the lane, unless it brings an f64 delta below the range
         // where FloatExp takes over (`op`'s switch).
         let mut here = reb & !esc & !stopped & !tiny;
@@ -594,6 +627,10 @@ fn step<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Optio
         l.der_r = add(mul(k.two, re), l.add);
         l.der_i = mul(k.two, im);
     }
+    if INT {
+        // `Contraction::step`: the mantissa times 4 |z|^2.
+        l.shrink = mul(l.shrink, mul(f2, k.four));
+    }
     // δ <- (2 Z_m + δ) δ + δc.
     let ar = add(mul(zr, k.two), l.dzr);
     let ai = add(mul(zi, k.two), l.dzi);
@@ -610,6 +647,7 @@ fn step<U: Unit, const DER: bool, F: FnMut(Option<Held>, &mut Counters) -> Optio
         let nonzero = !u.bits(u.equal_f64s(big, k.zero));
         renorm = nonzero & !inside & l.act;
     }
+
     let mut calm = true;
     if l.fresh != 0 {
         // After a rebase `op` takes a single step only if |δ|^2 > single_d2 (else it looks

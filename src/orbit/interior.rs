@@ -1,0 +1,509 @@
+//! Interior detection in the perturbation engines: a sample whose orbit has contracted by a
+//! factor the iteration limit makes decisive, or that Newton's method shows attracted by a
+//! cycle, is stopped and reported as interior.
+//!
+//! Along an orbit z_k the derivative with respect to its own start (z_1 = c for the
+//! Mandelbrot set, z_0 for Julia sets) is dz_n/dz_start = prod 2 z_k, and through a BLA step
+//! of l iterations it is multiplied by that step's Jacobian in the delta,
+//! d(δ_{m+l})/d(δ_m) = A + 2 A2 δ + AB δc (A itself for a first-order step). An orbit
+//! attracted by a cycle of multiplier λ (|λ| < 1) contracts geometrically, |λ| per period;
+//! this is the interior checking of Claude Heiland-Allen's Mandelbrot notes and of
+//! Fraktaler-3 ("stop when |dz/dz| is small"). Only the modulus is used, so what is carried
+//! is the real number |dz/dz|^2 = prod 4 |z_k|^2 (one multiply per step; the escape test
+//! already computed |z_k|^2).
+//!
+//! # The criterion
+//!
+//! An escaping orbit can contract too, for a while: one that crawls through the gate of a
+//! parabolic point (parameters just outside a cusp) is slowed there, and its derivative
+//! falls to about 16 ε (c = 1/4 + ε, from the flow w' = w^2 + ε: ∂w(t)/∂w(0) =
+//! g(w(t))/g(w(0))) while it escapes after about π/√ε iterations. Measured on the cusp of
+//! the main cardioid (ε = 1e-4 .. 1e-10), the root of the period-3 bulb and outside the main
+//! cardioid: min_n |dz_n/dz_1|^2 · N^4 >= 1.2e4 for every escaping orbit (N its escape
+//! index), the cusp the worst case (a minibrot's cusp is the same with N counted in periods,
+//! so its N is P times longer for the same dip); of 150 000 random escaping parameters (limit
+//! 10^5) none dipped below 1e-12 at all. A fixed
+//! threshold is therefore wrong at some iteration limit (1e-12 calls c = 1/4 + 1e-8,
+//! which escapes at 31418, interior). The threshold here is |dz/dz|^2 < min(1e-12,
+//! max_iter^-4): an orbit that dips below it either never escapes or escapes later than
+//! (1.2e4)^(1/4) ≈ 10 times the iteration limit, so N is INTERIOR either way.
+//!
+//! Julia sets need one more condition. A sample near a preimage of the critical point 0
+//! has a tiny derivative from its start (2 z_k with z_k near 0) whatever becomes of it;
+//! where the parameter c is inside the Mandelbrot set's interior that preimage lies in a
+//! Fatou component with the sample (an exterior sample cannot come near it), but for c
+//! outside it or on its boundary the filled Julia set has no interior and such samples
+//! escape soon (c = 0.28 + 0.008i: a dip of 9.4e-6 and an escape at 42). So a Julia set is
+//! checked only when its critical orbit (the reference orbit of 0 the engine has anyway)
+//! meets the Mandelbrot criterion at c, [`orbit_contracts`].
+//!
+//! # Newton's test
+//!
+//! The contraction needs log(threshold) / log|λ| periods: hundreds for |λ| = 0.9, more than
+//! the limit allows near a component's edge. In a view centred on a nucleus (the reference
+//! is one period p, and every sample comes back near 0 at the end of each turn) the loop
+//! also tries, at those ends, Newton's method for an attracting cycle of period k p
+//! ([`newton_attracting`], the test of interior distance estimation): an attracting cycle
+//! at c is a proof that c is interior, found within a few periods whatever |λ| is up to
+//! 0.999. The contraction criterion still decides everywhere else.
+//!
+//! # Representation
+//!
+//! `mant · 2^exp`, the mantissa kept in a window [`LO`, [`Check::hi`]] by renormalisation
+//! (rare: the window is about 1800 bits wide at the default escape radius). The top of the
+//! window leaves room for one step's factor, 4 |z|^2 <= 4 R^2 (R the escape radius), so a
+//! step is one multiply with no test; the bottom leaves room for a factor of 4 [`TINY2`].
+//! Factors below that (|z| < 2^-101, an orbit passing near 0) and BLA steps whose factor or
+//! product leaves the window are applied exactly in `FloatExp`. The loop tests the window
+//! once per pass, and the threshold costs no second comparison: `lo`, the bottom of the
+//! window for the current exponent, is raised to threshold / 2^exp.
+
+use super::reference::Reference;
+use crate::num::real::{cadd, cconv, cmul, norm2};
+use crate::num::{FloatExp, Real};
+
+/// Bottom of the mantissa's window: times a factor of at least 4 [`TINY2`] it stays normal.
+pub const LO: f64 = f64::from_bits((1023 - 800) << 52);
+/// |z|^2 below this (|z| < 2^-101) is applied apart: in f64 the product could underflow.
+/// (The same bound as the derivative's, `DER_TINY_Z2`.)
+pub const TINY2: f64 = f64::from_bits((1023 - 202) << 52);
+
+/// The threshold on |dz/dz|^2 for an iteration limit: min(1e-12, max_iter^-4) (module docs).
+pub fn threshold(max_iter: u32) -> FloatExp {
+    let m = FloatExp::from(max_iter.max(1) as f64);
+    let m2 = m * m;
+    FloatExp::from(1.0) / (m2 * m2).max(FloatExp::from(1e12))
+}
+
+/// What interior detection needs to know about a view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Check {
+    /// The threshold on |dz/dz|^2 ([`threshold`]).
+    pub below2: FloatExp,
+    /// Top of the mantissa's window: times a step's largest factor, 4 R^2, it stays finite.
+    pub hi: f64,
+    /// Binary exponent of the mantissa after a renormalisation (the middle of the window).
+    mid: i32,
+}
+
+impl Check {
+    /// The check for an iteration limit and escape radius R (2 ..= 1e150).
+    pub fn new(max_iter: u32, escape_radius: f64) -> Check {
+        // 4 R^2 <= 2^k; the window's top 2^(1022 - k).
+        let k = (4.0 * escape_radius * escape_radius).log2().ceil() as i32;
+        let top = (1022 - k).clamp(-700, 1000);
+        let bottom = LO.log2() as i32;
+        let hi = f64::from_bits(((1023 + top) as u64) << 52);
+        Check { below2: threshold(max_iter), hi, mid: (top + bottom) / 2 }
+    }
+
+    /// A check that never fires (interior detection off; its window is the default escape
+    /// radius's).
+    pub const OFF: Check = Check { below2: FloatExp::ZERO, hi: f64::from_bits((1023 + 988) << 52), mid: 94 };
+}
+
+/// |dz/dz|^2 of a sample = `mant` · 2^`exp`.
+///
+/// Steps only multiply ([`Contraction::step`], [`Contraction::bla_step`]); the loop asks
+/// [`Contraction::interior`] at the top of its next pass (the vector lanes in the same
+/// comparison as their other events), which decides where the mantissa left its window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contraction {
+    /// The mantissa: within [`LO`, `hi`] between passes.
+    pub mant: f64,
+    /// Its binary exponent.
+    pub exp: i32,
+    /// The mantissa below which the value may be under the threshold: threshold / 2^exp,
+    /// clamped to [`LO`, `hi`].
+    pub lo: f64,
+}
+
+impl Contraction {
+    /// The state of a sample that carries none (interior detection off).
+    pub const IDLE: Contraction = Contraction { mant: 1.0, exp: 0, lo: 0.0 };
+
+    /// The value `v` (>= 0), the mantissa in the middle of the window.
+    pub fn new(v: FloatExp, check: Check) -> Contraction {
+        let exp = if v.is_zero() { 0 } else { v.exponent() - check.mid };
+        let lo = check.below2.ldexp(-exp).max(FloatExp::from(LO)).min(FloatExp::from(check.hi));
+        // Within the window the exponents fit f64; a zero value is below any threshold.
+        Contraction { mant: v.ldexp(-exp).to_f64(), exp, lo: lo.to_f64() }
+    }
+
+    /// The value, exactly.
+    pub fn value(self) -> FloatExp {
+        FloatExp::new(self.mant, self.exp)
+    }
+
+    /// True when the mantissa has left its window or come below `lo`.
+    #[inline(always)]
+    pub fn unsettled(self, check: Check) -> bool {
+        !(self.mant >= self.lo && self.mant <= check.hi)
+    }
+
+    /// One perturbation step from the full value `z`, whose |z|^2 in its own arithmetic is
+    /// `f2`: the mantissa times 4 f2 in f64 for f2 at least [`TINY2`] (as the vector lanes
+    /// compute it). Below that (where an orbit passes near 0, once a period inside a
+    /// minibrot) the product is taken in f64 only where it and `f2` are normal numbers, else
+    /// recomputed from `z` in FloatExp (`f2` may have underflowed).
+    #[inline(always)]
+    pub fn step<D: Real>(&mut self, z: [D; 2], f2: D, check: Check) {
+        let f = f2.to_f64();
+        let p = self.mant * (f * 4.0);
+        if f >= TINY2 || (f >= f64::MIN_POSITIVE && p >= f64::MIN_POSITIVE) {
+            self.mant = p;
+        } else {
+            self.times(norm2(cconv::<D, FloatExp>(z)).ldexp(2), check);
+        }
+    }
+
+    /// A BLA step: the value times |m|^2, m the step's Jacobian in the delta. In f64 when
+    /// |m|^2 and the product are normal and the product is within the window's top (the
+    /// common case), else in FloatExp.
+    #[inline(always)]
+    pub fn bla_step<D: Real>(&mut self, m: [D; 2], check: Check) {
+        let f = norm2(m).to_f64();
+        let p = self.mant * f;
+        if f.is_normal() && (f64::MIN_POSITIVE..=check.hi).contains(&p) {
+            self.mant = p;
+        } else {
+            self.times(norm2(cconv::<D, FloatExp>(m)), check);
+        }
+    }
+
+    /// The value times `factor`, exactly, renormalised (a value below the threshold is left
+    /// unsettled).
+    #[cold]
+    #[inline(never)]
+    fn times(&mut self, factor: FloatExp, check: Check) {
+        *self = Contraction::new(self.value() * factor, check);
+    }
+
+    /// Once unsettled: true when the value is below the threshold (the sample is
+    /// interior), else the mantissa is brought back to the middle of the window.
+    #[cold]
+    #[inline(never)]
+    fn settle(&mut self, check: Check) -> bool {
+        let v = self.value();
+        if v < check.below2 {
+            return true;
+        }
+        *self = Contraction::new(v, check);
+        false
+    }
+
+    /// What the loop asks at the top of a pass: true when the sample is interior.
+    #[inline(always)]
+    pub fn interior(&mut self, check: Check) -> bool {
+        self.unsettled(check) && self.settle(check)
+    }
+}
+
+/// True when a reference orbit contracts below the threshold from Z_1 before it ends, by
+/// the same steps as a sample's: its point is then taken to be interior. For the critical
+/// orbit of a Julia set's parameter c (the reference orbit of 0: Z_0 = 0, Z_1 = c, ...)
+/// that puts c inside the Mandelbrot set's interior, where the Julia set's interior
+/// samples are recognised safely (module docs). An orbit that escapes never contracts.
+pub fn orbit_contracts(orbit: &Reference, check: Check) -> bool {
+    if orbit.escaped() {
+        return false;
+    }
+    let mut c = Contraction::new(FloatExp::ONE, check);
+    (1..=orbit.last()).any(|k| {
+        let z = orbit.get_fe(k);
+        c.step(z, norm2(z), check);
+        c.interior(check)
+    })
+}
+
+/// Newton's method for an attracting cycle: `map` gives f^p(w) and d(f^p)/dw at w (None
+/// where it cannot follow the orbit). From `w`, w <- w - (f^p(w) - w) / (f^p'(w) - 1) until a
+/// step is below [`NEWTON_CONVERGED`] of |w| (within [`NEWTON_STEPS`] steps); true when the
+/// point converged to has a multiplier below [`NEWTON_MULTIPLIER`] in modulus and is a
+/// fixed point of f^p to within [`NEWTON_CONVERGED`] of |w|.
+///
+/// This is the test behind interior distance estimation (Claude Heiland-Allen's
+/// mandelbrot-numerics, `m_d_interior_de`: the periodic point by Newton's method, then
+/// |λ| <= 1), used here as a proof of interior: for the Mandelbrot set an attracting cycle
+/// at parameter c puts c inside a hyperbolic component, whose critical orbit never escapes.
+/// The margins leave room for what f^p is computed with (rounding, BLA steps of relative
+/// accuracy 1e-14, so a residual floor of about 1e-14 / |1 - λ|) and for Kantorovich's
+/// condition: near the cycle f^p is a quadratic-like map whose second derivative is about
+/// |λ| / |w|, so h = |F| |F''| / |F' - 1|^2 <= 1e-9 / 1e-6 = 1e-3, far below 1/2: a true
+/// fixed point lies within about 1e-6 |w| of the one found, where the multiplier differs
+/// by about as little, well inside the margin to 1. (With |λ| allowed to 1 - 1e-5 the
+/// residual floor alone would be 1e-9 and h could reach 10: no proof.)
+pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2]) -> Option<([f64; 2], [FloatExp; 2])>) -> bool {
+    let size = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
+    for _ in 0..NEWTON_STEPS {
+        let Some((fw, d)) = map(w) else { return false };
+        let f = cconv::<f64, FloatExp>([fw[0] - w[0], fw[1] - w[1]]);
+        let slope = [d[0] - FloatExp::ONE, d[1]];
+        let n2 = norm2(slope);
+        if n2.is_zero() {
+            return false;
+        }
+        // f / slope = f conj(slope) / |slope|^2.
+        let q = cmul(f, [slope[0], -slope[1]]);
+        let step = [(q[0] / n2).to_f64(), (q[1] / n2).to_f64()];
+        w = [w[0] - step[0], w[1] - step[1]];
+        let scale = size(w);
+        if !(scale.is_finite() && step[0].is_finite() && step[1].is_finite()) {
+            return false;
+        }
+        if size(step) <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale {
+            let Some((fw, lambda)) = map(w) else { return false };
+            let residual = size([fw[0] - w[0], fw[1] - w[1]]);
+            return norm2(lambda) < FloatExp::from(NEWTON_MULTIPLIER * NEWTON_MULTIPLIER)
+                && residual <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale;
+        }
+    }
+    false
+}
+
+/// Newton's steps at most, per attempt.
+pub const NEWTON_STEPS: u32 = 16;
+/// A step below this fraction of |w| has converged.
+pub const NEWTON_CONVERGED: f64 = 1e-9;
+/// The largest |λ| accepted as attracting.
+pub const NEWTON_MULTIPLIER: f64 = 0.999;
+
+/// Claude Heiland-Allen's size estimate ("Minibrot size estimates") of the minibrot of
+/// period p from its nucleus's orbit z_1 .. z_(p-1): with l_n = prod_(k=1..n) 2 z_k and
+/// b = 1 + sum_(n=1..p-1) 1 / l_n, the complex number 1 / (b l_(p-1)^2), whose modulus is
+/// the minibrot's radius and argument the rotation of its cusp.
+pub fn size_estimate(orbit: impl IntoIterator<Item = [FloatExp; 2]>) -> [FloatExp; 2] {
+    let (mut l, mut b) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ONE, FloatExp::ZERO]);
+    for z in orbit {
+        l = cmul(l, [z[0].ldexp(1), z[1].ldexp(1)]);
+        b = cadd(b, cinv(l));
+    }
+    cinv(cmul(b, cmul(l, l)))
+}
+
+/// 1 / a (zero for zero).
+fn cinv(a: [FloatExp; 2]) -> [FloatExp; 2] {
+    let d = norm2(a);
+    if d.is_zero() {
+        return [FloatExp::ZERO; 2];
+    }
+    [a[0] / d, -(a[1] / d)]
+}
+
+/// What a scene asks for (`[render] interior_detection`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Detection {
+    /// `false`: never.
+    Off,
+    /// `true`: wherever it is safe (for a Julia set, where its parameter is inside the
+    /// Mandelbrot set).
+    On,
+    /// Key absent: where the view shows interior ([`decide`]).
+    #[default]
+    Auto,
+}
+
+/// Whether interior detection runs for a view, and why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Decision {
+    /// Asked for.
+    On,
+    /// On by default: the view's centre is found interior by the same criterion (and, for
+    /// a view centred on a nucleus, its minibrot is at least a sample across).
+    AutoOn,
+    /// Turned off by the scene.
+    Off,
+    /// Off by default: the view's centre escapes or its orbit does not contract.
+    AutoExteriorCentre,
+    /// Off by default: the view is centred on a minibrot smaller than a sample.
+    AutoMinibrotBelowSample,
+    /// Off: a Julia set whose parameter is not inside the Mandelbrot set has no interior,
+    /// and the criterion is not safe there.
+    JuliaNoInterior,
+}
+
+impl Decision {
+    /// True when detection runs.
+    pub fn runs(self) -> bool {
+        matches!(self, Decision::On | Decision::AutoOn)
+    }
+
+    /// One line for `--stats`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Decision::On => "on (asked for)",
+            Decision::AutoOn => "on (by default: the view is centred on interior)",
+            Decision::Off => "off (render.interior_detection = false)",
+            Decision::AutoExteriorCentre => {
+                "off (by default: the view's centre is not interior; render.interior_detection = true turns it on)"
+            }
+            Decision::AutoMinibrotBelowSample => {
+                "off (by default: the view's minibrot is smaller than a sample; render.interior_detection = true turns it on)"
+            }
+            Decision::JuliaNoInterior => {
+                "off (the Julia parameter's critical orbit does not contract: the set has no interior)"
+            }
+        }
+    }
+}
+
+/// Decides for a view: `refs` its reference orbits (the primary first; for a Julia set the
+/// orbit of 0 last), `spacing` its sample spacing.
+///
+/// By default detection runs where the view shows interior: where the view is centred on
+/// a nucleus (its reference is one period) whose minibrot's size estimate is at least a
+/// sample spacing, or where the view's centre is found interior by the criterion itself
+/// (its reference orbit contracts). Elsewhere the default leaves it off: it costs a few
+/// operations per step (about 13% of the single-thread time of the exterior-only
+/// bench-e50 at 400x300) and finds little or nothing. A Julia set is checked only where its
+/// parameter's critical orbit contracts (module docs), whatever was asked.
+pub fn decide(asked: Detection, refs: &[Reference], mandelbrot: bool, spacing: FloatExp, check: Check) -> Decision {
+    if asked == Detection::Off {
+        return Decision::Off;
+    }
+    if !mandelbrot && !orbit_contracts(&refs[refs.len() - 1], check) {
+        return Decision::JuliaNoInterior;
+    }
+    if asked == Detection::On {
+        return Decision::On;
+    }
+    let centre = &refs[0];
+    match centre.period() {
+        Some(p) if norm2(size_estimate((1..p).map(|k| centre.get_fe(k)))) < spacing * spacing => {
+            Decision::AutoMinibrotBelowSample
+        }
+        Some(_) => Decision::AutoOn,
+        None if orbit_contracts(centre, check) => Decision::AutoOn,
+        None => Decision::AutoExteriorCentre,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether the orbit of c (from z_1 = c, stepped as the engine steps it) escapes, or is
+    /// found interior, within `max_iter`.
+    fn along(c: [f64; 2], max_iter: u32) -> (bool, bool) {
+        let check = Check::new(max_iter, 65536.0);
+        let mut k = Contraction::new(FloatExp::ONE, check);
+        let mut z = c;
+        for _ in 1..max_iter {
+            if k.interior(check) {
+                return (false, true);
+            }
+            let f2 = z[0] * z[0] + z[1] * z[1];
+            if f2 > 65536.0 * 65536.0 {
+                return (true, false);
+            }
+            k.step([FloatExp::from(z[0]), FloatExp::from(z[1])], FloatExp::from(f2), check);
+            z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        }
+        (false, false)
+    }
+
+    /// The return map of z -> z^2 + c itself (p = 1): Newton finds the attracting fixed
+    /// point inside the main cardioid and nothing outside it, nor on its edge.
+    #[test]
+    fn newton_finds_attracting_fixed_points_only() {
+        let map = |c: [f64; 2]| {
+            move |w: [f64; 2]| -> Option<([f64; 2], [FloatExp; 2])> {
+                let z = [w[0] * w[0] - w[1] * w[1] + c[0], 2.0 * w[0] * w[1] + c[1]];
+                Some((z, [FloatExp::from(2.0 * w[0]), FloatExp::from(2.0 * w[1])]))
+            }
+        };
+        for c in [[0.0, 0.0], [-0.5, 0.3], [0.2, 0.0], [-0.7, 0.1], [0.2499, 0.0]] {
+            assert!(newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
+        }
+        // Outside (the fixed points repel), and at the cusp (|λ| = 1).
+        for c in [[0.3, 0.0], [-0.8, 0.0], [-0.75, 0.2], [0.25, 0.0], [-1.0, 0.0]] {
+            assert!(!newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn threshold_follows_the_iteration_limit() {
+        assert_eq!(threshold(1000).to_f64(), 1e-12);
+        assert_eq!(threshold(10).to_f64(), 1e-12);
+        let t = threshold(10_000_000).to_f64();
+        assert!((t / 1e-28 - 1.0).abs() < 1e-12, "{t:e}");
+        assert!(threshold(u32::MAX - 1) > FloatExp::ZERO);
+        assert_eq!(Check::OFF, Check { below2: FloatExp::ZERO, ..Check::new(1000, 65536.0) });
+    }
+
+    /// Just outside the cusp c = 1/4 an orbit escapes after about π/√ε iterations and its
+    /// derivative dips to about 16 ε on the way (below 1e-12 from ε = 1e-8): a fixed
+    /// threshold would call it interior, the limit's own never does. Inside, a contracting
+    /// orbit is recognised.
+    #[test]
+    fn crawling_through_a_parabolic_gate_is_not_interior() {
+        for eps in [1e-4, 1e-6, 1e-8] {
+            for max_iter in [1000, 40_000, 1_000_000] {
+                let (escaped, interior) = along([0.25 + eps, 0.0], max_iter);
+                assert!(!interior, "c = 1/4 + {eps:e}, limit {max_iter}: called interior");
+                let n = (std::f64::consts::PI / eps.sqrt()) as u32;
+                assert_eq!(escaped, max_iter > n + n / 10, "c = 1/4 + {eps:e}, limit {max_iter}");
+            }
+        }
+        for c in [[0.0, 0.0], [-0.1, 0.6], [-1.0, 0.1], [0.2499, 0.0], [-1.7549, 0.0]] {
+            assert_eq!(along(c, 1_000_000), (false, true), "{c:?}");
+        }
+    }
+
+    /// A step from a full value with |z|^2 = `f2` (on the real axis), then the loop's test.
+    fn step(k: &mut Contraction, f2: FloatExp, check: Check) -> bool {
+        k.step([f2.sqrt(), FloatExp::ZERO], f2, check);
+        k.interior(check)
+    }
+
+    #[test]
+    fn window_and_threshold() {
+        let check = Check::new(1_000_000, 65536.0);
+        let new = |v| Contraction::new(v, check);
+        let mut k = new(FloatExp::ONE);
+        assert!(!k.unsettled(check));
+        // A factor of 2^-100 crosses the threshold (1e-24 = 2^-79.7) at once.
+        assert!(step(&mut k, FloatExp::new(1.0, -102), check));
+        // Factors of 16: 2^400, renormalised on the way.
+        let mut k = new(FloatExp::ONE);
+        for _ in 0..100 {
+            assert!(!step(&mut k, FloatExp::from(4.0), check));
+        }
+        assert_eq!(k.value(), FloatExp::new(1.0, 400));
+        // Factors of 4 · 1/8 = 1/2: 2^400 to 2^300, then on down to the threshold.
+        for _ in 0..100 {
+            assert!(!step(&mut k, FloatExp::from(0.125), check));
+        }
+        assert_eq!(k.value(), FloatExp::new(1.0, 300));
+        let mut steps = 0;
+        while !step(&mut k, FloatExp::from(0.125), check) {
+            steps += 1;
+        }
+        // 2^300 down to below 1e-24 ≈ 2^-79.7: the 380th halving.
+        assert_eq!(steps, 379);
+        // Near 0: in f64 while normal, else exactly; a zero factor is interior at once.
+        let mut k = new(FloatExp::new(1.0, 400));
+        assert!(!step(&mut k, FloatExp::new(1.0, -300), check));
+        assert_eq!(k.value(), FloatExp::new(1.0, 102));
+        let mut k = new(FloatExp::new(1.0, 3000));
+        assert!(!step(&mut k, FloatExp::new(1.0, -2000), check));
+        assert_eq!(k.value(), FloatExp::new(1.0, 1002));
+        assert!(step(&mut new(FloatExp::ONE), FloatExp::ZERO, check));
+        // The largest single step the escape radius allows, and BLA steps beyond the window.
+        let mut k = new(FloatExp::new(1.0, 900));
+        assert!(!step(&mut k, FloatExp::from(65536.0 * 65536.0), check));
+        assert_eq!(k.value(), FloatExp::new(1.0, 934));
+        k.bla_step([FloatExp::new(1.0, 2500), FloatExp::ZERO], check);
+        assert_eq!(k.value(), FloatExp::new(1.0, 5934));
+        k.bla_step([FloatExp::new(1.0, -2965), FloatExp::ZERO], check);
+        assert!(!k.interior(check));
+        assert_eq!(k.value(), FloatExp::new(1.0, 4));
+        k.bla_step([1e-20, 0.0], check);
+        assert!(k.interior(check));
+        // At the largest escape radius the window is narrower but still holds a step.
+        let wide = Check::new(1000, 1e150);
+        let mut k = Contraction::new(FloatExp::ONE, wide);
+        assert!(!step(&mut k, FloatExp::from(1e300), wide) && k.value().log2() > 996.0);
+    }
+}
