@@ -44,8 +44,9 @@
 //! is one period p, and every sample comes back near 0 at the end of each turn) the loop
 //! also tries, at those ends, Newton's method for an attracting cycle of period k p
 //! ([`newton_attracting`], the test of interior distance estimation): an attracting cycle
-//! at c is a proof that c is interior, found within a few periods whatever |λ| is up to
-//! 0.999. The contraction criterion still decides everywhere else.
+//! at c is a proof that c is interior (Kantorovich's theorem certifies it), found within a
+//! few periods for |λ| up to about 1 - 1e-5. The contraction criterion still decides
+//! everywhere else.
 //!
 //! # Representation
 //!
@@ -216,57 +217,104 @@ pub fn orbit_contracts(orbit: &Reference, check: Check) -> bool {
     })
 }
 
-/// Newton's method for an attracting cycle: `map` gives f^p(w) and d(f^p)/dw at w (None
-/// where it cannot follow the orbit). From `w`, w <- w - (f^p(w) - w) / (f^p'(w) - 1) until a
-/// step is below [`NEWTON_CONVERGED`] of |w| (within [`NEWTON_STEPS`] steps); true when the
-/// point converged to has a multiplier below [`NEWTON_MULTIPLIER`] in modulus and is a
-/// fixed point of f^p to within [`NEWTON_CONVERGED`] of |w|.
+/// f^p at a point: the value and its first and second derivatives there.
+#[derive(Debug, Clone, Copy)]
+pub struct Turn {
+    /// f^p(w).
+    pub z: [f64; 2],
+    /// d(f^p)/dw.
+    pub d1: [FloatExp; 2],
+    /// d^2(f^p)/dw^2, when it was asked for.
+    pub d2: Option<[FloatExp; 2]>,
+}
+
+/// Newton's method for an attracting cycle: `map` gives f^p and its derivatives at w (None
+/// where it cannot follow the orbit; the second derivative only when its flag asks, which
+/// it does once the previous step was below the square root of [`NEWTON_BALL`] of |w|). From `w`, w <- w - F(w) / F'(w) with F(w) = f^p(w) - w,
+/// at most [`NEWTON_STEPS`] times; true as soon as Kantorovich's theorem, with a Lipschitz
+/// bound L = 2 |F''(w)| for F' near w, proves a fixed point w* of f^p within 2 |step| of w
+/// (h = |step| L / |F'(w)| <= 1/10) and bounds its multiplier below 1: |f^p'(w*)| <=
+/// |f^p'(w)| + 2 |step| L < 1; false as soon as it bounds it above 1. The residual is
+/// counted with [`NEWTON_NOISE`] of |w| added (the rounding and BLA steps, relative accuracy
+/// 1e-14, that f^p is computed with). The bound is used only on a ball below
+/// [`NEWTON_BALL`] of |w| and where F' moved from the previous iterate by at most half what
+/// L allows: the first Newton steps from a far start can land where F'' is a thousand
+/// times smaller than a little way off (before these conditions, a sample that escapes
+/// after 268 periods, within 1e-9 of a spacing of a minibrot's edge, was taken for interior
+/// at its second step of a 7-turn Newton, 0.8 |w| from the first).
 ///
 /// This is the test behind interior distance estimation (Claude Heiland-Allen's
 /// mandelbrot-numerics, `m_d_interior_de`: the periodic point by Newton's method, then
-/// |λ| <= 1), used here as a proof of interior: for the Mandelbrot set an attracting cycle
-/// at parameter c puts c inside a hyperbolic component, whose critical orbit never escapes.
-/// The margins leave room for what f^p is computed with (rounding, BLA steps of relative
-/// accuracy 1e-14, so a residual floor of about 1e-14 / |1 - λ|) and for Kantorovich's
-/// condition: near the cycle f^p is a quadratic-like map whose second derivative is about
-/// |λ| / |w|, so h = |F| |F''| / |F' - 1|^2 <= 1e-9 / 1e-6 = 1e-3, far below 1/2: a true
-/// fixed point lies within about 1e-6 |w| of the one found, where the multiplier differs
-/// by about as little, well inside the margin to 1. (With |λ| allowed to 1 - 1e-5 the
-/// residual floor alone would be 1e-9 and h could reach 10: no proof.)
-pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2]) -> Option<([f64; 2], [FloatExp; 2])>) -> bool {
-    let size = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
+/// |λ| <= 1), made a proof of interior: for the Mandelbrot set an attracting cycle at
+/// parameter c puts c inside a hyperbolic component, whose critical orbit never escapes.
+/// Near 0, where it is used, f^p is a quadratic-like map f^(p-1)(c) + Λ w^2 (Λ =
+/// f^(p-1)'(c)), whose second derivative 2 Λ = λ / w* hardly varies over the ball, so
+/// doubling it for L is ample. With the noise floor at 1e-12 |w|, multipliers up to about
+/// 1 - 1e-5 can be certified; those nearer 1 are left to the contraction criterion.
+pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) -> Option<Turn>) -> bool {
+    // The previous iterate and its f^p' (to check the Lipschitz bound against).
+    let mut before: Option<([f64; 2], [FloatExp; 2])> = None;
+    let mut near = false;
     for _ in 0..NEWTON_STEPS {
-        let Some((fw, d)) = map(w) else { return false };
-        let f = cconv::<f64, FloatExp>([fw[0] - w[0], fw[1] - w[1]]);
-        let slope = [d[0] - FloatExp::ONE, d[1]];
-        let n2 = norm2(slope);
-        if n2.is_zero() {
+        let Some(t) = map(w, near) else { return false };
+        let f = cconv::<f64, FloatExp>([t.z[0] - w[0], t.z[1] - w[1]]);
+        let slope = [t.d1[0] - FloatExp::ONE, t.d1[1]];
+        let s2 = norm2(slope);
+        if s2.is_zero() {
             return false;
         }
-        // f / slope = f conj(slope) / |slope|^2.
+        // F / F' = F conj(F') / |F'|^2.
         let q = cmul(f, [slope[0], -slope[1]]);
-        let step = [(q[0] / n2).to_f64(), (q[1] / n2).to_f64()];
-        w = [w[0] - step[0], w[1] - step[1]];
-        let scale = size(w);
-        if !(scale.is_finite() && step[0].is_finite() && step[1].is_finite()) {
-            return false;
+        let step = [q[0] / s2, q[1] / s2];
+        let size = norm2(cconv::<f64, FloatExp>(w)).sqrt();
+        let reach = norm2(step).sqrt() + size.mul_f64(NEWTON_NOISE) / s2.sqrt();
+        near = reach <= size.mul_f64(NEWTON_BALL.sqrt());
+        let Some(d2) = t.d2 else {
+            before = Some((w, t.d1));
+            w = [w[0] - step[0].to_f64(), w[1] - step[1].to_f64()];
+            if !(w[0].is_finite() && w[1].is_finite()) {
+                return false;
+            }
+            continue;
+        };
+        let lip = norm2(d2).sqrt().ldexp(1);
+        // The bound needs F'' steady over the ball: a ball small beside |w| (f^p's features
+        // near 0 are on the scale of w), and F' changing from the previous iterate by no more
+        // than half the bound says.
+        let small = reach <= size.mul_f64(NEWTON_BALL);
+        let steady = before.is_some_and(|(v, d)| {
+            let dw = norm2(cconv::<f64, FloatExp>([w[0] - v[0], w[1] - v[1]])).sqrt();
+            norm2([t.d1[0] - d[0], t.d1[1] - d[1]]).sqrt().ldexp(1) <= lip * dw
+        });
+        before = Some((w, t.d1));
+        if small && steady && reach * lip <= s2.sqrt().mul_f64(0.1) {
+            // A fixed point is certified: attracting, repelling, or not yet told apart.
+            let (lambda, spread) = (norm2(t.d1).sqrt(), (reach * lip).ldexp(1));
+            if lambda + spread < FloatExp::ONE {
+                return true;
+            }
+            if lambda - spread > FloatExp::ONE {
+                return false;
+            }
         }
-        if size(step) <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale {
-            let Some((fw, lambda)) = map(w) else { return false };
-            let residual = size([fw[0] - w[0], fw[1] - w[1]]);
-            return norm2(lambda) < FloatExp::from(NEWTON_MULTIPLIER * NEWTON_MULTIPLIER)
-                && residual <= NEWTON_CONVERGED * NEWTON_CONVERGED * scale;
+        w = [w[0] - step[0].to_f64(), w[1] - step[1].to_f64()];
+        if !(w[0].is_finite() && w[1].is_finite()) {
+            return false;
         }
     }
     false
 }
 
+/// The fewest periods of a nucleus's reference the iteration limit must hold for detection
+/// to run by default.
+pub const AUTO_MIN_PERIODS: u64 = 100;
+
 /// Newton's steps at most, per attempt.
-pub const NEWTON_STEPS: u32 = 16;
-/// A step below this fraction of |w| has converged.
-pub const NEWTON_CONVERGED: f64 = 1e-9;
-/// The largest |λ| accepted as attracting.
-pub const NEWTON_MULTIPLIER: f64 = 0.999;
+pub const NEWTON_STEPS: u32 = 24;
+/// The relative error of f^p(w) allowed for in Newton's certificate.
+pub const NEWTON_NOISE: f64 = 1e-12;
+/// The largest ball (relative to |w|) over which Newton's certificate takes F'' as steady.
+pub const NEWTON_BALL: f64 = 1e-6;
 
 /// Claude Heiland-Allen's size estimate ("Minibrot size estimates") of the minibrot of
 /// period p from its nucleus's orbit z_1 .. z_(p-1): with l_n = prod_(k=1..n) 2 z_k and
@@ -318,6 +366,9 @@ pub enum Decision {
     AutoExteriorCentre,
     /// Off by default: the view is centred on a minibrot smaller than a sample.
     AutoMinibrotBelowSample,
+    /// Off by default: the view is centred on a nucleus whose period the iteration limit
+    /// holds fewer than [`AUTO_MIN_PERIODS`] times.
+    AutoFewPeriods,
     /// Off: a Julia set whose parameter is not inside the Mandelbrot set has no interior,
     /// and the criterion is not safe there.
     JuliaNoInterior,
@@ -341,6 +392,9 @@ impl Decision {
             Decision::AutoMinibrotBelowSample => {
                 "off (by default: the view's minibrot is smaller than a sample; render.interior_detection = true turns it on)"
             }
+            Decision::AutoFewPeriods => {
+                "off (by default: the iteration limit holds fewer than 100 periods of the view's nucleus, too few for it to pay; render.interior_detection = true turns it on)"
+            }
             Decision::JuliaNoInterior => {
                 "off (the Julia parameter's critical orbit does not contract: the set has no interior)"
             }
@@ -351,14 +405,24 @@ impl Decision {
 /// Decides for a view: `refs` its reference orbits (the primary first; for a Julia set the
 /// orbit of 0 last), `spacing` its sample spacing.
 ///
-/// By default detection runs where the view shows interior: where the view is centred on
-/// a nucleus (its reference is one period) whose minibrot's size estimate is at least a
-/// sample spacing, or where the view's centre is found interior by the criterion itself
-/// (its reference orbit contracts). Elsewhere the default leaves it off: it costs a few
-/// operations per step (about 13% of the single-thread time of the exterior-only
-/// bench-e50 at 400x300) and finds little or nothing. A Julia set is checked only where its
+/// By default detection runs where the view shows interior and the limit leaves it
+/// something to save: where the view is centred on a nucleus (its reference is one period
+/// p) whose minibrot's size estimate is at least a sample spacing and the limit is at least
+/// [`AUTO_MIN_PERIODS`] p, or where the view's centre is found interior by the criterion
+/// itself (its reference orbit contracts). Elsewhere the default leaves it off: it costs a
+/// few operations per step (about 13% of the single-thread time of the exterior-only
+/// bench-e50 at 400x300), Newton's test some periods' work per sample tried, and an
+/// interior sample it stops has run a few periods already (measured on minibrots of period
+/// 25760 and 31967 to 10^6 iterations, 39 and 31 periods: 30-40% slower with detection). A Julia set is checked only where its
 /// parameter's critical orbit contracts (module docs), whatever was asked.
-pub fn decide(asked: Detection, refs: &[Reference], mandelbrot: bool, spacing: FloatExp, check: Check) -> Decision {
+pub fn decide(
+    asked: Detection,
+    refs: &[Reference],
+    mandelbrot: bool,
+    spacing: FloatExp,
+    max_iter: u32,
+    check: Check,
+) -> Decision {
     if asked == Detection::Off {
         return Decision::Off;
     }
@@ -373,6 +437,7 @@ pub fn decide(asked: Detection, refs: &[Reference], mandelbrot: bool, spacing: F
         Some(p) if norm2(size_estimate((1..p).map(|k| centre.get_fe(k)))) < spacing * spacing => {
             Decision::AutoMinibrotBelowSample
         }
+        Some(p) if (max_iter as u64) < AUTO_MIN_PERIODS * p as u64 => Decision::AutoFewPeriods,
         Some(_) => Decision::AutoOn,
         None if orbit_contracts(centre, check) => Decision::AutoOn,
         None => Decision::AutoExteriorCentre,
@@ -404,20 +469,34 @@ mod tests {
     }
 
     /// The return map of z -> z^2 + c itself (p = 1): Newton finds the attracting fixed
-    /// point inside the main cardioid and nothing outside it, nor on its edge.
+    /// point inside the main cardioid, even 2e-5 from its edge, and nothing outside it, nor
+    /// at its cusp or on its edge.
     #[test]
-    fn newton_finds_attracting_fixed_points_only() {
+    fn newton_certifies_attracting_fixed_points_only() {
         let map = |c: [f64; 2]| {
-            move |w: [f64; 2]| -> Option<([f64; 2], [FloatExp; 2])> {
+            move |w: [f64; 2], _: bool| -> Option<Turn> {
                 let z = [w[0] * w[0] - w[1] * w[1] + c[0], 2.0 * w[0] * w[1] + c[1]];
-                Some((z, [FloatExp::from(2.0 * w[0]), FloatExp::from(2.0 * w[1])]))
+                let d1 = [FloatExp::from(2.0 * w[0]), FloatExp::from(2.0 * w[1])];
+                Some(Turn { z, d1, d2: Some([FloatExp::from(2.0), FloatExp::ZERO]) })
             }
         };
-        for c in [[0.0, 0.0], [-0.5, 0.3], [0.2, 0.0], [-0.7, 0.1], [0.2499, 0.0]] {
+        // c(λ) = λ/2 - λ^2/4 puts the fixed point's multiplier at λ.
+        let at = |l: [f64; 2]| [l[0] / 2.0 - (l[0] * l[0] - l[1] * l[1]) / 4.0, l[1] / 2.0 - l[0] * l[1] / 2.0];
+        for c in
+            [[0.0, 0.0], [-0.5, 0.3], [0.2, 0.0], [-0.7, 0.1], [0.2499, 0.0], at([0.99998, 0.0]), at([0.0, 0.99998])]
+        {
             assert!(newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
         }
-        // Outside (the fixed points repel), and at the cusp (|λ| = 1).
-        for c in [[0.3, 0.0], [-0.8, 0.0], [-0.75, 0.2], [0.25, 0.0], [-1.0, 0.0]] {
+        for c in [
+            [0.3, 0.0],
+            [-0.8, 0.0],
+            [-0.75, 0.2],
+            [0.25, 0.0],
+            [-1.0, 0.0],
+            at([1.0, 0.0]),
+            at([0.0, 1.0]),
+            at([0.0, 1.00001]),
+        ] {
             assert!(!newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
         }
     }

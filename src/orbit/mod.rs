@@ -229,7 +229,7 @@ pub fn prepare(
     }
     let single_d2 = perturb::single_step_threshold(&bla_f64);
     let check = interior::Check::new(spec.max_iter, spec.escape_radius);
-    let interior_decision = interior::decide(spec.interior, &refs, mandelbrot, spec.spacing, check);
+    let interior_decision = interior::decide(spec.interior, &refs, mandelbrot, spec.spacing, spec.max_iter, check);
     Ok(Perturbation {
         refs,
         bla_fe: std::sync::Arc::new(bla_fe),

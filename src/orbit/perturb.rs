@@ -468,6 +468,47 @@ impl Der {
     }
 }
 
+/// A complex number as an f64 pair times 2^e, for products whose size leaves the f64 range
+/// (the derivative of a turn in Newton's test: up to Λ ~ 1/sqrt(minibrot size) mid-turn).
+#[derive(Debug, Clone, Copy)]
+struct Scaled {
+    m: [f64; 2],
+    e: i32,
+}
+
+impl Scaled {
+    const ONE: Scaled = Scaled { m: [1.0, 0.0], e: 0 };
+
+    /// self *= f: in f64 while |f| is within 2^+-400 (the product of that and a mantissa
+    /// within 2^+-500 neither overflows nor underflows), else in FloatExp.
+    #[inline]
+    fn mul(&mut self, f: [f64; 2]) {
+        let big = f[0].abs().max(f[1].abs());
+        if big < DER_SAFE && big > 1.0 / DER_SAFE {
+            self.m = cmul(self.m, f);
+            if !(DER_LO..=DER_HI).contains(&self.m[0].abs().max(self.m[1].abs())) {
+                self.renormalise();
+            }
+            return;
+        }
+        self.set(cmul(self.to_fe(), cconv(f)));
+    }
+
+    fn renormalise(&mut self) {
+        self.set(self.to_fe());
+    }
+
+    fn set(&mut self, v: [FloatExp; 2]) {
+        let big = v[0].abs().max(v[1].abs());
+        let e = if big.is_zero() { 0 } else { big.exponent() };
+        *self = Scaled { m: [v[0].ldexp(-e).to_f64(), v[1].ldexp(-e).to_f64()], e };
+    }
+
+    fn to_fe(self) -> [FloatExp; 2] {
+        [FloatExp::new(self.m[0], self.e), FloatExp::new(self.m[1], self.e)]
+    }
+}
+
 /// A sample on its way through the vector lanes: its output index, state, derivative, the
 /// offset at full range, and whether the lanes stopped it for a derivative renormalisation.
 #[derive(Debug, Clone, Copy)]
@@ -604,7 +645,7 @@ impl Perturbation {
         if candidate && exp < pr.anchor_exp && s.n >= pr.at {
             pr.at = s.n.saturating_mul(2);
             let dc = cto_f64(s.dc);
-            if interior::newton_attracting(w, |w| self.return_map(w, dc, p, k)) {
+            if interior::newton_attracting(w, |w, second| self.return_map(w, dc, p, k, second)) {
                 return true;
             }
         } else if k != 0 && k < MAX_CYCLE_PERIODS {
@@ -614,46 +655,61 @@ impl Perturbation {
         false
     }
 
-    /// f^(k p)(w) and its derivative in w, for a full value w near 0 and the sample offset
-    /// `dc`, by perturbation against k turns of one period p of a nucleus's reference from
-    /// Z_0 = 0 (each turn ending at Z_p, near 0, where the next begins from Z_0 with δ the
-    /// full value): BLA steps where the f64 tables have them, single steps elsewhere. None
-    /// where the orbit of w escapes or leaves the reference within a turn (it would rebase
-    /// elsewhere than at Z_p).
-    fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32) -> Option<([f64; 2], [FloatExp; 2])> {
+    /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and
+    /// the sample offset `dc`, by perturbation against k turns of one period p of a
+    /// nucleus's reference from Z_0 = 0 (each turn ending at Z_p, near 0, where the next
+    /// begins from Z_0 with δ the full value): BLA steps where the f64 tables have them
+    /// (δ' = A δ + B δc + A2 δ^2 + AB δ δc + B2 δc^2, so d1' = m d1 with m = A + 2 A2 δ +
+    /// AB δc and d2' = m d2 + 2 A2 d1^2), single steps elsewhere (d1' = 2 z d1,
+    /// d2' = 2 (d1^2 + z d2)); d2 only when `second` asks. None where the orbit of w escapes
+    /// or leaves the reference within a turn (it would rebase elsewhere than at Z_p).
+    fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
         let r = &self.refs[0];
         let table = self.bla_f64[0].as_ref();
+        let fe = |v: [f64; 2]| -> [FloatExp; 2] { cconv(v) };
+        let twice = |v: [FloatExp; 2]| [v[0].ldexp(1), v[1].ldexp(1)];
         let mut z = w;
-        let mut der = [FloatExp::ONE, FloatExp::ZERO];
+        // d1 as an f64 pair with its own exponent (FloatExp for each product would double
+        // the cost of the turn); d2 in FloatExp, and only when asked for.
+        let mut d1 = Scaled::ONE;
+        let mut d2 = [FloatExp::ZERO; 2];
         for _ in 0..k {
             let (mut dz, mut m) = (z, 0u32);
             while m < p {
                 let zm = r.get(m);
                 let full = cadd(zm, dz);
-                let (f2, d2) = (norm2(full), norm2(dz));
-                if f2 > self.escape2 || (m > 0 && f2 < d2) {
+                let (f2, d2z) = (norm2(full), norm2(dz));
+                if f2 > self.escape2 || (m > 0 && f2 < d2z) {
                     return None;
                 }
                 if let Some(t) = table
-                    && let Some((e, len)) = t.lookup(m, d2, p - m)
+                    && let Some((e, len)) = t.lookup(m, d2z, p - m)
                 {
-                    let (next, jac) = if e.linear(d2) {
+                    let (next, jac) = if e.linear(d2z) {
                         (cadd(cmul(e.first.a, dz), cmul(e.first.b, dc)), e.first.a)
                     } else {
                         let (next, jac, _) = e.apply_with_jacobian(dz, dc);
                         (next, jac)
                     };
-                    der = cmul(cconv(jac), der);
+                    if second {
+                        let d = d1.to_fe();
+                        d2 = cadd(cmul(fe(jac), d2), cmul(twice(fe(e.second.a2)), cmul(d, d)));
+                    }
+                    d1.mul(jac);
                     (dz, m) = (next, m + len);
                     continue;
                 }
-                der = cmul(cconv([full[0] * 2.0, full[1] * 2.0]), der);
+                if second {
+                    let d = d1.to_fe();
+                    d2 = twice(cadd(cmul(d, d), cmul(fe(full), d2)));
+                }
+                d1.mul([full[0] * 2.0, full[1] * 2.0]);
                 dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
                 m += 1;
             }
             z = cadd(r.get(p), dz);
         }
-        Some((z, der))
+        Some(interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2) })
     }
 
     /// Interior detection's check (one that never fires when it is off).

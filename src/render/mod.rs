@@ -163,7 +163,8 @@ pub struct DeepStats {
     /// Rebases.
     pub rebases: u64,
     /// Whether interior detection ran, and why (`on`, `auto-on`, `off`,
-    /// `auto-exterior-centre`, `auto-minibrot-below-sample`, `julia-no-interior`).
+    /// `auto-exterior-centre`, `auto-minibrot-below-sample`, `auto-few-periods`,
+    /// `julia-no-interior`).
     pub interior_detection: orbit::interior::Decision,
     /// Its threshold on |dz/dz|^2 (see `orbit::interior`).
     #[serde(skip_serializing_if = "Option::is_none")]

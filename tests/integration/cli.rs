@@ -162,7 +162,8 @@ fn deep_views_render_with_perturbation_and_report_it() {
     assert!(json["deep"]["reference_bits"].as_u64().unwrap() > 1096);
 }
 
-/// Interior detection: by default on a view centred on a minibrot, `--interior-detection
+/// Interior detection: by default on a view centred on a minibrot (to a limit of at least
+/// 100 of its periods), `--interior-detection
 /// off` and `on` override it (and the PNG carries the scene key), `--stats` and
 /// `--stats-json` say what was decided and how many samples stopped early, the picture is
 /// the same either way, and a key that is not a boolean is refused with its place.
@@ -199,6 +200,12 @@ fn interior_detection_is_a_scene_key_and_a_flag_shown_in_statistics() {
         pictures.push(image::open(dir.join(&png)).unwrap().into_rgb8().into_raw());
     }
     assert!(pictures.iter().all(|p| p == &pictures[0]), "the picture depends on interior detection");
+    // 14 periods of the nucleus: too few for detection to pay, so not by default.
+    let o =
+        deepfield(&["render", "scene.toml", "-o", "few.png", "--max-iter", "20000", "--stats-json", "s.json"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["deep"]["interior_detection"], "auto-few-periods", "{json}");
     rejects("interior-type", Some("version = 1\n[render]\ninterior_detection = \"yes\"\n"), &[], "scene.toml:3:22");
     rejects("interior-flag", None, &["--interior-detection", "maybe"], "--interior-detection");
 }
