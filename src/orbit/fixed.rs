@@ -13,13 +13,16 @@
 //! precision that nothing downstream uses).
 //!
 //! One step is x' = x^2 - y^2 + cx, y' = (x + y)^2 - x^2 - y^2 + cy: three squarings of
-//! magnitudes, each computed column by column (product scanning) for the columns from n - 2
-//! up, where n is the limb count; the dropped lower columns change the kept limbs by less
-//! than n units of the lowest one, far inside the guard limb. With a helper thread, the
-//! caller's thread squares x and the lower columns of x + y, the helper squares y and the
-//! upper columns, and the two halves of (x + y)^2 are joined with an exact carry: the same
-//! bits as one thread. `cargo bench --bench reference` compares this with malachite-float
-//! (and MPFR through rug with the `mpfr` feature) at 1000, 4000 and 16000 bits.
+//! magnitudes, each a short product (only the columns that reach the kept limbs; the
+//! dropped ones change them by less than a unit of the lowest, far inside the guard limb).
+//! Up to [`comba::MAX_LIMBS`] limbs the squares run on 64-bit limbs column by column
+//! ([`comba`]); beyond, on 26-bit digits in vector lanes ([`square`]), which overtake it
+//! there. The choice depends on the limb count only, so every instruction set gives the
+//! same bits. With a helper thread, the caller's thread squares x and the lower part of
+//! x + y (columns, or rows of digits), the helper squares y and the upper part, and the two
+//! parts of (x + y)^2 are joined exactly: the same bits as one thread. `cargo bench --bench
+//! reference` compares this with malachite-float (and MPFR through rug with the `mpfr`
+//! feature) at 1000, 4000 and 16000 bits.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -28,6 +31,7 @@ use malachite_base::rounding_modes::RoundingMode;
 use malachite_float::Float;
 use malachite_nz::integer::Integer;
 
+use super::comba;
 use super::square::{self, Layout};
 use crate::num::FloatExp;
 use crate::simd_level::SimdLevel;
@@ -49,17 +53,115 @@ pub struct FixedOrbit {
     y: Vec<u64>,
     cx: Vec<u64>,
     cy: Vec<u64>,
-    /// The squares' digit layout.
-    layout: Layout,
+    /// How the squares are computed.
+    kernel: Kernel,
     /// The instruction set the squares run with.
     simd: SimdLevel,
     /// Work space of a step, allocated once.
     w: Work,
 }
 
+/// How an n-limb square is computed, and where a square shared by two threads splits.
+#[derive(Debug, Clone, Copy)]
+enum Kernel {
+    /// 64-bit limbs, column by column ([`comba`]); columns from `mid` on are the helper's.
+    Limbs { n: usize, mid: usize },
+    /// 26-bit digits in vector lanes ([`square`]); rows from `mid` on are the helper's.
+    Digits { layout: Layout, mid: usize },
+}
+
+/// A squaring's scratch: the digits, column sums and carry of a square in progress.
+#[derive(Debug, Clone)]
+struct Scratch {
+    digits: Vec<u32>,
+    acc: Vec<u64>,
+    carry: [u64; 2],
+}
+
+impl Kernel {
+    /// The kernel for n-limb magnitudes, or None beyond [`square::MAX_DIGITS`].
+    fn new(n: usize) -> Option<Kernel> {
+        if (2..=comba::MAX_LIMBS).contains(&n) {
+            return Some(Kernel::Limbs { n, mid: comba::split(n) });
+        }
+        let layout = Layout::new(n)?;
+        Some(Kernel::Digits { layout, mid: layout.split() })
+    }
+
+    fn scratch(self) -> Scratch {
+        let (digits, acc) = match self {
+            Kernel::Limbs { .. } => (Vec::new(), Vec::new()),
+            Kernel::Digits { layout, .. } => (vec![0; layout.digit_len()], vec![0; layout.columns()]),
+        };
+        Scratch { digits, acc, carry: [0; 2] }
+    }
+
+    /// Words of the upper part of a shared square ([`Kernel::upper`]).
+    fn upper_len(self) -> usize {
+        match self {
+            Kernel::Limbs { n, .. } => n + 1,
+            Kernel::Digits { layout, .. } => layout.columns(),
+        }
+    }
+
+    /// Limbs n - 2 .. 2n - 2 of a^2 into `out`.
+    fn square(self, a: &[u64], w: &mut Scratch, out: &mut [u64], simd: SimdLevel) {
+        match self {
+            Kernel::Limbs { .. } => comba::square(a, out),
+            Kernel::Digits { layout, .. } => square::square(layout, a, &mut w.digits, &mut w.acc, out, simd),
+        }
+    }
+
+    /// The lower part of a shared square of `a`: lower columns into `out` and the carry
+    /// into `w`, or the digits and lower rows' column sums into `w`.
+    fn lower(self, a: &[u64], w: &mut Scratch, out: &mut [u64], simd: SimdLevel) {
+        match self {
+            Kernel::Limbs { n, mid } => w.carry = comba::columns(a, comba::first_column(n)..mid, out),
+            Kernel::Digits { layout, mid } => {
+                square::digits(a, &mut w.digits);
+                w.acc.fill(0);
+                square::rows(layout, &w.digits, 0..mid, &mut w.acc, simd);
+            }
+        }
+    }
+
+    /// The upper part of a shared square of `a` into `up` ([`Kernel::upper_len`] words).
+    fn upper(self, a: &[u64], w: &mut Scratch, up: &mut [u64], simd: SimdLevel) {
+        match self {
+            Kernel::Limbs { n, mid } => {
+                comba::columns(a, mid..comba::end_column(n), up);
+            }
+            Kernel::Digits { layout, mid } => {
+                square::digits(a, &mut w.digits);
+                up.fill(0);
+                square::rows(layout, &w.digits, mid..layout.m, up, simd);
+            }
+        }
+    }
+
+    /// Joins the upper part `up` to the lower part in `w` and `out`: the square, exactly as
+    /// [`Kernel::square`] gives it.
+    fn join(self, w: &mut Scratch, up: &[u64], out: &mut [u64]) {
+        match self {
+            Kernel::Limbs { n, mid } => {
+                let from = mid - (n - 2);
+                out[from..].copy_from_slice(&up[from..]);
+                comba::add_carry(n, mid, w.carry, out);
+            }
+            Kernel::Digits { layout, .. } => {
+                for (v, &u) in w.acc.iter_mut().zip(up) {
+                    *v += u;
+                }
+                square::finish(layout, &w.digits, &mut w.acc);
+                square::pack(layout, &w.acc, out);
+            }
+        }
+    }
+}
+
 /// A step's work space: x + y, the magnitudes |x|, |y|, |x + y| it squares (n limbs) and
 /// their squares (n + 1 limbs, from limb n - 2 of the full product), and the squaring's
-/// digits and column sums.
+/// scratch.
 #[derive(Debug, Clone)]
 struct Work {
     sum: Vec<u64>,
@@ -69,13 +171,13 @@ struct Work {
     x2: Vec<u64>,
     y2: Vec<u64>,
     s2: Vec<u64>,
-    digits: Vec<u32>,
-    acc: Vec<u64>,
+    scratch: Scratch,
+    /// The helper's upper part of (x + y)^2, when a step is shared.
+    up: Vec<u64>,
 }
 
 impl Work {
-    fn new(l: Layout) -> Work {
-        let n = l.n;
+    fn new(n: usize, kernel: Kernel) -> Work {
         let v = |k: usize| vec![0; k];
         Work {
             sum: v(n),
@@ -85,8 +187,8 @@ impl Work {
             x2: v(n + 1),
             y2: v(n + 1),
             s2: v(n + 1),
-            digits: vec![0; l.digit_len()],
-            acc: v(l.columns()),
+            scratch: kernel.scratch(),
+            up: v(kernel.upper_len()),
         }
     }
 }
@@ -149,10 +251,10 @@ impl FixedOrbit {
             return None;
         }
         let n = Self::limbs_for(bits);
-        let layout = Layout::new(n)?;
+        let kernel = Kernel::new(n)?;
         let conv = |v: &Float| to_fixed(v, n);
         let (x, y, cx, cy) = (conv(&start[0])?, conv(&start[1])?, conv(&c[0])?, conv(&c[1])?);
-        Some(FixedOrbit { n, x, y, cx, cy, layout, simd, w: Work::new(layout) })
+        Some(FixedOrbit { n, x, y, cx, cy, kernel, simd, w: Work::new(n, kernel) })
     }
 
     /// Limbs per real.
@@ -192,10 +294,10 @@ impl FixedOrbit {
     /// One step, z <- z^2 + c, on this thread.
     pub fn step(&mut self) {
         self.inputs();
-        let (l, simd, w) = (self.layout, self.simd, &mut self.w);
-        square::square(l, &w.ax, &mut w.digits, &mut w.acc, &mut w.x2, simd);
-        square::square(l, &w.ay, &mut w.digits, &mut w.acc, &mut w.y2, simd);
-        square::square(l, &w.asum, &mut w.digits, &mut w.acc, &mut w.s2, simd);
+        let (k, simd, w) = (self.kernel, self.simd, &mut self.w);
+        k.square(&w.ax, &mut w.scratch, &mut w.x2, simd);
+        k.square(&w.ay, &mut w.scratch, &mut w.y2, simd);
+        k.square(&w.asum, &mut w.scratch, &mut w.s2, simd);
         self.finish();
     }
 
@@ -203,8 +305,10 @@ impl FixedOrbit {
     /// is wide enough for that to pay ([`THREADED_LIMBS`]) and `share` allows it, else steps
     /// on this thread alone. The results are the same bits either way.
     pub fn with_stepper<R>(&mut self, share: bool, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
+        // Two threads only where the caller's thread pool has them (a render's `--threads`)
+        // and the machine has two cores.
         let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
-        if share && self.n >= THREADED_LIMBS && cores >= 2 {
+        if share && self.n >= THREADED_LIMBS && cores >= 2 && rayon::current_num_threads() >= 2 {
             self.with_helper(body)
         } else {
             body(&mut Stepper { orbit: self, shared: None })
@@ -213,7 +317,7 @@ impl FixedOrbit {
 
     /// Runs `body` with a stepper that always shares each step with a helper thread.
     pub fn with_helper<R>(&mut self, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        let shared = Shared::new(self.layout, self.simd);
+        let shared = Shared::new(self.n, self.kernel, self.simd);
         std::thread::scope(|s| {
             s.spawn(|| shared.helper());
             let result = body(&mut Stepper { orbit: self, shared: Some(&shared) });
@@ -243,39 +347,49 @@ impl Stepper<'_> {
         };
         let n = self.orbit.n;
         self.orbit.inputs();
-        let (l, simd, w) = (self.orbit.layout, self.orbit.simd, &mut self.orbit.w);
-        // Hand |y| and |x + y| to the helper, then square |x| and the first rows of |x + y|
+        let (k, simd, w) = (self.orbit.kernel, self.orbit.simd, &mut self.orbit.w);
+        // Hand |y| and |x + y| to the helper, then square |x| and the lower part of |x + y|
         // here.
         for (slot, &v) in sh.input.iter().zip(w.ay.iter().chain(&w.asum)) {
             slot.store(v, Ordering::Relaxed);
         }
         let seq = sh.seq.load(Ordering::Relaxed) + 1;
         sh.seq.store(seq, Ordering::Release);
-        square::square(l, &w.ax, &mut w.digits, &mut w.acc, &mut w.x2, simd);
-        square::digits(&w.asum, &mut w.digits);
-        w.acc.fill(0);
-        square::rows(l, &w.digits, 0..sh.mid, &mut w.acc, simd);
-        while sh.done.load(Ordering::Acquire) != seq {
-            std::hint::spin_loop();
-        }
-        for (v, slot) in w.y2.iter_mut().zip(&sh.output) {
+        k.square(&w.ax, &mut w.scratch, &mut w.x2, simd);
+        k.lower(&w.asum, &mut w.scratch, &mut w.s2, simd);
+        wait(|| sh.done.load(Ordering::Acquire) == seq);
+        for (v, slot) in w.y2.iter_mut().chain(w.up.iter_mut()).zip(&sh.output) {
             *v = slot.load(Ordering::Relaxed);
         }
-        for (v, slot) in w.acc.iter_mut().zip(&sh.output[n + 1..]) {
-            *v += slot.load(Ordering::Relaxed);
-        }
-        square::finish(l, &w.digits, &mut w.acc);
-        square::pack(l, &w.acc, &mut w.s2);
+        debug_assert_eq!(w.y2.len(), n + 1);
+        k.join(&mut w.scratch, &w.up, &mut w.s2);
         self.orbit.finish();
     }
 }
 
+/// Spins until `ready` (the other thread answers within a fraction of a microsecond when
+/// both have a core), then yields the core between looks: where the machine is busier than
+/// its cores (another job, a fuzzer), spinning against a descheduled partner would cost
+/// whole time slices per step.
+fn wait(ready: impl Fn() -> bool) {
+    const SPINS: u32 = 1 << 14;
+    let mut spins = 0;
+    while !ready() {
+        if spins < SPINS {
+            spins += 1;
+            std::hint::spin_loop();
+        } else {
+            std::thread::yield_now();
+        }
+    }
+}
+
 /// What the two threads exchange: inputs |y| and |x + y| (2n limbs), outputs y^2 (n + 1
-/// limbs) and the column sums of the last rows of (x + y)^2, and a step counter each way.
+/// limbs) and the upper part of (x + y)^2 ([`Kernel::upper`]), and a step counter each way.
 struct Shared {
-    layout: Layout,
+    n: usize,
+    kernel: Kernel,
     simd: SimdLevel,
-    mid: usize,
     input: Vec<AtomicU64>,
     output: Vec<AtomicU64>,
     seq: AtomicU64,
@@ -284,15 +398,14 @@ struct Shared {
 }
 
 impl Shared {
-    fn new(layout: Layout, simd: SimdLevel) -> Shared {
-        let n = layout.n;
+    fn new(n: usize, kernel: Kernel, simd: SimdLevel) -> Shared {
         let words = |k: usize| (0..k).map(|_| AtomicU64::new(0)).collect();
         Shared {
-            layout,
+            n,
+            kernel,
             simd,
-            mid: layout.split(),
             input: words(2 * n),
-            output: words(n + 1 + layout.columns()),
+            output: words(n + 1 + kernel.upper_len()),
             seq: AtomicU64::new(0),
             done: AtomicU64::new(0),
             stop: AtomicBool::new(false),
@@ -301,31 +414,25 @@ impl Shared {
 
     /// The helper's loop: waits for a step's inputs, squares its share, publishes it.
     fn helper(&self) {
-        let l = self.layout;
-        let n = l.n;
+        let (n, k) = (self.n, self.kernel);
         let (mut ay, mut asum) = (vec![0; n], vec![0; n]);
         let mut y2 = vec![0; n + 1];
-        let mut digits = vec![0; l.digit_len()];
-        let mut acc = vec![0; l.columns()];
+        let mut up = vec![0; k.upper_len()];
+        let mut scratch = k.scratch();
         let mut last = 0;
         loop {
+            wait(|| self.seq.load(Ordering::Acquire) != last || self.stop.load(Ordering::Acquire));
             let seq = self.seq.load(Ordering::Acquire);
             if seq == last {
-                if self.stop.load(Ordering::Acquire) {
-                    return;
-                }
-                std::hint::spin_loop();
-                continue;
+                return;
             }
             last = seq;
             for (v, slot) in ay.iter_mut().chain(asum.iter_mut()).zip(&self.input) {
                 *v = slot.load(Ordering::Relaxed);
             }
-            square::square(l, &ay, &mut digits, &mut acc, &mut y2, self.simd);
-            square::digits(&asum, &mut digits);
-            acc.fill(0);
-            square::rows(l, &digits, self.mid..l.m, &mut acc, self.simd);
-            for (slot, &v) in self.output.iter().zip(y2.iter().chain(&acc)) {
+            k.square(&ay, &mut scratch, &mut y2, self.simd);
+            k.upper(&asum, &mut scratch, &mut up, self.simd);
+            for (slot, &v) in self.output.iter().zip(y2.iter().chain(&up)) {
                 slot.store(v, Ordering::Relaxed);
             }
             self.done.store(seq, Ordering::Release);
@@ -428,8 +535,8 @@ mod tests {
     /// centre (an attracting cycle, where rounding errors shrink: every step agrees), and
     /// near the e1086 location's minibrot (truncated to 250 digits: the orbit lingers for
     /// hundreds of steps and escapes; the steps agree until chaos amplifies the last bits,
-    /// and the escape is the same). Every instruction set gives the same bits, and so do
-    /// the steps shared with a helper thread.
+    /// and the escape is the same), with both squaring kernels. Every instruction set gives
+    /// the same bits, and so do the steps shared with a helper thread.
     #[test]
     fn fixed_point_orbit_matches_big_floats() {
         let rabbit = ["-0.12256116687665361237", "0.74486176661974423659"];
@@ -437,12 +544,15 @@ mod tests {
             "-1.768610493014677074503175653270226520239677907588665494837677257575304640978808475274635707362464044253014370289948538552508877464736415873052958422861932774670165994201643419934807500290056179906392909880374230601661671965436663874506006355684",
             "0.001266613503868717702066411192242601576193940560471409817185010171762524792588903616691501346028502452530417599269384116816237002586460261272462170615382790262110756215389780859682964779212455295242650488799024701023353984576434859496345393442867",
         ];
-        for bits in [200u64, 1700] {
-            against_big_floats(rabbit, bits, 3000, 3000, SimdLevel::Scalar);
-            let mine = against_big_floats(e1086, bits, 20000, 100, SimdLevel::Scalar);
+        // 200 and 1700 bits run on 64-bit limbs, 10300 bits on vector digits.
+        for (bits, steps) in [(200u64, 20000), (1700, 20000), (10300, 1500)] {
+            let limbs = FixedOrbit::limbs_for(bits) <= comba::MAX_LIMBS;
+            assert_eq!(limbs, bits < 10000, "{bits} bits: kernel");
+            against_big_floats(rabbit, bits, steps.min(3000), steps.min(3000), SimdLevel::Scalar);
+            let mine = against_big_floats(e1086, bits, steps, 100, SimdLevel::Scalar);
             assert!(mine.len() > 200, "{bits} bits: escaped after {} steps", mine.len());
             for simd in SimdLevel::usable() {
-                assert_eq!(against_big_floats(e1086, bits, 20000, 0, simd), mine, "{bits} bits, {simd}");
+                assert_eq!(against_big_floats(e1086, bits, steps, 0, simd), mine, "{bits} bits, {simd}");
             }
             let c = e1086.map(|t| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), bits));
             let mut threaded =

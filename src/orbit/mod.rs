@@ -7,6 +7,7 @@
 
 pub mod bigfloat;
 pub mod bla;
+pub mod comba;
 pub mod fixed;
 pub mod interior;
 #[cfg(feature = "mpfr")]

@@ -375,12 +375,15 @@ pub fn render<P: Send>(
         EngineKind::Gpu(precision) => Some((gpu::GpuContext::shared()?, precision)),
         _ => None,
     };
-    let (params, reference_seconds) = prepare_field(scene, &plan, options.clone(), cancel, progress)?;
-    let counters = Mutex::new(Counters::default());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
         .build()
         .map_err(|_| RenderError::Threads(options.threads))?;
+    // In the pool, so that the shared work (BLA tables, a reference's helper thread) keeps
+    // to the threads asked for.
+    let (params, reference_seconds) =
+        pool.install(|| prepare_field(scene, &plan, options.clone(), cancel, progress))?;
+    let counters = Mutex::new(Counters::default());
     let threads = pool.current_num_threads();
     let rows_per = strip_rows(scene);
     let band = options.rows.clone().unwrap_or(0..scene.height);
