@@ -30,7 +30,7 @@ fn main() {
         Scene::validate(file, &src.origin, &src.text, &src.base_dir, &deepfield::io::load_bitmap).expect("valid");
     scene.width = w;
     scene.height = h;
-    let mut worker = Worker::spawn(Arc::new(|| {}));
+    let mut worker = Worker::spawn(Arc::new(|| {}), None);
     println!("{path} at {w}x{h} (aa {} in the final pass)", scene.aa);
     let mut run = |label: &str, scene: &Scene| {
         let start = Instant::now();

@@ -201,6 +201,11 @@ pub struct ViewArgs {
     /// Window size (inner, in points).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
+    /// Read the scene's reference orbit(s) from FILE (written by `deepfield reference`)
+    /// instead of computing them; refused with the reason when it does not serve the scene.
+    /// Views navigated to later use it where it still serves (same centre, no deeper).
+    #[arg(long, value_name = "FILE", requires = "scene")]
+    pub reference: Option<PathBuf>,
 }
 
 /// `deepfield recolor`.

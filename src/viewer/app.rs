@@ -22,6 +22,7 @@ use super::nav::{History, Nav};
 use super::palette_editor::PaletteEditor;
 use super::worker::{Job, Report, Worker};
 use crate::field::{Needs, Planes};
+use crate::orbit::saved::SavedReferences;
 use crate::palette::{self, Palette};
 use crate::render;
 use crate::scene::raw::{LayerRaw, cli};
@@ -51,6 +52,9 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
     /// Render inline when polled (tests): no background thread.
     pub inline: bool,
+    /// Reference orbits from a file (`deepfield reference`), used wherever they serve the
+    /// view instead of computing them.
+    pub references: Option<Arc<SavedReferences>>,
 }
 
 /// Counters a test (or the curious) can read.
@@ -62,6 +66,8 @@ pub struct Counters {
     pub recolours: u64,
     /// Julia previews rendered.
     pub julia_previews: u64,
+    /// Deep engines built from the reference file's orbits.
+    pub references_from_file: u64,
 }
 
 /// State saved between runs. Every field has a default, so a session saved by another
@@ -147,13 +153,16 @@ impl ViewerApp {
         let saved: Option<Saved> = cc.storage.and_then(|s| eframe::get_value(s, "deepfield"));
         let ctx = cc.egui_ctx.clone();
         let worker = if options.inline {
-            Worker::inline()
+            Worker::inline(options.references.clone())
         } else {
             let c = ctx.clone();
-            Worker::spawn(Arc::new(move || c.request_repaint()))
+            Worker::spawn(Arc::new(move || c.request_repaint()), options.references.clone())
         };
-        let julia_worker =
-            if options.inline { Worker::inline() } else { Worker::spawn(Arc::new(move || ctx.request_repaint())) };
+        let julia_worker = if options.inline {
+            Worker::inline(None)
+        } else {
+            Worker::spawn(Arc::new(move || ctx.request_repaint()), None)
+        };
         let (origin, text, base_dir, nav) = match (&options.scene, &saved) {
             (Some(path), _) => {
                 let s = crate::io::read_scene_source(path).map_err(|e| e.to_string())?;
@@ -235,6 +244,7 @@ impl ViewerApp {
             renders: self.worker.renders.load(Ordering::Relaxed),
             recolours: self.recolours,
             julia_previews: self.julia_previews,
+            references_from_file: self.worker.engines_from_file(),
         }
     }
 

@@ -15,6 +15,7 @@ use std::time::Instant;
 use crate::field::{ChannelSet, Planes};
 use crate::num::{Decimal, FloatExp};
 use crate::orbit::Perturbation;
+use crate::orbit::saved::SavedReferences;
 use crate::palette::color::linear_to_srgb8;
 use crate::render::{self, Options, RenderError};
 use crate::scene::Scene;
@@ -97,13 +98,13 @@ pub struct Worker {
 
 impl Worker {
     /// A worker thread; `wake` is called after each report (to request a repaint).
-    pub fn spawn(wake: Wake) -> Self {
+    pub fn spawn(wake: Wake, saved: Option<Arc<SavedReferences>>) -> Self {
         let (jobs, job_rx) = mpsc::channel::<(u64, Job)>();
         let (report_tx, reports) = mpsc::channel();
         let cancel = Arc::new(Mutex::new(Arc::new(AtomicBool::new(false))));
         let renders = Arc::new(AtomicU64::new(0));
         let (tx, flag, count) = (report_tx.clone(), cancel.clone(), renders.clone());
-        let deep = Arc::new(DeepCache::default());
+        let deep = Arc::new(DeepCache::new(saved));
         let kept = deep.clone();
         std::thread::Builder::new()
             .name("deepfield-render".into())
@@ -125,7 +126,7 @@ impl Worker {
     }
 
     /// A worker that renders only when [`Worker::poll`] is called, on the caller's thread.
-    pub fn inline() -> Self {
+    pub fn inline(saved: Option<Arc<SavedReferences>>) -> Self {
         let (report_tx, reports) = mpsc::channel();
         Self {
             jobs: None,
@@ -136,8 +137,13 @@ impl Worker {
             pending: None,
             inline: true,
             renders: Arc::new(AtomicU64::new(0)),
-            deep: Arc::new(DeepCache::default()),
+            deep: Arc::new(DeepCache::new(saved)),
         }
+    }
+
+    /// Deep engines built from the reference file's orbits so far.
+    pub fn engines_from_file(&self) -> u64 {
+        self.deep.from_file.load(Ordering::Relaxed)
     }
 
     /// Starts `job`, cancelling whatever is in flight; returns its serial number.
@@ -179,9 +185,29 @@ impl Worker {
     }
 }
 
-/// The deep engine kept from the last job: its key (what besides the centre, extent and
-/// spacing decides it), the reference point, and the engine.
-pub type DeepCache = Mutex<Option<(String, [Decimal; 2], Arc<Perturbation>)>>;
+/// A deep engine kept from the last job: its key ([`deep_key`]: what besides the centre,
+/// extent and spacing decides it), the reference point, and the engine.
+type Kept = (String, [Decimal; 2], Arc<Perturbation>);
+
+/// The deep engine kept between jobs, and the reference orbits a file brought.
+#[derive(Debug, Default)]
+pub struct DeepCache {
+    /// The engine kept.
+    engine: Mutex<Option<Kept>>,
+    /// Reference orbits read from a file (`deepfield view --reference`): a new engine is
+    /// built from them instead of computing its orbits wherever they serve the view (its
+    /// centre, limit, escape radius, and no deeper than the file's precision).
+    saved: Option<Arc<SavedReferences>>,
+    /// Engines built from [`DeepCache::saved`].
+    pub from_file: AtomicU64,
+}
+
+impl DeepCache {
+    /// A cache with no engine yet, and the reference orbits of a file if given.
+    pub fn new(saved: Option<Arc<SavedReferences>>) -> Self {
+        DeepCache { saved, ..DeepCache::default() }
+    }
+}
 
 /// How far, in views, a deep engine reaches: one built for a view serves pans of up to a
 /// view's size either way and zooms out by up to this factor (its BLA tables are built for
@@ -212,18 +238,26 @@ fn deep_engine(
     cancel: &AtomicBool,
 ) -> Result<Option<Arc<Perturbation>>, RenderError> {
     let key = deep_key(scene);
-    let cached = cache.lock().unwrap_or_else(|e| e.into_inner()).clone().filter(|(k, _, _)| *k == key);
+    let cached = cache.engine.lock().unwrap_or_else(|e| e.into_inner()).clone().filter(|(k, _, _)| *k == key);
     // An engine built for a much wider view would serve a deep zoom-in with short BLA
     // steps: past a few reaches narrower, a new one is cheaper.
     let view = scene.log10_radius + 0.5 * (1.0 + (scene.width as f64 / scene.height as f64).powi(2)).log10();
     let moved = cached
         .filter(|(_, _, d)| d.extent.log2() * std::f64::consts::LOG10_2 - view < (4.0 * DEEP_REACH).log10())
         .and_then(|(_, at, d)| d.with_origin(difference(&scene.center, &at)).map(Arc::new));
-    let options = Options { deep: moved.clone(), deep_reach: Some(DEEP_REACH), ..Options::default() };
+    let mut options = Options { deep: moved.clone(), deep_reach: Some(DEEP_REACH), ..Options::default() };
+    // The file's orbits, where they serve this view.
+    let plan = scene.engine()?;
+    if let (Some(saved), Some(spec)) = (&cache.saved, render::deep_spec(scene, &plan, &options).1) {
+        options.references = saved.serves(&spec).is_ok().then(|| saved.clone());
+    }
     let Some(engine) = render::prepare_deep(scene, &options, cancel, &|_| {})? else { return Ok(None) };
     let reused = moved.as_ref().is_some_and(|c| Arc::ptr_eq(&c.refs, &engine.refs));
     if !reused {
-        *cache.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, scene.center.clone(), engine.clone()));
+        if cache.saved.as_ref().is_some_and(|s| Arc::ptr_eq(&s.refs, &engine.refs)) {
+            cache.from_file.fetch_add(1, Ordering::Relaxed);
+        }
+        *cache.engine.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, scene.center.clone(), engine.clone()));
     }
     Ok(Some(engine))
 }

@@ -27,8 +27,11 @@ fn harness(dir: &Path, text: &str) -> Harness<'static, ViewerApp> {
     let path = scene_file(dir, text);
     let mut h =
         Harness::builder().with_size(Vec2::new(900.0, 560.0)).with_max_steps(200).wgpu().build_eframe(move |cc| {
-            ViewerApp::new(cc, ViewerOptions { scene: Some(path.clone()), screenshot: None, inline: true })
-                .expect("viewer starts")
+            ViewerApp::new(
+                cc,
+                ViewerOptions { scene: Some(path.clone()), screenshot: None, inline: true, references: None },
+            )
+            .expect("viewer starts")
         });
     settle(&mut h);
     h
@@ -414,4 +417,54 @@ fn layer_controls_show_defaults_for_keys_left_out() {
     assert_eq!(bottom.density.as_ref().map(|d| *d.get_ref()), Some(0.2));
     assert!(bottom.offset.is_none() && bottom.interior.is_none() && bottom.palette.is_none());
     assert_eq!(h.state().counters().renders, before.renders, "a density edit recolours without rendering");
+}
+
+/// `view --reference`: a deep view's engine is built from the file's orbits (none computed)
+/// and shows the image it shows without the file; a file that does not serve the scene is
+/// refused before any window opens, with the reason, and so is `--reference` without a
+/// scene.
+#[test]
+fn a_reference_file_serves_the_viewer() {
+    let dir = scratch("viewer-reference");
+    let text = shipped("liiiines.toml", |t| t);
+    let scene = scene_file(&dir, &text);
+    let bin = env!("CARGO_BIN_EXE_deepfield");
+    // Made for a finer raster than the viewer's, so its precision is enough.
+    let file = dir.join("liiiines.dfr");
+    let o = std::process::Command::new(bin)
+        .args(["reference", scene.to_str().unwrap(), "--size", "3200x2400", "-o", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let saved = deepfield::orbit::saved::SavedReferences::decode(&std::fs::read(&file).unwrap()).expect("decodes");
+    let path = scene.clone();
+    let mut with =
+        Harness::builder().with_size(Vec2::new(900.0, 560.0)).with_max_steps(200).wgpu().build_eframe(move |cc| {
+            let options = ViewerOptions {
+                scene: Some(path.clone()),
+                screenshot: None,
+                inline: true,
+                references: Some(std::sync::Arc::new(saved.clone())),
+            };
+            ViewerApp::new(cc, options).expect("viewer starts")
+        });
+    settle(&mut with);
+    assert_eq!(with.state().counters().references_from_file, 1);
+    let mut without = harness(&dir, &text);
+    assert_eq!(without.state().counters().references_from_file, 0);
+    let (a, b) = (with.render().expect("a frame"), without.render().expect("a frame"));
+    let far = a.pixels().zip(b.pixels()).filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 12)).count();
+    assert!(far * 1000 < (a.width() * a.height()) as usize, "{far} pixels differ");
+    // Refusals, exit 2 with the reason: another iteration limit, no scene.
+    let other = scene_file(&dir, &text.replace("max = 12500", "max = 12000"));
+    assert!(text.contains("max = 12500"));
+    let o = std::process::Command::new(bin)
+        .args(["view", other.to_str().unwrap(), "--reference", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("does not serve") && err.contains("max_iter"), "{err}");
+    let o = std::process::Command::new(bin).args(["view", "--reference", file.to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
 }
