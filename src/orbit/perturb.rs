@@ -561,6 +561,33 @@ struct Lane {
     dc_fe: [FloatExp; 2],
 }
 
+/// A sample's delta at the start, u = origin + spacing × offset, and, when the view's
+/// common BLA steps are taken (`common` = their K1, K2), δ_m = K1 u + K2 u² with the scaled
+/// derivative (K1 + 2 K2 u) × spacing: computed in `T` (f64 where
+/// [`Perturbation::start_in_f64`] allows, which gives FloatExp's bits sooner), returned in
+/// FloatExp.
+#[allow(clippy::type_complexity)] // three complex values, named in the doc
+fn start_arithmetic<T: Real>(
+    spacing: FloatExp,
+    origin: [FloatExp; 2],
+    offset: [f64; 2],
+    common: Option<[[FloatExp; 2]; 2]>,
+) -> ([FloatExp; 2], Option<([FloatExp; 2], [FloatExp; 2])>) {
+    let fe = |v: [FloatExp; 2]| -> [T; 2] { cconv(v) };
+    let sp = T::from_fe(spacing);
+    let d = [sp.mul_f64(offset[0]), sp.mul_f64(offset[1])];
+    // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
+    let d = if origin == [FloatExp::ZERO; 2] { d } else { cadd(fe(origin), d) };
+    let moved = common.map(|[k1, k2]| {
+        let (k1, k2) = (fe(k1), fe(k2));
+        let dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
+        let k2d = cmul(k2, d);
+        let der = cmul(cadd(k1, [k2d[0].mul_f64(2.0), k2d[1].mul_f64(2.0)]), [sp, T::from_f64(0.0)]);
+        (cconv(dz), cconv(der))
+    });
+    (cconv(d), moved)
+}
+
 /// Samples the interleaved loop keeps in flight: their dependency chains (each step waits
 /// for the previous one's multiply-adds) overlap in the out-of-order core. Measured by
 /// alternating binaries (liiiines, 1e50 view): 2 lanes beat 1, 3, 4 and 8 (4 lanes: 25%
@@ -574,9 +601,12 @@ impl Perturbation {
     /// after the view's common BLA steps when `skip` (counted into `counters`).
     fn start(&self, offset: [f64; 2], skip: bool, counters: &mut Counters) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
-        let d = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
-        // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
-        let d = if self.origin == [zero; 2] { d } else { cadd(self.origin, d) };
+        let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
+        let (d, moved) = if self.interior.is_none() && self.start_in_f64(offset) {
+            start_arithmetic::<f64>(self.spacing, self.origin, offset, common)
+        } else {
+            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common)
+        };
         let shrink = self.interior.map_or(Contraction::IDLE, |c| Contraction::new(FloatExp::ONE, c));
         // The first Newton test at the end of the second period, if the first contracted.
         let at = self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2));
@@ -587,22 +617,35 @@ impl Perturbation {
             (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
         };
         let mut der = [self.spacing, zero];
-        if let (true, Some(k)) = (skip, &self.skip) {
+        if let (true, Some(k), Some((dz, scaled))) = (skip, &self.skip, moved) {
             counters.iterations += (k.m - start.m) as u64;
             counters.bla_iterations += (k.m - start.m) as u64;
             counters.bla_steps += k.steps as u64;
-            let [k1, k2] = k.k;
-            start.dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
+            start.dz = dz;
             start.m = k.m;
             start.n = k.m;
-            let k2d = cmul(k2, d);
-            der = cmul(cadd(k1, [k2d[0].ldexp(1), k2d[1].ldexp(1)]), der);
+            der = scaled;
             if let Some(c) = self.interior {
                 let [d1, d2] = k.d;
                 start.shrink = Contraction::new(norm2(cadd(d1, cmul(d2, d))), c);
             }
         }
         (start, Der::from_fe(der, add_fe), add_fe)
+    }
+
+    /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`]):
+    /// the spacing, the origin, the common steps' coefficients and the offset are zero or
+    /// within exponents that keep every product and sum the start forms a normal f64, where
+    /// FloatExp's operations give the bits f64's give (its mantissa products and sums are
+    /// f64 operations, rounded alike; its alignment by powers of two is exact).
+    fn start_in_f64(&self, offset: [f64; 2]) -> bool {
+        let fits = |v: FloatExp, lo: i32, hi: i32| v.is_zero() || (lo..=hi).contains(&v.exponent());
+        let o = |x: f64| x == 0.0 || (2f64.powi(-60)..=2f64.powi(40)).contains(&x.abs());
+        o(offset[0])
+            && o(offset[1])
+            && fits(self.spacing, -250, 0)
+            && self.origin.iter().all(|&v| fits(v, -250, 40))
+            && self.skip.as_ref().is_none_or(|k| k.k.iter().flatten().all(|&v| fits(v, -250, 250)))
     }
 
     /// The period of the reference when interior detection may use Newton's test: a
