@@ -198,7 +198,7 @@ pub struct DeepCache {
     /// built from them instead of computing its orbits wherever they serve the view (its
     /// centre, limit, escape radius, and no deeper than the file's precision).
     saved: Option<Arc<SavedReferences>>,
-    /// Engines built from [`DeepCache::saved`].
+    /// Engines built from the reference file's orbits.
     pub from_file: AtomicU64,
 }
 
