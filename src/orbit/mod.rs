@@ -231,6 +231,13 @@ pub fn prepare(
     let single_d2 = perturb::single_step_threshold(&bla_f64);
     let check = interior::Check::new(spec.max_iter, spec.escape_radius);
     let interior_decision = interior::decide(spec.interior, &refs, mandelbrot, spec.spacing, spec.max_iter, check);
+    // Λ = 2 Z_1 ⋯ 2 Z_(p-1) of a nucleus's reference (interior detection's quadratic model).
+    let renormal = refs[0].period().filter(|_| mandelbrot).map(|p| {
+        (1..p).fold([FloatExp::ONE, FloatExp::ZERO], |l, k| {
+            let z = refs[0].get_fe(k);
+            crate::num::real::cmul(l, [z[0].ldexp(1), z[1].ldexp(1)])
+        })
+    });
     Ok(Perturbation {
         refs,
         bla_fe: std::sync::Arc::new(bla_fe),
@@ -245,6 +252,7 @@ pub fn prepare(
         interior: interior_decision.runs().then_some(check),
         interior_asked: spec.interior,
         interior_decision,
+        renormal,
         numbers: spec.numbers,
         skip,
         single_d2,

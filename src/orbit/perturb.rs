@@ -154,6 +154,10 @@ pub struct Perturbation {
     pub interior_asked: Detection,
     /// What was decided, and why.
     pub interior_decision: Decision,
+    /// For a nucleus's reference of period p: Λ = f^(p-1)'(c) = 2 Z_1 · 2 Z_2 ⋯ 2 Z_(p-1),
+    /// the coefficient of the quadratic model f^p(w) ≈ f^p(0) + Λ w² near 0 that interior
+    /// detection's first Newton test starts from ([`Perturbation::newton_probe`]).
+    pub renormal: Option<[FloatExp; 2]>,
     /// Delta number types.
     pub numbers: Numbers,
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
@@ -664,7 +668,11 @@ impl Perturbation {
     /// period k p where its value has come back to the anchor's four times closer than it
     /// went away at the first end. Where that holds, |dz/dz|^2 shrank since the anchor, and
     /// the iteration count has reached the sample's `at`, Newton's method looks for an
-    /// attracting cycle of period k p from the value ([`interior::newton_attracting`]).
+    /// attracting cycle of period k p from the value ([`interior::newton_attracting`]). At
+    /// the first end, before any anchor, a test of period p starts from the attracting
+    /// fixed point of the one-period quadratic model ([`Perturbation::model_fixed_point`])
+    /// wherever the model has one: inside the minibrot's cardioid that start is close
+    /// enough for Newton to certify within a few turns, without waiting for the orbit.
     /// Found, the sample is interior (its parameter lies in a hyperbolic component); else
     /// the next test waits until the iteration count has doubled, from a new anchor. This
     /// finds most interior samples within a few periods, where the contraction criterion
@@ -685,6 +693,14 @@ impl Perturbation {
             }
             _ => away2(pr.anchor) * 16.0 < pr.first2,
         };
+        // At the first end, a start from the fixed point of the quadratic model, where the
+        // model says it attracts: no need to wait for the orbit to settle.
+        if pr.anchor_n == 0
+            && let Some(w0) = self.model_fixed_point(w)
+            && interior::newton_attracting(w0, |w, second| self.return_map(w, cto_f64(s.dc), p, 1, second))
+        {
+            return true;
+        }
         if candidate && exp < pr.anchor_exp && s.n >= pr.at {
             pr.at = s.n.saturating_mul(2);
             let dc = cto_f64(s.dc);
@@ -696,6 +712,30 @@ impl Perturbation {
         }
         *pr = Probe { anchor_n: s.n, anchor_exp: exp, anchor: w, ..*pr };
         false
+    }
+
+    /// The attracting fixed point of the quadratic model w -> a + Λ w^2 of one period near 0
+    /// (a the sample's value at its first period end, f^p(0)): in the renormalised
+    /// coordinate z = Λ w it is z^2 + c' with c' = Λ a, whose attracting fixed point is
+    /// (1 - sqrt(1 - 4c')) / 2, with multiplier 1 - sqrt(1 - 4c'). None where the model
+    /// does not attract (multiplier of modulus 1 or more: the sample is outside the
+    /// minibrot's cardioid, to the model's accuracy) or Λ is unknown.
+    fn model_fixed_point(&self, a: [f64; 2]) -> Option<[f64; 2]> {
+        let lam = self.renormal?;
+        let cp = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
+        let (x, y) = (1.0 - 4.0 * cp[0], -4.0 * cp[1]);
+        let r = x.hypot(y);
+        let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
+        let mult = [1.0 - sq[0], -sq[1]];
+        if !(mult[0] * mult[0] + mult[1] * mult[1] < 1.0) {
+            return None;
+        }
+        let z = cconv::<f64, FloatExp>([mult[0] / 2.0, mult[1] / 2.0]);
+        // z / Λ = z conj(Λ) / |Λ|^2.
+        let q = cmul(z, [lam[0], -lam[1]]);
+        let n = norm2(lam);
+        let w = cto_f64([q[0] / n, q[1] / n]);
+        (w[0].is_finite() && w[1].is_finite()).then_some(w)
     }
 
     /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and
