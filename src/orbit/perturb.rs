@@ -727,7 +727,8 @@ impl Perturbation {
         let r = x.hypot(y);
         let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
         let mult = [1.0 - sq[0], -sq[1]];
-        if !(mult[0] * mult[0] + mult[1] * mult[1] < 1.0) {
+        // Not below 1, or not a number (an overflowed c'): no attracting fixed point.
+        if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
             return None;
         }
         let z = cconv::<f64, FloatExp>([mult[0] / 2.0, mult[1] / 2.0]);
