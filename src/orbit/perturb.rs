@@ -156,7 +156,7 @@ pub struct Perturbation {
     pub interior_decision: Decision,
     /// For a nucleus's reference of period p: Λ = f^(p-1)'(c) = 2 Z_1 · 2 Z_2 ⋯ 2 Z_(p-1),
     /// the coefficient of the quadratic model f^p(w) ≈ f^p(0) + Λ w² near 0 that interior
-    /// detection's first Newton test starts from ([`Perturbation::newton_probe`]).
+    /// detection's first Newton test starts from.
     pub renormal: Option<[FloatExp; 2]>,
     /// Delta number types.
     pub numbers: Numbers,
