@@ -95,13 +95,7 @@ pub fn apply_palette(file: &mut SceneFile, p: &str) {
     }
     for l in &mut file.layers {
         let l = l.get_mut();
-        // Distance and interior layers without a palette are grey or solid by design.
-        let uses_palette = match l.kind.get_ref().as_str() {
-            "smooth" | "histogram" | "angle" | "stripe" | "trap" => true,
-            "distance" | "interior" => l.palette.is_some(),
-            _ => false,
-        };
-        if uses_palette {
+        if deepfield::scene::uses_palette(l) {
             l.palette = Some(cli(p.clone()));
         }
     }

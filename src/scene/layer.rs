@@ -20,6 +20,15 @@ use crate::source::SourceError;
 use crate::trap::ifs::IfsParams;
 use crate::trap::{BitmapTrap, Frame, Shape, Stripe, Trap};
 
+/// True when a palette given for every layer (`--palette`, the viewer's palette menu) applies
+/// to `l`: its kind takes a palette and it uses one, written or by default. Distance,
+/// interior and IFS layers without a palette are grey, solid or white by design and keep
+/// that.
+pub fn uses_palette(l: &LayerRaw) -> bool {
+    let takes = kind_keys(l.kind.get_ref()).is_some_and(|keys| keys.contains(&"palette"));
+    takes && (l.palette.is_some() || matches!(default_value(l, "palette"), Some(DefaultValue::Text(_))))
+}
+
 /// Every layer kind, with the keys it takes beyond `kind` and the [`COMMON_KEYS`].
 pub const LAYER_KINDS: [(&str, &[&str]); 12] = [
     ("smooth", &["palette", "density", "offset", "transfer", "interior"]),
@@ -515,6 +524,28 @@ mod tests {
     use super::*;
     use crate::scene::raw::KeyValueMut;
     use crate::trap::Bitmap;
+
+    /// `--palette` and the viewer's palette menu reach the layers that use a palette: the
+    /// kinds that have one by default, and any layer that names one (IFS and distance
+    /// included); not the layers that are grey, solid or white without one.
+    #[test]
+    fn a_palette_for_every_layer_reaches_the_layers_that_use_one() {
+        let with = |kind: &str, palette: Option<&str>| {
+            let mut l = LayerRaw::of_kind(kind);
+            l.palette = palette.map(|p| Spanned::new(0..0, p.to_string()));
+            uses_palette(&l)
+        };
+        for kind in ["smooth", "histogram", "angle", "stripe", "trap"] {
+            assert!(with(kind, None), "{kind}");
+        }
+        for kind in ["distance", "interior", "ifs"] {
+            assert!(!with(kind, None), "{kind} without a palette");
+            assert!(with(kind, Some("ice")), "{kind} with a palette");
+        }
+        for kind in ["boundary", "slope", "binary"] {
+            assert!(!with(kind, None), "{kind}");
+        }
+    }
 
     #[test]
     fn every_kind_key_is_declared_and_every_declared_key_is_taken() {

@@ -15,7 +15,7 @@ mod validate;
 use std::path::{Path, PathBuf};
 
 pub use context::BitmapLoader;
-pub use layer::{COMMON_KEYS, DefaultValue, LAYER_KINDS, default_value, kind_keys, kind_list};
+pub use layer::{COMMON_KEYS, DefaultValue, LAYER_KINDS, default_value, kind_keys, kind_list, uses_palette};
 pub use raw::SceneFile;
 
 use crate::compose::Stack;

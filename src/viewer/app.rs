@@ -280,9 +280,7 @@ impl ViewerApp {
     pub fn set_palette(&mut self, name: &str) {
         for (k, l) in self.file.layers.iter_mut().enumerate() {
             let l = l.get_mut();
-            if matches!(l.kind.get_ref().as_str(), "smooth" | "histogram" | "angle" | "stripe" | "trap")
-                || l.palette.is_some()
-            {
+            if crate::scene::uses_palette(l) {
                 l.palette = Some(cli(name.to_string()));
                 self.overrides.remove(&k);
             }
