@@ -50,6 +50,28 @@ pub enum BlendMode {
 }
 
 impl BlendMode {
+    /// Every mode, in the order menus list them.
+    pub const ALL: [BlendMode; 13] = [
+        BlendMode::Normal,
+        BlendMode::Multiply,
+        BlendMode::Screen,
+        BlendMode::Overlay,
+        BlendMode::Darken,
+        BlendMode::Lighten,
+        BlendMode::Difference,
+        BlendMode::SoftLight,
+        BlendMode::HardLight,
+        BlendMode::ColorDodge,
+        BlendMode::ColorBurn,
+        BlendMode::Exclusion,
+        BlendMode::Plus,
+    ];
+
+    /// The mode's name in scene files (its serde name, declared once by the derive).
+    pub fn name(self) -> String {
+        toml::Value::try_from(self).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default()
+    }
+
     fn skia(self) -> tiny_skia::BlendMode {
         use tiny_skia::BlendMode as B;
         match self {
@@ -251,6 +273,33 @@ pub fn downsample(samples: Vec<[f32; 3]>, width: usize, aa: usize) -> Vec<[f32; 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `BlendMode::ALL` lists every mode once (the match fails to compile when a mode is
+    /// added and not listed), and each name reads back as its mode.
+    #[test]
+    fn every_blend_mode_is_listed_and_named() {
+        for (k, &m) in BlendMode::ALL.iter().enumerate() {
+            let at = match m {
+                BlendMode::Normal => 0,
+                BlendMode::Multiply => 1,
+                BlendMode::Screen => 2,
+                BlendMode::Overlay => 3,
+                BlendMode::Darken => 4,
+                BlendMode::Lighten => 5,
+                BlendMode::Difference => 6,
+                BlendMode::SoftLight => 7,
+                BlendMode::HardLight => 8,
+                BlendMode::ColorDodge => 9,
+                BlendMode::ColorBurn => 10,
+                BlendMode::Exclusion => 11,
+                BlendMode::Plus => 12,
+            };
+            assert_eq!(at, k, "{m:?}");
+            let back: BlendMode = toml::Value::String(m.name()).try_into().expect("reads back");
+            assert_eq!(back, m);
+        }
+        assert_eq!(BlendMode::SoftLight.name(), "soft-light");
+    }
 
     #[test]
     fn downsample_averages_in_linear_light() {

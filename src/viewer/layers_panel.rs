@@ -104,6 +104,18 @@ fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut
         };
     }
     drop(fields);
+    // How it combines with the layers below (the bottom layer has nothing below it).
+    if k > 0 {
+        let current = l.blend.as_ref().map_or(BlendMode::default(), |b| *b.get_ref());
+        egui::ComboBox::new(("blend", k), "blend").selected_text(current.name()).show_ui(ui, |ui| {
+            for mode in BlendMode::ALL {
+                if ui.selectable_label(mode == current, mode.name()).clicked() && mode != current {
+                    l.blend = Some(cli(mode));
+                    changed = true;
+                }
+            }
+        });
+    }
     if k > 0
         && let Some(default) = opacity_default
     {

@@ -417,6 +417,14 @@ fn layer_controls_show_defaults_for_keys_left_out() {
     assert_eq!(bottom.density.as_ref().map(|d| *d.get_ref()), Some(0.2));
     assert!(bottom.offset.is_none() && bottom.interior.is_none() && bottom.palette.is_none());
     assert_eq!(h.state().counters().renders, before.renders, "a density edit recolours without rendering");
+    // The upper layer's blend mode has a menu (the bottom layer has nothing below it).
+    assert_eq!(h.get_all_by_label("blend").count(), 1);
+    h.get_by_label("blend").click();
+    h.run_steps(2);
+    h.get_by_label("screen").click();
+    settle(&mut h);
+    let top = h.state().scene_file().layers[1].get_ref().clone();
+    assert_eq!(top.blend.as_ref().map(|b| *b.get_ref()), Some(deepfield::compose::BlendMode::Screen));
 }
 
 /// `view --reference`: a deep view's engine is built from the file's orbits (none computed)
