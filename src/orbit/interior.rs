@@ -330,7 +330,7 @@ pub fn size_estimate(orbit: impl IntoIterator<Item = [FloatExp; 2]>) -> [FloatEx
 }
 
 /// 1 / a (zero for zero).
-fn cinv(a: [FloatExp; 2]) -> [FloatExp; 2] {
+pub(super) fn cinv(a: [FloatExp; 2]) -> [FloatExp; 2] {
     let d = norm2(a);
     if d.is_zero() {
         return [FloatExp::ZERO; 2];

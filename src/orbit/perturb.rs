@@ -394,6 +394,20 @@ impl Der {
         [v[0].to_f64(), v[1].to_f64()]
     }
 
+    /// self *= f, with nothing added (the derivative of a turn in Newton's test, up to
+    /// Λ ~ 1/sqrt(minibrot size) mid-turn): in f64 while |f| is within 2^+-400 (its product
+    /// with a mantissa within 2^+-500 neither overflows nor underflows), else in FloatExp.
+    #[inline]
+    fn mul(&mut self, f: [f64; 2]) {
+        let big = f[0].abs().max(f[1].abs());
+        if big < DER_SAFE && big > 1.0 / DER_SAFE {
+            self.mant = cmul(self.mant, f);
+            self.renormalise(FloatExp::ZERO);
+        } else {
+            *self = Der::from_fe(cmul(self.to_fe(), cconv(f)), FloatExp::ZERO);
+        }
+    }
+
     /// True when the larger part of the mantissa is outside [DER_LO, DER_HI] (or 0).
     #[inline(always)]
     fn out_of_range(&self) -> bool {
@@ -469,47 +483,6 @@ impl Der {
     fn jacobian_fe(&mut self, m: [FloatExp; 2], n: [FloatExp; 2], add_fe: FloatExp) {
         let d = cadd(cmul(m, self.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
         *self = Der::from_fe(d, add_fe);
-    }
-}
-
-/// A complex number as an f64 pair times 2^e, for products whose size leaves the f64 range
-/// (the derivative of a turn in Newton's test: up to Λ ~ 1/sqrt(minibrot size) mid-turn).
-#[derive(Debug, Clone, Copy)]
-struct Scaled {
-    m: [f64; 2],
-    e: i32,
-}
-
-impl Scaled {
-    const ONE: Scaled = Scaled { m: [1.0, 0.0], e: 0 };
-
-    /// self *= f: in f64 while |f| is within 2^+-400 (the product of that and a mantissa
-    /// within 2^+-500 neither overflows nor underflows), else in FloatExp.
-    #[inline]
-    fn mul(&mut self, f: [f64; 2]) {
-        let big = f[0].abs().max(f[1].abs());
-        if big < DER_SAFE && big > 1.0 / DER_SAFE {
-            self.m = cmul(self.m, f);
-            if !(DER_LO..=DER_HI).contains(&self.m[0].abs().max(self.m[1].abs())) {
-                self.renormalise();
-            }
-            return;
-        }
-        self.set(cmul(self.to_fe(), cconv(f)));
-    }
-
-    fn renormalise(&mut self) {
-        self.set(self.to_fe());
-    }
-
-    fn set(&mut self, v: [FloatExp; 2]) {
-        let big = v[0].abs().max(v[1].abs());
-        let e = if big.is_zero() { 0 } else { big.exponent() };
-        *self = Scaled { m: [v[0].ldexp(-e).to_f64(), v[1].ldexp(-e).to_f64()], e };
-    }
-
-    fn to_fe(self) -> [FloatExp; 2] {
-        [FloatExp::new(self.m[0], self.e), FloatExp::new(self.m[1], self.e)]
     }
 }
 
@@ -681,7 +654,7 @@ impl Perturbation {
     fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
         let Some(p) = self.newton_period() else { return false };
         let exp = s.shrink.value().exponent();
-        let w = cto_f64(s.dz);
+        let (w, dc) = (cto_f64(s.dz), cto_f64(s.dc));
         let pr = &mut s.probe;
         let away2 = |a: [f64; 2]| (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
         let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
@@ -697,13 +670,12 @@ impl Perturbation {
         // model says it attracts: no need to wait for the orbit to settle.
         if pr.anchor_n == 0
             && let Some(w0) = self.model_fixed_point(w)
-            && interior::newton_attracting(w0, |w, second| self.return_map(w, cto_f64(s.dc), p, 1, second))
+            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, 1, second))
         {
             return true;
         }
         if candidate && exp < pr.anchor_exp && s.n >= pr.at {
             pr.at = s.n.saturating_mul(2);
-            let dc = cto_f64(s.dc);
             if interior::newton_attracting(w, |w, second| self.return_map(w, dc, p, k, second)) {
                 return true;
             }
@@ -731,11 +703,7 @@ impl Perturbation {
         if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
             return None;
         }
-        let z = cconv::<f64, FloatExp>([mult[0] / 2.0, mult[1] / 2.0]);
-        // z / Λ = z conj(Λ) / |Λ|^2.
-        let q = cmul(z, [lam[0], -lam[1]]);
-        let n = norm2(lam);
-        let w = cto_f64([q[0] / n, q[1] / n]);
+        let w = cto_f64(cmul(cconv::<f64, FloatExp>([mult[0] / 2.0, mult[1] / 2.0]), interior::cinv(lam)));
         (w[0].is_finite() && w[1].is_finite()).then_some(w)
     }
 
@@ -755,7 +723,7 @@ impl Perturbation {
         let mut z = w;
         // d1 as an f64 pair with its own exponent (FloatExp for each product would double
         // the cost of the turn); d2 in FloatExp, and only when asked for.
-        let mut d1 = Scaled::ONE;
+        let mut d1 = Der { mant: [1.0, 0.0], exp: 0, add: 0.0 };
         let mut d2 = [FloatExp::ZERO; 2];
         for _ in 0..k {
             let (mut dz, mut m) = (z, 0u32);

@@ -36,6 +36,11 @@ struct View {
 }
 
 impl View {
+    /// A 48×36 view through the f64 perturbation engine to 5000 iterations.
+    fn small(center: [&'static str; 2], radius: &'static str, julia: Option<[&'static str; 2]>) -> View {
+        View { center, radius, julia, max_iter: 5000, size: (48, 36), engine: "perturb-f64" }
+    }
+
     fn text(&self, detection: Option<bool>) -> String {
         let formula = match self.julia {
             Some([re, im]) => format!("[formula]\nkind = \"julia\"\nc = [\"{re}\", \"{im}\"]\n"),
@@ -163,22 +168,8 @@ fn minibrot_centred_view_at_1e102() {
 /// period-3 bulb), where samples inside must be found and outside never.
 #[test]
 fn shallow_views_with_interior() {
-    let mandelbrot = View {
-        center: ["-0.9", "0.15"],
-        radius: "0.35",
-        julia: None,
-        max_iter: 5000,
-        size: (48, 36),
-        engine: "perturb-f64",
-    };
-    let rabbit = View {
-        center: ["0", "0"],
-        radius: "1.3",
-        julia: Some(["-0.12", "0.75"]),
-        max_iter: 5000,
-        size: (48, 36),
-        engine: "perturb-f64",
-    };
+    let mandelbrot = View::small(["-0.9", "0.15"], "0.35", None);
+    let rabbit = View::small(["0", "0"], "1.3", Some(["-0.12", "0.75"]));
     for v in [mandelbrot, rabbit] {
         let (n, (stopped, newton), _) = render_all_ways(&v);
         assert_eq!(newton, 0, "{}: Newton's test needs a nucleus's reference", v.radius);
@@ -197,14 +188,7 @@ fn shallow_views_with_interior() {
 /// near a preimage of 0 contract on their way out: detection stays off even when asked for.
 #[test]
 fn julia_set_without_interior_is_not_checked() {
-    let v = View {
-        center: ["0", "0"],
-        radius: "1.5",
-        julia: Some(["0.28", "0.008"]),
-        max_iter: 5000,
-        size: (48, 36),
-        engine: "perturb-f64",
-    };
+    let v = View::small(["0", "0"], "1.5", Some(["0.28", "0.008"]));
     let (_, stats) = render_n(&v.text(Some(true)), SimdLevel::detect());
     let deep = stats.deep.expect("perturbation");
     assert_eq!(deep.interior_detection, Decision::JuliaNoInterior);
