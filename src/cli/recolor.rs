@@ -5,13 +5,15 @@
 //! overrides the palette of each. The view of the scene must match the data (same
 //! sample raster); planes a layer needs but the file lacks are named in the error.
 
+use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::anyhow;
-use deepfield::field::{Channel, Needs};
-use deepfield::io::{self, PngEncoder, PngWriter, RawData, TrapKind};
+use deepfield::field::{Channel, Needs, Planes};
+use deepfield::io::{self, IoError, PngEncoder, PngWriter, RawData, TrapKind};
+use deepfield::render;
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
 use deepfield::trap::Trap;
@@ -66,36 +68,53 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
         .map_err(|e| Failure::Runtime(e.into()))?;
-    let enc = PngEncoder::new(scene.png_bits);
-    let encoded: Vec<Vec<u8>> = pool.install(|| {
-        use rayon::prelude::*;
-        if scene.png_bits == 8 {
-            return deepfield::render::recolor_rgb8(&scene.stack, &raw.strips, scene.aa);
-        }
-        let rgb = deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa);
-        rgb.par_iter().map(|strip| enc.encode(strip)).collect()
-    });
-    let color_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    let mut png =
+    let png =
         PngWriter::create(&out, scene.width, scene.height, scene.png_bits, &scene.to_toml()).map_err(Failure::input)?;
-    for bytes in &encoded {
-        png.write_encoded(bytes).map_err(|e| Failure::Runtime(e.into()))?;
-    }
-    png.finish().map_err(|e| Failure::Runtime(e.into()))?;
+    write_coloured(&scene, &raw, &pool, png).map_err(|e| Failure::Runtime(e.into()))?;
     if args.stats {
         let line = format!(
-            "read {:.3} s, colour {:.3} s ({} x {} pixels, {} layers), write {:.3} s\n",
+            "read {:.3} s, colour and write {:.3} s ({} x {} pixels, {} layers)\n",
             read_s,
-            color_s,
+            t1.elapsed().as_secs_f64(),
             scene.width,
             scene.height,
             scene.stack.layers.len(),
-            t2.elapsed().as_secs_f64()
         );
         std::io::stdout().lock().write_all(line.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }
     Ok(())
+}
+
+/// Colours the strips on `pool` and writes them to `png` as they come: the writer thread
+/// deflates one strip while the workers colour the next ones, and puts the strips, which
+/// finish in any order, back in order.
+fn write_coloured(scene: &Scene, raw: &RawData, pool: &rayon::ThreadPool, mut png: PngWriter) -> Result<(), IoError> {
+    use rayon::prelude::*;
+    let ctx = pool.install(|| render::context(&scene.stack, &raw.strips));
+    let enc = PngEncoder::new(scene.png_bits);
+    let colour = |planes: &Planes| match scene.png_bits {
+        8 => render::strip_rgb8(&scene.stack, planes, scene.aa, &ctx),
+        _ => enc.encode(&render::strip_linear(&scene.stack, planes, scene.aa, &ctx)),
+    };
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Vec<u8>)>();
+    std::thread::scope(|s| {
+        let writer = s.spawn(move || {
+            let mut waiting = BTreeMap::new();
+            let mut next = 0;
+            for (k, bytes) in rx {
+                waiting.insert(k, bytes);
+                while let Some(bytes) = waiting.remove(&next) {
+                    png.write_encoded(&bytes)?;
+                    next += 1;
+                }
+            }
+            png.finish()
+        });
+        // A failed writer drops the receiver; the workers' sends then fail and are ignored.
+        pool.install(|| raw.strips.par_iter().enumerate().for_each(|(k, p)| drop(tx.send((k, colour(p))))));
+        drop(tx);
+        writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
 }
 
 /// Refuses a scene whose raster or layers the data cannot serve.

@@ -29,8 +29,6 @@ use super::IoError;
 use super::exr::{ExrWriter, SCENE_ATTRIBUTE, TILE_ATTRIBUTE};
 use super::tile::{Band, band_rows, check_set, parse_tile_text};
 
-/// Lines per block of a ZIP-compressed scan-line file.
-const BLOCK_LINES: usize = 16;
 /// Blocks compressed together (in parallel) before they are written in order.
 const BATCH: usize = 64;
 
@@ -95,13 +93,16 @@ pub fn assemble_exr(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) 
     );
     header.own_attributes = attributes;
     let line_bytes: usize = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() * w).sum();
+    // The whole image keeps the units' compression, and so its block height.
+    let block_lines = header.compression.scan_lines_per_block();
     let (mut writer, headers) = ExrWriter::with_header(out, header)?;
 
     let mut pending: Vec<u8> = Vec::new();
     let mut batch: Vec<(usize, Vec<u8>)> = Vec::new();
     let mut next_line = 0usize;
     let flush = |batch: &mut Vec<(usize, Vec<u8>)>, writer: &mut ExrWriter| -> Result<(), IoError> {
-        let chunks = compress(&headers, w, line_bytes, std::mem::take(batch)).map_err(|e| IoError::new(out, e))?;
+        let chunks =
+            compress(&headers, w, line_bytes, block_lines, std::mem::take(batch)).map_err(|e| IoError::new(out, e))?;
         writer.write(chunks).map_err(|e| IoError::new(out, e))
     };
     for u in &units {
@@ -118,10 +119,10 @@ pub fn assemble_exr(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) 
             }
             expect += lines;
             pending.extend_from_slice(&block.data);
-            while pending.len() >= BLOCK_LINES * line_bytes {
-                let rest = pending.split_off(BLOCK_LINES * line_bytes);
+            while pending.len() >= block_lines * line_bytes {
+                let rest = pending.split_off(block_lines * line_bytes);
                 batch.push((next_line, std::mem::replace(&mut pending, rest)));
-                next_line += BLOCK_LINES;
+                next_line += block_lines;
                 if batch.len() == BATCH {
                     flush(&mut batch, &mut writer)?;
                 }
@@ -144,6 +145,7 @@ fn compress(
     headers: &Headers,
     width: usize,
     line_bytes: usize,
+    block_lines: usize,
     blocks: Vec<(usize, Vec<u8>)>,
 ) -> Result<Vec<(usize, Chunk)>, String> {
     blocks
@@ -156,7 +158,7 @@ fn compress(
                 level: Vec2(0, 0),
             };
             let chunk = UncompressedBlock { index, data }.compress_to_chunk(headers).map_err(|e| e.to_string())?;
-            Ok((y / BLOCK_LINES, chunk))
+            Ok((y / block_lines, chunk))
         })
         .collect()
 }

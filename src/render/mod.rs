@@ -11,7 +11,7 @@
 pub mod frames;
 mod recolor;
 
-pub use recolor::{recolor, recolor_rgb8};
+pub use recolor::{context, recolor, recolor_rgb8, strip_linear, strip_rgb8};
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;

@@ -13,24 +13,33 @@ use crate::palette::color::linear_to_srgb8;
 /// Colours every strip (sample rows a multiple of `aa`) and downsamples it: linear RGB
 /// output pixels per strip, in order.
 pub fn recolor(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<[f32; 3]>> {
-    let ctx = if stack.is_global() { stack.context(strips.iter()) } else { Context::default() };
-    strips
-        .par_iter()
-        .map(|planes| {
-            let samples = stack.composite(planes, aa, &ctx);
-            compose::downsample(samples, planes.width, aa as usize)
-        })
-        .collect()
+    let ctx = context(stack, strips);
+    strips.par_iter().map(|planes| strip_linear(stack, planes, aa, &ctx)).collect()
 }
 
 /// Like [`recolor`], for 8-bit output: sRGB bytes per strip, identical to encoding
 /// [`recolor`]'s pixels, and faster at one sample per pixel (no round trip through linear
 /// light where the compositor already holds sRGB bytes).
 pub fn recolor_rgb8(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<u8>> {
-    if aa != 1 {
-        let encode = |rgb: &Vec<[f32; 3]>| rgb.iter().flat_map(|p| p.map(linear_to_srgb8)).collect();
-        return recolor(stack, strips, aa).par_iter().map(encode).collect();
+    let ctx = context(stack, strips);
+    strips.par_iter().map(|planes| strip_rgb8(stack, planes, aa, &ctx)).collect()
+}
+
+/// The image-wide data the layers need ([`Stack::context`]), built once from every strip;
+/// empty when no layer needs any.
+pub fn context(stack: &Stack, strips: &[Planes]) -> Context {
+    if stack.is_global() { stack.context(strips.iter()) } else { Context::default() }
+}
+
+/// One strip of [`recolor`]: its output pixels in linear RGB.
+pub fn strip_linear(stack: &Stack, planes: &Planes, aa: u32, ctx: &Context) -> Vec<[f32; 3]> {
+    compose::downsample(stack.composite(planes, aa, ctx), planes.width, aa as usize)
+}
+
+/// One strip of [`recolor_rgb8`]: its output pixels as sRGB bytes.
+pub fn strip_rgb8(stack: &Stack, planes: &Planes, aa: u32, ctx: &Context) -> Vec<u8> {
+    if aa == 1 {
+        return stack.composite_rgb8(planes, ctx);
     }
-    let ctx = if stack.is_global() { stack.context(strips.iter()) } else { Context::default() };
-    strips.par_iter().map(|planes| stack.composite_rgb8(planes, &ctx)).collect()
+    strip_linear(stack, planes, aa, ctx).iter().flat_map(|p| p.map(linear_to_srgb8)).collect()
 }
