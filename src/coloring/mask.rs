@@ -7,6 +7,9 @@
 
 use crate::field::{INTERIOR, Planes};
 
+/// A mask's feather where the scene gives none: hard edges.
+pub const MASK_FEATHER: f64 = 0.0;
+
 /// The quantity a mask reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MaskQuantity {

@@ -16,7 +16,7 @@ pub mod shading;
 mod transfer;
 
 pub use histogram::Histogram;
-pub use mask::{Mask, MaskQuantity};
+pub use mask::{MASK_FEATHER, Mask, MaskQuantity};
 pub use shading::{DistanceStyle, Light};
 pub use transfer::Transfer;
 

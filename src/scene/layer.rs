@@ -13,7 +13,7 @@ use toml::Spanned;
 
 use super::context::{BitmapLoader, Ctx, linear_colour};
 use super::raw::{LayerRaw, MaskRaw};
-use crate::coloring::{Coloring, DistanceStyle, InteriorFill, Light, Mask, MaskQuantity, Transfer};
+use crate::coloring::{Coloring, DistanceStyle, InteriorFill, Light, MASK_FEATHER, Mask, MaskQuantity, Transfer};
 use crate::compose::{BlendMode, Layer};
 use crate::palette::{self, Palette};
 use crate::source::SourceError;
@@ -514,7 +514,7 @@ fn mask(cx: &Ctx<'_>, m: &Spanned<MaskRaw>) -> Result<Mask, SourceError> {
     }
     let feather = match &raw.feather {
         Some(f) => cx.finite(f, 0.0, 1e12, "mask.feather")?,
-        None => 0.0,
+        None => MASK_FEATHER,
     };
     Ok(Mask { quantity: *quantity, above, below, feather, invert: raw.invert.as_ref().is_some_and(|v| *v.get_ref()) })
 }

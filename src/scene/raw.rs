@@ -372,6 +372,13 @@ pub struct MaskRaw {
     pub invert: Option<Spanned<bool>>,
 }
 
+impl MaskRaw {
+    /// A mask reading `quantity` over its whole range (every other key left out).
+    pub fn new(quantity: &str) -> Self {
+        MaskRaw { quantity: cli(quantity.to_string()), above: None, below: None, feather: None, invert: None }
+    }
+}
+
 /// `[output]`.
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

@@ -13,10 +13,10 @@ use std::collections::BTreeMap;
 use eframe::egui;
 use toml::Spanned;
 
-use crate::coloring::Transfer;
+use crate::coloring::{MASK_FEATHER, MaskQuantity, Transfer};
 use crate::compose::BlendMode;
 use crate::palette::{self, Palette};
-use crate::scene::raw::{KeyValueMut, LayerRaw, cli};
+use crate::scene::raw::{KeyValueMut, LayerRaw, MaskRaw, cli};
 use crate::scene::{DefaultValue, LAYER_KINDS, default_value, kind_keys};
 
 /// Shows the layers, the controls of each and the add-a-layer menu. `overrides` are the
@@ -103,6 +103,9 @@ fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut
             KeyValueMut::Blend(_) | KeyValueMut::Mask(_) => false,
         };
     }
+    if let Some((_, KeyValueMut::Mask(m))) = fields.iter_mut().find(|(name, _)| *name == "mask") {
+        changed |= mask_control(ui, k, m);
+    }
     drop(fields);
     // How it combines with the layers below (the bottom layer has nothing below it).
     if k > 0 {
@@ -126,6 +129,75 @@ fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut
         }
     }
     changed
+}
+
+/// The layer's mask: which quantity it reads (or none), then its range, each end open until
+/// ticked, its feather and whether it is inverted. A value typed that validation refuses
+/// (an empty range) is reported as any other invalid edit is.
+fn mask_control(ui: &mut egui::Ui, k: usize, m: &mut Option<Spanned<MaskRaw>>) -> bool {
+    let current = m.as_ref().map(|m| m.get_ref().quantity.get_ref().clone());
+    let mut changed = false;
+    egui::ComboBox::new(("mask", k), "mask").selected_text(current.as_deref().unwrap_or("none")).show_ui(ui, |ui| {
+        if ui.selectable_label(current.is_none(), "none").clicked() && current.is_some() {
+            *m = None;
+            changed = true;
+        }
+        for (_, name) in MaskQuantity::ALL {
+            if ui.selectable_label(current.as_deref() == Some(name), name).clicked() && current.as_deref() != Some(name)
+            {
+                match m {
+                    Some(raw) => raw.get_mut().quantity = cli(name.to_string()),
+                    None => *m = Some(cli(MaskRaw::new(name))),
+                }
+                changed = true;
+            }
+        }
+    });
+    let Some(raw) = m.as_mut().map(Spanned::get_mut) else { return changed };
+    changed |= bound_control(ui, "mask above", &mut raw.above);
+    changed |= bound_control(ui, "mask below", &mut raw.below);
+    let mut feather = raw.feather.as_ref().map_or(MASK_FEATHER, |f| *f.get_ref());
+    let speed = (feather * 0.01).max(1e-3);
+    if number_field(ui, "mask feather", &mut feather, speed) && feather.is_finite() && feather >= 0.0 {
+        raw.feather = Some(cli(feather));
+        changed = true;
+    }
+    let mut invert = raw.invert.as_ref().is_some_and(|v| *v.get_ref());
+    if ui.checkbox(&mut invert, "mask invert").changed() {
+        raw.invert = Some(cli(invert));
+        changed = true;
+    }
+    changed
+}
+
+/// One end of a mask's range: open (unticked) or a number.
+fn bound_control(ui: &mut egui::Ui, key: &str, v: &mut Option<Spanned<f64>>) -> bool {
+    ui.horizontal(|ui| {
+        let mut on = v.is_some();
+        let mut changed = false;
+        if ui.checkbox(&mut on, "").on_hover_text("tick to close this end of the range").changed() {
+            *v = on.then(|| cli(0.0));
+            changed = true;
+        }
+        match v {
+            Some(bound) => {
+                let mut x = *bound.get_ref();
+                let speed = (x.abs() * 0.01).max(1e-3);
+                let r = ui.add(egui::DragValue::new(&mut x).speed(speed).max_decimals(6));
+                let label = ui.label(key);
+                if r.labelled_by(label.id).changed() && x.is_finite() {
+                    *v = Some(cli(x));
+                    changed = true;
+                }
+            }
+            None => {
+                ui.weak("open");
+                ui.label(key);
+            }
+        }
+        changed
+    })
+    .inner
 }
 
 /// A key left out whose absence no value stands for: what leaving it out means, beside its

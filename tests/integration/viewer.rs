@@ -427,6 +427,37 @@ fn layer_controls_show_defaults_for_keys_left_out() {
     assert_eq!(top.blend.as_ref().map(|b| *b.get_ref()), Some(deepfield::compose::BlendMode::Screen));
 }
 
+/// A layer's mask has controls: the quantity's menu, each end of the range (open until
+/// ticked), the feather and the inversion, showing the scene's values; an edit writes the
+/// key, and the menu adds a mask to a layer without one.
+#[test]
+fn layer_masks_have_controls() {
+    let dir = scratch("viewer-layer-mask");
+    let scene = "version = 1\n[iteration]\nmax = 200\n[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"slope\"\nblend = \"multiply\"\n[layer.mask]\nquantity = \"distance\"\nbelow = 8.0\nfeather = 3.0\n";
+    let mut h = harness(&dir, scene);
+    let value = |h: &Harness<'static, ViewerApp>, label: &str| {
+        h.get_all_by_label(label).filter_map(|n| n.accesskit_node().numeric_value()).collect::<Vec<_>>()
+    };
+    assert_eq!(value(&h, "mask below"), [8.0]);
+    assert_eq!(value(&h, "mask feather"), [3.0]);
+    assert!(value(&h, "mask above").is_empty(), "an end the scene leaves open shows as open");
+    assert_eq!(h.get_all_by_label("mask").count(), 2, "one menu per layer");
+    h.get_all_by_label("mask feather").next().unwrap().set_value_accesskit(0.5);
+    settle(&mut h);
+    let mask = |h: &Harness<'static, ViewerApp>, k: usize| h.state().scene_file().layers[k].get_ref().mask.clone();
+    let top = mask(&h, 1).expect("kept").into_inner();
+    assert_eq!(top.feather.map(|f| f.into_inner()), Some(0.5));
+    assert_eq!(top.below.map(|f| f.into_inner()), Some(8.0));
+    assert!(top.above.is_none() && top.invert.is_none(), "an edit writes only its key");
+    // The bottom layer has none; its menu adds one.
+    assert!(mask(&h, 0).is_none());
+    h.get_all_by_label("mask").next().unwrap().click();
+    h.run_steps(2);
+    h.get_by_label("phase").click();
+    settle(&mut h);
+    assert_eq!(mask(&h, 0).map(|m| m.into_inner().quantity.into_inner()).as_deref(), Some("phase"));
+}
+
 /// `view --reference`: a deep view's engine is built from the file's orbits (none computed)
 /// and shows the image it shows without the file; a file that does not serve the scene is
 /// refused before any window opens, with the reason, and so is `--reference` without a
