@@ -234,8 +234,13 @@ fn to_premultiplied_srgb8(c: [f32; 4], enc: Srgb8Encoder) -> PremultipliedColorU
     }
     let a8 = (a * 255.0 + 0.5) as u8;
     if a8 == 255 {
-        return PremultipliedColorU8::from_rgba(enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255)
-            .unwrap_or(PremultipliedColorU8::TRANSPARENT);
+        // Grey layers (slope, distance without a palette) encode one value, not three.
+        let [r, g, b] = if c[0] == c[1] && c[1] == c[2] {
+            [enc.encode(c[0]); 3]
+        } else {
+            [enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2])]
+        };
+        return PremultipliedColorU8::from_rgba(r, g, b, 255).unwrap_or(PremultipliedColorU8::TRANSPARENT);
     }
     let scale = a8 as f32 / 255.0;
     let premul = |v: f32| ((enc.encode(v / a) as f32 * scale + 0.5) as u8).min(a8);

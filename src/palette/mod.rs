@@ -199,7 +199,7 @@ impl Palette {
 
     /// Linear-light RGBA (not premultiplied) at position `t`, after the palette's density,
     /// offset and mode.
-    #[inline]
+    #[inline(always)]
     pub fn at(&self, t: f64) -> [f32; 4] {
         let t = t * self.density + self.offset;
         let u = match self.mode {
