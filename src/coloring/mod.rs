@@ -245,23 +245,25 @@ impl Coloring {
             let (x, y) = (planes.dex[k] as f64, planes.dey[k] as f64);
             (x * x + y * y).sqrt() * px
         };
-        // Statically dispatched per colouring: the closure inlines into the loop.
+        // Statically dispatched per colouring: the closures inline into the passes. `each!`
+        // colours a sample in one go; `staged!` first takes the number a palette is read at
+        // (a transfer, a distance style, a histogram position) for a whole run.
+        macro_rules! staged {
+            (|$k:pat_param| $value:expr, |$k2:pat_param, $v:pat_param| $colour:expr) => {
+                in_runs(len, |$k: usize| -> f64 { $value }, |$k2: usize, $v: f64| -> [f32; 4] { $colour }, sink)
+            };
+        }
         macro_rules! each {
-            (|$k:pat_param| $body:expr) => {{
-                let f = |$k: usize| -> [f32; 4] { $body };
-                for i in 0..len {
-                    sink(i, f(i));
-                }
-            }};
+            (|$k:pat_param| $body:expr) => {
+                in_runs(len, |_| 0.0, |$k: usize, _| -> [f32; 4] { $body }, sink)
+            };
         }
         match self {
-            Coloring::Smooth { palette, density, offset, transfer, interior } => each!(|k| {
-                if inside(k) {
-                    return premul(*interior);
-                }
-                let nu = planes.n[k] as f64 + planes.nf[k] as f64;
-                premul(palette.at(transfer.apply(nu) * density + offset))
-            }),
+            Coloring::Smooth { palette, density, offset, transfer, interior } => {
+                staged!(|k| transfer.apply(planes.n[k] as f64 + planes.nf[k] as f64) * density + offset, |k, t| {
+                    if inside(k) { premul(*interior) } else { premul(palette.at(t)) }
+                })
+            }
             Coloring::Histogram { palette, cycles, offset, interior } => {
                 let fallback;
                 let hist = match &ctx.histogram {
@@ -271,17 +273,14 @@ impl Coloring {
                         &fallback
                     }
                 };
-                each!(|k| {
-                    if inside(k) {
-                        return premul(*interior);
-                    }
-                    premul(palette.at(hist.position(planes.n[k], planes.nf[k]) * cycles + offset))
+                staged!(|k| hist.position(planes.n[k], planes.nf[k]) * cycles + offset, |k, t| if inside(k) {
+                    premul(*interior)
+                } else {
+                    premul(palette.at(t))
                 })
             }
-            Coloring::Distance { style, palette, offset } => each!(|k| {
-                let d = if inside(k) { 0.0 } else { distance(k) };
-                let v = style.value(d);
-                match palette {
+            Coloring::Distance { style, palette, offset } => {
+                staged!(|k| style.value(if inside(k) { 0.0 } else { distance(k) }), |_, v| match palette {
                     // The soft style spans [0, 1]: keep 1 off the wrap-around point.
                     Some(p) if matches!(style, DistanceStyle::Soft { .. }) => premul(p.at(v.min(1.0 - 1e-9) + offset)),
                     Some(p) => premul(p.at(v + offset)),
@@ -289,8 +288,8 @@ impl Coloring {
                         let g = color::srgb_to_linear_lut(v as f32);
                         [g, g, g, 1.0]
                     }
-                }
-            }),
+                })
+            }
             Coloring::Boundary { width, color } => each!(|k| {
                 let cover = if inside(k) { 1.0 } else { shading::boundary_cover(distance(k), *width) };
                 premul([color[0], color[1], color[2], color[3] * cover])
@@ -308,23 +307,25 @@ impl Coloring {
                 }
                 premul(colors[usize::from(planes.t[k] >= 0.5)])
             }),
-            Coloring::Angle { palette, density, offset } => each!(|k| {
-                if inside(k) {
-                    return [0.0; 4];
-                }
-                premul(palette.at(planes.t[k] as f64 * density + offset))
-            }),
+            Coloring::Angle { palette, density, offset } => {
+                staged!(|k| planes.t[k] as f64 * density + offset, |k, t| if inside(k) {
+                    [0.0; 4]
+                } else {
+                    premul(palette.at(t))
+                })
+            }
             Coloring::Stripe { trap, palette, density, offset } => match &planes.traps[*trap] {
-                TrapPlane::Stripe { value, .. } => each!(|k| {
-                    if inside(k) {
-                        return [0.0; 4];
-                    }
-                    premul(palette.at(value[k] as f64 * density + offset))
-                }),
+                TrapPlane::Stripe { value, .. } => {
+                    staged!(|k| value[k] as f64 * density + offset, |k, t| if inside(k) {
+                        [0.0; 4]
+                    } else {
+                        premul(palette.at(t))
+                    })
+                }
                 _ => each!(|_| [0.0; 4]),
             },
             Coloring::TrapDistance { trap, palette, density, offset } => match &planes.traps[*trap] {
-                TrapPlane::Distance(d) => each!(|k| premul(palette.at(d[k] as f64 * density + offset))),
+                TrapPlane::Distance(d) => staged!(|k| d[k] as f64 * density + offset, |_, t| premul(palette.at(t))),
                 _ => each!(|_| [0.0; 4]),
             },
             Coloring::BitmapTrap { trap } => match &planes.traps[*trap] {
@@ -353,6 +354,37 @@ impl Coloring {
                     _ => each!(|_| [0.0; 4]),
                 },
             },
+        }
+    }
+}
+
+/// Samples per run of [`in_runs`].
+const RUN: usize = 64;
+
+/// Paints samples 0..len in runs of [`RUN`], in three passes over each: `value` of every
+/// sample of the run, then `colour` from it, then `sink`. Each pass is a short loop of
+/// independent iterations, so the core overlaps many samples' logarithms, powers and
+/// palette lookups; one pass per sample chains them all and waits on each (two-layer 4K
+/// recolour, one thread: colour and write 0.88–0.95 s in one pass, 0.63–0.71 s with the
+/// transfer and the sink in passes of their own). The bytes do not change.
+#[inline(always)]
+fn in_runs(
+    len: usize,
+    value: impl Fn(usize) -> f64,
+    colour: impl Fn(usize, f64) -> [f32; 4],
+    sink: &mut impl FnMut(usize, [f32; 4]),
+) {
+    let (mut v, mut c) = ([0.0f64; RUN], [[0.0f32; 4]; RUN]);
+    for start in (0..len).step_by(RUN) {
+        let run = start..len.min(start + RUN);
+        for (vj, k) in v.iter_mut().zip(run.clone()) {
+            *vj = value(k);
+        }
+        for ((cj, &vj), k) in c.iter_mut().zip(&v).zip(run.clone()) {
+            *cj = colour(k, vj);
+        }
+        for (&cj, k) in c.iter().zip(run) {
+            sink(k, cj);
         }
     }
 }
