@@ -209,11 +209,20 @@ impl Stack {
         base.fill(bg8);
         let mut layer_pixmap = Pixmap::new(w, h)?;
         let enc = Srgb8Encoder::get();
-        for layer in &self.layers {
+        for (i, layer) in self.layers.iter().enumerate() {
             let dst = layer_pixmap.pixels_mut();
-            layer
-                .coloring
-                .paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| dst[k] = to_premultiplied_srgb8(c, enc));
+            let mut opaque = true;
+            layer.coloring.paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| {
+                let p = to_premultiplied_srgb8(c, enc);
+                opaque &= p.alpha() == 255;
+                dst[k] = p;
+            });
+            // An opaque bottom layer drawn normally covers the background exactly: source
+            // over an opaque pixel is the pixel, so the layer becomes the base as it is.
+            if i == 0 && opaque && layer.blend == BlendMode::Normal && layer.opacity == 1.0 {
+                std::mem::swap(&mut base, &mut layer_pixmap);
+                continue;
+            }
             let paint = PixmapPaint {
                 opacity: layer.opacity,
                 blend_mode: layer.blend.skia(),
