@@ -245,9 +245,9 @@ impl Drop for ExrWriter {
 }
 
 impl ExrEncoder {
-    /// Builds and compresses the blocks of a strip whose first sample row is `row`
-    /// (a multiple of the block height); `colors` are the samples' composited colours, needed when the
-    /// layout has `R`, `G`, `B`. Safe to call from many threads at once.
+    /// Builds and compresses the blocks of a strip whose first sample row is `row` (a
+    /// multiple of the block height); `colors` are the samples' composited colours, needed
+    /// when the layout has `R`, `G`, `B`. Safe to call from many threads at once.
     pub fn encode(
         &self,
         row: usize,
