@@ -219,6 +219,7 @@ impl Colouring {
     fn keyframe(&self, path: &Path, pool: &rayon::ThreadPool) -> Result<Keyframe, Failure> {
         let raw = io::read_exr_planes(path, 32).map_err(Failure::input)?;
         let text = raw
+            .header
             .scene
             .clone()
             .ok_or_else(|| Failure::Input(anyhow!("{}: the keyframe carries no scene", path.display())))?;
@@ -231,7 +232,7 @@ impl Colouring {
                     super::scene::apply_palette(file, p);
                 }
             })?;
-        super::recolor::check_fits(&scene, &raw, path)?;
+        super::recolor::check_fits(&scene, &raw.header, path)?;
         let strips = pool.install(|| deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa));
         Ok(Keyframe { width: scene.width as usize, height: scene.height as usize, rgb: strips.concat() })
     }

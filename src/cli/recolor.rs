@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::anyhow;
+use deepfield::coloring::Context;
 use deepfield::field::{Channel, Needs, Planes};
-use deepfield::io::{self, IoError, PngEncoder, PngWriter, RawData, TrapKind};
+use deepfield::io::{ExrStrips, IoError, PngEncoder, PngWriter, RawHeader, TrapKind};
 use deepfield::render;
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
@@ -32,12 +33,11 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
     if abs(&out) == abs(&args.data) || args.scene.as_deref().is_some_and(|s| abs(s) == abs(&out)) {
         return Err(Failure::Input(anyhow!("-o {} would overwrite an input; choose another name", out.display())));
     }
-    let raw = io::read_exr_planes(&args.data, 32).map_err(Failure::input)?;
-    let read_s = t0.elapsed().as_secs_f64();
+    let data = ExrStrips::open(&args.data, 32).map_err(Failure::input)?;
     let (origin, text, base) = match &args.scene {
         Some(path) => super::scene::read_source(path)?,
         None => {
-            let text = raw.scene.clone().ok_or_else(|| {
+            let text = data.header().scene.clone().ok_or_else(|| {
                 Failure::Input(anyhow!("{}: the file carries no scene; give one with --scene", args.data.display()))
             })?;
             (format!("{} (stored scene)", args.data.display()), text, PathBuf::from("."))
@@ -61,21 +61,23 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
             file.output.bits = Some(cli(b.parse().unwrap_or(8)));
         }
     })?;
-    check_fits(&scene, &raw, &args.data)?;
+    check_fits(&scene, data.header(), &args.data)?;
 
-    let t1 = Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
         .map_err(|e| Failure::Runtime(e.into()))?;
     let png =
         PngWriter::create(&out, scene.width, scene.height, scene.png_bits, &scene.to_toml()).map_err(Failure::input)?;
-    write_coloured(&scene, &raw, &pool, png).map_err(|e| Failure::Runtime(e.into()))?;
+    let read_s = write_coloured(&scene, data, &pool, png).map_err(|e| Failure::Runtime(e.into()))?;
     if args.stats {
+        let read = match read_s {
+            Some(s) => format!("read {s:.3} s, then colour and write"),
+            None => "read, colour and write (streamed)".into(),
+        };
         let line = format!(
-            "read {:.3} s, colour and write {:.3} s ({} x {} pixels, {} layers)\n",
-            read_s,
-            t1.elapsed().as_secs_f64(),
+            "{read}: {:.3} s in all ({} x {} pixels, {} layers)\n",
+            t0.elapsed().as_secs_f64(),
             scene.width,
             scene.height,
             scene.stack.layers.len(),
@@ -85,16 +87,22 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Colours the strips on `pool` and writes them to `png` as they come: the writer thread
-/// deflates one strip while the workers colour the next ones, and puts the strips, which
-/// finish in any order, back in order.
-fn write_coloured(scene: &Scene, raw: &RawData, pool: &rayon::ThreadPool, mut png: PngWriter) -> Result<(), IoError> {
+/// Reads, colours and writes the strips on `pool`: the writer thread deflates one strip
+/// while the workers colour the next ones, and puts the strips, which finish in any order,
+/// back in order. Layers that need nothing image-wide colour each strip as soon as the
+/// reader has it (reading, colouring and deflating overlap; `None` returned); otherwise the
+/// whole file is read first for the image-wide context (the seconds that took returned).
+fn write_coloured(
+    scene: &Scene,
+    data: ExrStrips,
+    pool: &rayon::ThreadPool,
+    mut png: PngWriter,
+) -> Result<Option<f64>, IoError> {
     use rayon::prelude::*;
-    let ctx = pool.install(|| render::context(&scene.stack, &raw.strips));
     let enc = PngEncoder::new(scene.png_bits);
-    let colour = |planes: &Planes| match scene.png_bits {
-        8 => render::strip_rgb8(&scene.stack, planes, scene.aa, &ctx),
-        _ => enc.encode(&render::strip_linear(&scene.stack, planes, scene.aa, &ctx)),
+    let colour = |planes: &Planes, ctx: &Context| match scene.png_bits {
+        8 => render::strip_rgb8(&scene.stack, planes, scene.aa, ctx),
+        _ => enc.encode(&render::strip_linear(&scene.stack, planes, scene.aa, ctx)),
     };
     let (tx, rx) = std::sync::mpsc::channel::<(usize, Vec<u8>)>();
     std::thread::scope(|s| {
@@ -111,14 +119,29 @@ fn write_coloured(scene: &Scene, raw: &RawData, pool: &rayon::ThreadPool, mut pn
             png.finish()
         });
         // A failed writer drops the receiver; the workers' sends then fail and are ignored.
-        pool.install(|| raw.strips.par_iter().enumerate().for_each(|(k, p)| drop(tx.send((k, colour(p))))));
+        let read = pool.install(|| {
+            if scene.stack.is_global() {
+                let t = Instant::now();
+                let raw = data.collect()?;
+                let read_s = t.elapsed().as_secs_f64();
+                let ctx = render::context(&scene.stack, &raw.strips);
+                raw.strips.par_iter().enumerate().for_each(|(k, p)| drop(tx.send((k, colour(p, &ctx)))));
+                Ok(Some(read_s))
+            } else {
+                let ctx = Context::default();
+                data.for_each_strip(|k, p| drop(tx.send((k, colour(&p, &ctx))))).map(|()| None)
+            }
+        });
         drop(tx);
-        writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        let written = writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        // A read fault is the cause; the writer's complaint about missing strips follows.
+        let read = read?;
+        written.map(|()| read)
     })
 }
 
 /// Refuses a scene whose raster or layers the data cannot serve.
-pub(super) fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<(), Failure> {
+pub(super) fn check_fits(scene: &Scene, raw: &RawHeader, data: &Path) -> Result<(), Failure> {
     let name = data.display();
     let (w, h) = ((scene.width * scene.aa) as usize, (scene.height * scene.aa) as usize);
     if (w, h) != (raw.width, raw.height) {
@@ -141,7 +164,7 @@ pub(super) fn check_fits(scene: &Scene, raw: &RawData, data: &Path) -> Result<()
             )));
         }
     }
-    let kinds = raw.trap_kinds();
+    let kinds = &raw.traps;
     for (k, trap) in scene.traps.iter().enumerate() {
         let want = match trap {
             Trap::Geometric(_) => TrapKind::Distance,

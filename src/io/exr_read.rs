@@ -4,33 +4,52 @@
 //! Channels map back by name: `N` (u32), `NF`, `T`, `DEX`, `DEY` (f32), and our trap
 //! channels `trapK.D` (geometric trap distance), `trapK.STRIPE` (stripe average) and
 //! `trapK.R/G/B/A` (bitmap trap colour). The planes are cut into strips of whole rows so
-//! colouring can run on all cores.
+//! colouring can run on all cores, and handed on strip by strip as the blocks decode
+//! ([`ExrStrips`]), so that a recolour overlaps reading with colouring.
 
-use std::path::Path;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use ::exr::block::reader::ChunksReader;
+use ::exr::block::UncompressedBlock;
+use ::exr::block::chunk::Chunk;
+use ::exr::block::reader::{AllChunksReader, ChunksReader};
 use ::exr::math::Vec2;
 use ::exr::meta::BlockDescription;
+use ::exr::meta::MetaData;
 use ::exr::meta::attribute::SampleType;
 use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers, f16, read};
+use rayon::prelude::*;
 
 use super::IoError;
 use super::exr::SCENE_ATTRIBUTE;
 use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
 
-/// The raw data of an EXR file.
-#[derive(Debug, Clone)]
-pub struct RawData {
+/// What a raw-data EXR's header says: enough to check that a scene fits the data before
+/// any block is read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawHeader {
     /// Samples per row.
     pub width: usize,
     /// Sample rows.
     pub height: usize,
     /// The scene stored in the header, if the file has one.
     pub scene: Option<String>,
-    /// The planes, in strips of whole rows, top to bottom.
-    pub strips: Vec<Planes>,
     /// Which of N, NF, T, DEX, DEY the file holds (N always: files without it are refused).
     pub channels: ChannelSet,
+    /// The kind of each trap plane, in trap order.
+    pub traps: Vec<TrapKind>,
+}
+
+/// The raw data of an EXR file.
+#[derive(Debug, Clone)]
+pub struct RawData {
+    /// What the header says.
+    pub header: RawHeader,
+    /// The planes, in strips of whole rows, top to bottom.
+    pub strips: Vec<Planes>,
 }
 
 /// What one trap's channels hold.
@@ -44,23 +63,6 @@ pub enum TrapKind {
     Color,
     /// `trapK.IFS`.
     Density,
-}
-
-impl RawData {
-    /// The kind of each trap plane, in trap order.
-    pub fn trap_kinds(&self) -> Vec<TrapKind> {
-        self.strips.first().map_or(Vec::new(), |s| {
-            s.traps
-                .iter()
-                .map(|t| match t {
-                    TrapPlane::Distance(_) => TrapKind::Distance,
-                    TrapPlane::Stripe { .. } => TrapKind::Stripe,
-                    TrapPlane::Color(_) => TrapKind::Color,
-                    TrapPlane::Density(_) => TrapKind::Density,
-                })
-                .collect()
-        })
-    }
 }
 
 /// The most a compressed EXR can expand: deflate (ZIP) reaches ~1032:1, the other
@@ -90,18 +92,84 @@ fn check_decoded_size(path: &Path) -> Result<(), IoError> {
     Ok(())
 }
 
-/// Reads every plane of `path`, cut into strips of `strip_rows` rows (at least 1).
-///
-/// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is decoded block
-/// by block straight into the strips, the blocks decompressed on every core
-/// (`read_scanlines`); anything else (tiles, mip levels, several parts) goes through the
-/// exr crate's whole-image reader.
+/// Reads every plane of `path`, cut into strips of `strip_rows` rows (at least 1), decoding
+/// on the current rayon pool ([`ExrStrips`]).
 pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoError> {
-    check_decoded_size(path)?;
-    match read_scanlines(path, strip_rows.max(1))? {
-        Some(raw) => Ok(raw),
-        None => read_whole_image(path, strip_rows),
+    ExrStrips::open(path, strip_rows)?.collect()
+}
+
+/// An EXR opened for reading strip by strip: its header read, its pixel data not yet.
+///
+/// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is decoded
+/// block by block straight into the strips, each block decompressed and converted by a
+/// task on the current rayon pool, and each strip handed on as soon as its last row is in
+/// ([`ExrStrips::for_each_strip`]): a recolour colours the first strips while later blocks
+/// are still being decompressed, and holds only the strips in flight. Anything else (tiles,
+/// mip levels, several parts) goes through the exr crate's whole-image reader first.
+pub struct ExrStrips {
+    path: PathBuf,
+    header: RawHeader,
+    rows_per: usize,
+    source: Source,
+}
+
+/// Where an [`ExrStrips`] takes its strips from.
+enum Source {
+    /// The blocks still in the file, and how their lines map to planes.
+    Blocks { chunks: Box<AllChunksReader<BufReader<File>>>, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
+    /// Strips already read by the whole-image reader.
+    Whole(Vec<Planes>),
+}
+
+impl ExrStrips {
+    /// Opens `path` and reads its header; the strips will hold `strip_rows` rows (at least 1).
+    pub fn open(path: &Path, strip_rows: usize) -> Result<Self, IoError> {
+        check_decoded_size(path)?;
+        let rows_per = strip_rows.max(1);
+        if let Some(strips) = open_scanlines(path, rows_per)? {
+            return Ok(strips);
+        }
+        let raw = read_whole_image(path, rows_per)?;
+        Ok(Self { path: path.to_path_buf(), header: raw.header, rows_per, source: Source::Whole(raw.strips) })
     }
+
+    /// What the header says.
+    pub fn header(&self) -> &RawHeader {
+        &self.header
+    }
+
+    /// Decodes the pixel data on the current rayon pool and calls `done` with each strip
+    /// (its index from the top, its planes) once all its rows are in: on a worker thread, in
+    /// no particular order, every strip exactly once when the result is `Ok`. A damaged
+    /// file stops the decoding at its first fault (some strips may have been handed on).
+    pub fn for_each_strip(self, done: impl Fn(usize, Planes) + Sync) -> Result<(), IoError> {
+        match self.source {
+            Source::Whole(strips) => {
+                strips.into_par_iter().enumerate().for_each(|(k, p)| done(k, p));
+                Ok(())
+            }
+            Source::Blocks { chunks, slots, line_bytes } => {
+                let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
+                decode_blocks(*chunks, &layout, &done).map_err(|e| IoError::new(&self.path, e))
+            }
+        }
+    }
+
+    /// Every strip, in order.
+    pub fn collect(self) -> Result<RawData, IoError> {
+        let header = self.header.clone();
+        let count = header.height.div_ceil(self.rows_per);
+        let slots: Vec<Mutex<Option<Planes>>> = (0..count).map(|_| Mutex::new(None)).collect();
+        self.for_each_strip(|k, planes| *lock(&slots[k]) = Some(planes))?;
+        let strips = slots.into_iter().filter_map(|m| m.into_inner().unwrap_or_else(PoisonError::into_inner)).collect();
+        Ok(RawData { header, strips })
+    }
+}
+
+/// A mutex's guard, whether or not another thread panicked while holding it (the data is
+/// plain samples, valid either way).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// Where one channel's samples go.
@@ -187,6 +255,15 @@ fn slot_of(name: &str, traps: &[TrapKind]) -> Slot {
     }
 }
 
+/// One sample (`bytes`, little-endian, of `kind`) as f32.
+fn float_of(b: &[u8], kind: SampleType) -> f32 {
+    match kind {
+        SampleType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        SampleType::F16 => f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32(),
+        SampleType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+    }
+}
+
 /// Converts one line of samples (`bytes`, little-endian, of `kind`) to f32.
 fn floats_into(dst: &mut [f32], bytes: &[u8], kind: SampleType) {
     match kind {
@@ -208,12 +285,12 @@ fn floats_into(dst: &mut [f32], bytes: &[u8], kind: SampleType) {
     }
 }
 
-/// The fast path of [`read_exr_planes`]: `None` when the file is not a single-part,
+/// Opens the fast path of [`ExrStrips`]: `None` when the file is not a single-part,
 /// single-level scan-line image with full-resolution channels.
-fn read_scanlines(path: &Path, rows_per: usize) -> Result<Option<RawData>, IoError> {
+fn open_scanlines(path: &Path, rows_per: usize) -> Result<Option<ExrStrips>, IoError> {
     let err = |e: ::exr::error::Error| IoError::new(path, e);
-    let file = std::fs::File::open(path).map_err(|e| IoError::new(path, e))?;
-    let reader = ::exr::block::read(std::io::BufReader::new(file), false).map_err(err)?;
+    let file = File::open(path).map_err(|e| IoError::new(path, e))?;
+    let reader = ::exr::block::read(BufReader::new(file), false).map_err(err)?;
     let header = match reader.headers() {
         [h] => h.clone(),
         _ => return Ok(None),
@@ -236,101 +313,215 @@ fn read_scanlines(path: &Path, rows_per: usize) -> Result<Option<RawData>, IoErr
         Some((_, t)) if *t != SampleType::U32 => return Err(IoError::new(path, "channel N is not uint32")),
         _ => {}
     }
-    let channels = plane_channels(&has);
-    let scene = scene_text(&header.own_attributes);
-    let mut strips: Vec<Planes> = (0..height)
-        .step_by(rows_per)
-        .map(|r0| {
-            let rows = rows_per.min(height - r0);
-            let len = rows * width;
-            let plane = |c: Channel| if channels.contains(c) { vec![0.0f32; len] } else { Vec::new() };
-            Planes {
-                width,
-                rows,
-                n: vec![0; len],
-                nf: plane(Channel::NF),
-                t: plane(Channel::T),
-                dex: plane(Channel::DEX),
-                dey: plane(Channel::DEY),
-                traps: traps
-                    .iter()
-                    .map(|k| match k {
-                        TrapKind::Distance => TrapPlane::Distance(vec![0.0; len]),
-                        TrapKind::Stripe => TrapPlane::Stripe { value: vec![0.0; len], prev: Vec::new() },
-                        TrapKind::Density => TrapPlane::Density(vec![0.0; len]),
-                        TrapKind::Color => TrapPlane::Color(vec![[0.0; 4]; len]),
-                    })
-                    .collect(),
-            }
-        })
-        .collect();
     let line_bytes: usize = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() * width).sum();
-    let mut lines_read = 0usize;
-    let mut scratch = vec![0.0f32; width];
-    let insert = |_: &::exr::meta::MetaData, block: ::exr::block::UncompressedBlock| -> ::exr::error::UnitResult {
-        let index = block.index;
-        if index.layer != 0 || index.level != Vec2(0, 0) {
-            return Ok(());
+    let raw =
+        RawHeader { width, height, scene: scene_text(&header.own_attributes), channels: plane_channels(&has), traps };
+    let chunks = reader.all_chunks(false).map_err(err)?;
+    Ok(Some(ExrStrips {
+        path: path.to_path_buf(),
+        header: raw,
+        rows_per,
+        source: Source::Blocks { chunks: Box::new(chunks), slots, line_bytes },
+    }))
+}
+
+/// How the lines of a scan-line file's blocks map to strips and planes.
+struct Layout<'a> {
+    header: &'a RawHeader,
+    rows_per: usize,
+    slots: Vec<(Slot, SampleType)>,
+    line_bytes: usize,
+}
+
+impl Layout<'_> {
+    /// Empty planes for a strip of `rows` rows (zeroed allocations: the pages are touched
+    /// only as the lines arrive).
+    fn planes(&self, rows: usize) -> Planes {
+        let (width, channels) = (self.header.width, self.header.channels);
+        let len = rows * width;
+        let plane = |c: Channel| if channels.contains(c) { vec![0.0f32; len] } else { Vec::new() };
+        Planes {
+            width,
+            rows,
+            n: vec![0; len],
+            nf: plane(Channel::NF),
+            t: plane(Channel::T),
+            dex: plane(Channel::DEX),
+            dey: plane(Channel::DEY),
+            traps: self
+                .header
+                .traps
+                .iter()
+                .map(|k| match k {
+                    TrapKind::Distance => TrapPlane::Distance(vec![0.0; len]),
+                    TrapKind::Stripe => TrapPlane::Stripe { value: vec![0.0; len], prev: Vec::new() },
+                    TrapKind::Density => TrapPlane::Density(vec![0.0; len]),
+                    TrapKind::Color => TrapPlane::Color(vec![[0.0; 4]; len]),
+                })
+                .collect(),
         }
-        let lines = index.pixel_size.1;
-        if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * line_bytes {
-            return Err(::exr::error::Error::Invalid("a scan-line block of the wrong size".into()));
-        }
-        for (l, line) in block.data.chunks_exact(line_bytes).enumerate() {
-            let y = index.pixel_position.1 + l;
-            if y >= height {
-                return Err(::exr::error::Error::Invalid("a scan line outside the data window".into()));
+    }
+
+    /// Converts one scan line of a block into row `row` of `planes`.
+    fn insert_line(&self, planes: &mut Planes, row: usize, line: &[u8]) {
+        let width = self.header.width;
+        let at = row * width..(row + 1) * width;
+        let mut offset = 0;
+        for &(slot, kind) in &self.slots {
+            let bytes = &line[offset..offset + kind.bytes_per_sample() * width];
+            offset += bytes.len();
+            match slot {
+                Slot::N => {
+                    for (d, b) in planes.n[at.clone()].iter_mut().zip(bytes.chunks_exact(4)) {
+                        *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                    }
+                }
+                Slot::Plane(c) => {
+                    let dst = match c {
+                        Channel::NF => &mut planes.nf,
+                        Channel::T => &mut planes.t,
+                        Channel::DEX => &mut planes.dex,
+                        _ => &mut planes.dey,
+                    };
+                    floats_into(&mut dst[at.clone()], bytes, kind);
+                }
+                Slot::Trap(k) => match &mut planes.traps[k] {
+                    TrapPlane::Distance(v) | TrapPlane::Density(v) | TrapPlane::Stripe { value: v, .. } => {
+                        floats_into(&mut v[at.clone()], bytes, kind)
+                    }
+                    TrapPlane::Color(_) => {}
+                },
+                Slot::Color(k, i) => {
+                    if let TrapPlane::Color(v) = &mut planes.traps[k] {
+                        for (d, b) in v[at.clone()].iter_mut().zip(bytes.chunks_exact(kind.bytes_per_sample())) {
+                            d[i] = float_of(b, kind);
+                        }
+                    }
+                }
+                Slot::Skip => {}
             }
-            let planes = &mut strips[y / rows_per];
-            let at = (y % rows_per) * width..(y % rows_per + 1) * width;
-            let mut offset = 0;
-            for &(slot, kind) in &slots {
-                let bytes = &line[offset..offset + kind.bytes_per_sample() * width];
-                offset += bytes.len();
-                match slot {
-                    Slot::N => {
-                        for (d, b) in planes.n[at.clone()].iter_mut().zip(bytes.chunks_exact(4)) {
-                            *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                        }
-                    }
-                    Slot::Plane(c) => {
-                        let dst = match c {
-                            Channel::NF => &mut planes.nf,
-                            Channel::T => &mut planes.t,
-                            Channel::DEX => &mut planes.dex,
-                            _ => &mut planes.dey,
-                        };
-                        floats_into(&mut dst[at.clone()], bytes, kind);
-                    }
-                    Slot::Trap(k) => match &mut planes.traps[k] {
-                        TrapPlane::Distance(v) | TrapPlane::Density(v) | TrapPlane::Stripe { value: v, .. } => {
-                            floats_into(&mut v[at.clone()], bytes, kind)
-                        }
-                        TrapPlane::Color(_) => {}
-                    },
-                    Slot::Color(k, i) => {
-                        if let TrapPlane::Color(v) = &mut planes.traps[k] {
-                            floats_into(&mut scratch, bytes, kind);
-                            for (d, s) in v[at.clone()].iter_mut().zip(&scratch) {
-                                d[i] = *s;
-                            }
-                        }
-                    }
-                    Slot::Skip => {}
+        }
+    }
+}
+
+/// A strip whose rows are arriving.
+#[derive(Default)]
+struct Pending {
+    /// Its planes, allocated when its first row arrives; taken when its last one has.
+    planes: Option<Planes>,
+    /// Which of its rows have arrived.
+    seen: Vec<bool>,
+    /// How many have.
+    count: usize,
+}
+
+/// A damaged file's first fault, kept while the other tasks wind down.
+type Fault = Mutex<Option<String>>;
+
+/// Decompresses the blocks of a scan-line file on the current rayon pool, converts their
+/// lines into strips and hands each complete strip to `done`. The thread reading the file
+/// keeps at most a few blocks per worker in flight (it helps decompress while it waits), so
+/// memory holds the strips being filled, not the file.
+fn decode_blocks(
+    chunks: AllChunksReader<BufReader<File>>,
+    layout: &Layout<'_>,
+    done: &(impl Fn(usize, Planes) + Sync),
+) -> Result<(), String> {
+    let (height, rows_per) = (layout.header.height, layout.rows_per);
+    let meta = chunks.meta_data().clone();
+    let pending: Vec<Mutex<Pending>> = (0..height.div_ceil(rows_per)).map(|_| Mutex::new(Pending::default())).collect();
+    let fault: Fault = Mutex::new(None);
+    let failed = AtomicBool::new(false);
+    let in_flight = AtomicUsize::new(0);
+    let limit = 4 * rayon::current_num_threads();
+    let fail = |message: String| {
+        failed.store(true, Ordering::Relaxed);
+        lock(&fault).get_or_insert(message);
+    };
+    let (meta, pending, fail, in_flight) = (&meta, &pending, &fail, &in_flight);
+    rayon::scope(|s| {
+        for chunk in chunks {
+            if failed.load(Ordering::Relaxed) {
+                break;
+            }
+            let chunk = match chunk {
+                Ok(c) => c,
+                Err(e) => {
+                    fail(e.to_string());
+                    break;
+                }
+            };
+            while in_flight.load(Ordering::Acquire) >= limit {
+                if !matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
+                    std::thread::yield_now();
                 }
             }
-            lines_read += 1;
+            in_flight.fetch_add(1, Ordering::AcqRel);
+            s.spawn(move |_| {
+                if let Err(e) = decode_block(chunk, meta, layout, pending, done) {
+                    fail(e);
+                }
+                in_flight.fetch_sub(1, Ordering::AcqRel);
+            });
         }
-        Ok(())
-    };
-    reader.all_chunks(false).map_err(err)?.decompress_parallel(false, insert).map_err(err)?;
-    if lines_read != height {
-        return Err(IoError::new(
-            path,
-            format!("the file holds {lines_read} of its {height} scan lines: it is damaged"),
-        ));
+    });
+    if let Some(message) = fault.into_inner().unwrap_or_else(PoisonError::into_inner) {
+        return Err(message);
     }
-    Ok(Some(RawData { width, height, scene, strips, channels }))
+    let lines: usize = pending.iter().map(|p| lock(p).count).sum();
+    if lines != height {
+        return Err(format!("the file holds {lines} of its {height} scan lines: it is damaged"));
+    }
+    Ok(())
+}
+
+/// Decompresses one block, puts its lines into their strips and hands on the strips it
+/// completes.
+fn decode_block(
+    chunk: Chunk,
+    meta: &MetaData,
+    layout: &Layout<'_>,
+    pending: &[Mutex<Pending>],
+    done: &(impl Fn(usize, Planes) + Sync),
+) -> Result<(), String> {
+    let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
+    let index = block.index;
+    let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
+    if index.layer != 0 || index.level != Vec2(0, 0) {
+        return Ok(());
+    }
+    let lines = index.pixel_size.1;
+    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * layout.line_bytes {
+        return Err("a scan-line block of the wrong size".into());
+    }
+    for (l, line) in block.data.chunks_exact(layout.line_bytes).enumerate() {
+        let y = index.pixel_position.1 + l;
+        if y >= height {
+            return Err("a scan line outside the data window".into());
+        }
+        let (k, row) = (y / rows_per, y % rows_per);
+        let rows = rows_per.min(height - k * rows_per);
+        let complete = {
+            let mut p = lock(&pending[k]);
+            if p.seen.is_empty() {
+                p.seen = vec![false; rows];
+                p.planes = Some(layout.planes(rows));
+            }
+            let Some(planes) = p.planes.as_mut() else {
+                return Err(format!("scan line {y} appears twice"));
+            };
+            layout.insert_line(planes, row, line);
+            if std::mem::replace(&mut p.seen[row], true) {
+                return Err(format!("scan line {y} appears twice"));
+            }
+            p.count += 1;
+            if p.count == rows { p.planes.take() } else { None }
+        };
+        if let Some(planes) = complete {
+            done(k, planes);
+        }
+    }
+    Ok(())
 }
 
 /// Every plane through the exr crate's whole-image reader (tiled and multi-level files).
@@ -361,9 +552,11 @@ fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> 
     let n = n.ok_or_else(|| IoError::new(path, NO_N))?;
     let take = |name: &str| floats.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice());
     let channels = plane_channels(&|name| take(name).is_some());
+    let kinds = trap_layout(&|n| take(n).is_some());
     // Trap planes, by index: trap0, trap1, ... until one is missing.
-    let traps: Vec<(TrapKind, Vec<&[f32]>)> = trap_layout(&|n| take(n).is_some())
-        .into_iter()
+    let traps: Vec<(TrapKind, Vec<&[f32]>)> = kinds
+        .iter()
+        .copied()
         .enumerate()
         .map(|(k, kind)| {
             let parts: &[&str] = match kind {
@@ -403,7 +596,7 @@ fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> 
             traps: trap_planes,
         });
     }
-    Ok(RawData { width, height, scene, strips, channels })
+    Ok(RawData { header: RawHeader { width, height, scene, channels, traps: kinds }, strips })
 }
 
 #[cfg(test)]
@@ -453,16 +646,55 @@ mod tests {
         let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}.exr", std::process::id()));
         Image::from_layer(layer).write().to_file(&path).unwrap();
         for rows in [1, 5, 32] {
-            let fast = read_scanlines(&path, rows).unwrap().expect("a scan-line file");
+            let open = open_scanlines(&path, rows).unwrap().expect("a scan-line file");
+            assert!(matches!(open.source, Source::Blocks { .. }));
+            let fast = open.collect().unwrap();
             let whole = read_whole_image(&path, rows).unwrap();
             assert_eq!(fast.strips, whole.strips, "{rows} rows per strip");
-            assert_eq!((fast.width, fast.height, &fast.scene), (w, h, &Some("version = 1".to_string())));
-            assert_eq!(fast.channels, whole.channels);
-            assert_eq!(fast.trap_kinds(), [TrapKind::Color, TrapKind::Distance]);
+            assert_eq!(fast.header, whole.header);
+            let h0 = &fast.header;
+            assert_eq!((h0.width, h0.height, &h0.scene), (w, h, &Some("version = 1".to_string())));
+            assert_eq!(h0.traps, [TrapKind::Color, TrapKind::Distance]);
         }
         let raw = read_exr_planes(&path, 5).unwrap();
         // Strip 6 holds rows 30..35: its row 2 is row 32.
         assert_eq!(raw.strips[6].n[2 * w + 3], (32 * w as u32 + 3) * 3);
         std::fs::remove_file(&path).unwrap();
+    }
+
+    /// A file cut short is refused with the file named, whichever block the cut falls in,
+    /// and never hands on a strip twice.
+    #[test]
+    fn truncated_files_are_refused() {
+        let (w, h) = (19usize, 70usize);
+        let channels = SpecificChannels::build()
+            .with_channel("N")
+            .with_channel("NF")
+            .with_pixel_fn(|p: Vec2<usize>| ((p.1 * w + p.0) as u32, p.0 as f32 * 0.5));
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::named("deepfield"),
+            Encoding { compression: Compression::RLE, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
+            channels,
+        );
+        let dir = std::env::temp_dir().join(format!("deepfield-exr-cut-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let whole = dir.join("whole.exr");
+        Image::from_layer(layer).write().to_file(&whole).unwrap();
+        let bytes = std::fs::read(&whole).unwrap();
+        let full = read_exr_planes(&whole, 8).unwrap();
+        assert_eq!(full.strips.len(), 9);
+        assert_eq!(full.strips[8].n[w * 5 + 2], (69 * w + 2) as u32);
+        for keep in [bytes.len() - 1, bytes.len() * 3 / 4, bytes.len() / 2] {
+            let cut = dir.join(format!("cut{keep}.exr"));
+            std::fs::write(&cut, &bytes[..keep]).unwrap();
+            let seen = Mutex::new(vec![0u32; 9]);
+            let open = ExrStrips::open(&cut, 8);
+            let result = open.and_then(|s| s.for_each_strip(|k, _| lock(&seen)[k] += 1));
+            let e = result.expect_err("a cut file was read");
+            assert!(e.to_string().contains("cut"), "{e}");
+            assert!(lock(&seen).iter().all(|&c| c <= 1));
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
