@@ -47,14 +47,28 @@ impl FloatExp {
         if !m.is_finite() {
             return FloatExp { m, e: 0 };
         }
-        let bits = m.to_bits();
-        let field = ((bits >> 52) & 0x7ff) as i32;
+        let field = ((m.to_bits() >> 52) & 0x7ff) as i32;
         if field == 0 {
-            // Subnormal mantissa: scale into the normal range first.
-            return Self::new(m * exp2i(64), e.saturating_sub(64));
+            return Self::from_subnormal(m, e);
         }
-        let mant = f64::from_bits((bits & !(0x7ff << 52)) | (1023 << 52));
+        Self::normalised(m, field, e)
+    }
+
+    /// [`FloatExp::new`] for a normal m whose exponent field is `field`.
+    #[inline(always)]
+    fn normalised(m: f64, field: i32, e: i32) -> Self {
+        let mant = f64::from_bits((m.to_bits() & !(0x7ff << 52)) | (1023 << 52));
         FloatExp { m: mant, e: e.saturating_add(field - 1023) }
+    }
+
+    /// [`FloatExp::new`] for a subnormal m: scaled into the normal range first. Kept out of
+    /// line, and not calling `new` again, so that `new` has no recursion and inlines into
+    /// the loops that call it.
+    #[cold]
+    #[inline(never)]
+    fn from_subnormal(m: f64, e: i32) -> Self {
+        let m = m * exp2i(64);
+        Self::normalised(m, ((m.to_bits() >> 52) & 0x7ff) as i32, e.saturating_sub(64))
     }
 
     /// The mantissa (1 <= |m| < 2, or 0).

@@ -1155,7 +1155,7 @@ impl Perturbation {
     /// `INT`, |dz/dz|^2 is multiplied by |d(δ')/d(δ)|^2 (A + 2 A2 δ + AB δc, or A for a
     /// first-order step). The new δ is the same bits whether or not the Jacobian is
     /// computed.
-    #[inline]
+    #[inline(always)]
     fn apply_bla<D: Real, const DER: bool, const INT: bool>(
         &self,
         e: Step<'_, D>,
