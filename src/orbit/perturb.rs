@@ -38,7 +38,7 @@ use super::interior::{self, Check, Contraction, Decision, Detection};
 use super::reference::Reference;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
-use crate::num::{FloatExp, Real};
+use crate::num::{FloatExp, Real, Scaled};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 
@@ -718,13 +718,12 @@ impl Perturbation {
     fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
         let r = &self.refs[0];
         let table = self.bla_f64[0].as_ref();
-        let fe = |v: [f64; 2]| -> [FloatExp; 2] { cconv(v) };
-        let twice = |v: [FloatExp; 2]| [v[0].ldexp(1), v[1].ldexp(1)];
         let mut z = w;
         // d1 as an f64 pair with its own exponent (FloatExp for each product would double
-        // the cost of the turn); d2 in FloatExp, and only when asked for.
+        // the cost of the turn); d2 likewise ([`Scaled`]: only its size enters Newton's
+        // bound), and only when asked for.
         let mut d1 = Der { mant: [1.0, 0.0], exp: 0, add: 0.0 };
-        let mut d2 = [FloatExp::ZERO; 2];
+        let mut d2 = Scaled::ZERO;
         for _ in 0..k {
             let (mut dz, mut m) = (z, 0u32);
             while m < p {
@@ -744,16 +743,17 @@ impl Perturbation {
                         (next, jac)
                     };
                     if second {
-                        let d = d1.to_fe();
-                        d2 = cadd(cmul(fe(jac), d2), cmul(twice(fe(e.second.a2)), cmul(d, d)));
+                        let d = Scaled::new(d1.mant, d1.exp);
+                        let a2 = Scaled::from_f64(e.second.a2).ldexp(1);
+                        d2 = Scaled::from_f64(jac) * d2 + a2 * d.square();
                     }
                     d1.mul(jac);
                     (dz, m) = (next, m + len);
                     continue;
                 }
                 if second {
-                    let d = d1.to_fe();
-                    d2 = twice(cadd(cmul(d, d), cmul(fe(full), d2)));
+                    let d = Scaled::new(d1.mant, d1.exp);
+                    d2 = (d.square() + Scaled::from_f64(full) * d2).ldexp(1);
                 }
                 d1.mul([full[0] * 2.0, full[1] * 2.0]);
                 dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
@@ -761,7 +761,7 @@ impl Perturbation {
             }
             z = cadd(r.get(p), dz);
         }
-        Some(interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2) })
+        Some(interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2.to_fe()) })
     }
 
     /// Interior detection's check (one that never fires when it is off).
