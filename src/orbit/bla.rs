@@ -287,7 +287,12 @@ impl<T: Real> BlaTable<T> {
         }
         // Steps past a level's end have radius "never", so levels[k - 1] holds this one.
         let j = (i >> k) as usize;
-        (k > 0).then(|| (Step { first: &self.levels[k - 1][j], second: &self.seconds[k - 1][j] }, 1u32 << k))
+        // An `if`, not `bool::then` with a closure: the closure was compiled out of line, a
+        // call per lookup on the loop's hottest path.
+        if k == 0 {
+            return None;
+        }
+        Some((Step { first: &self.levels[k - 1][j], second: &self.seconds[k - 1][j] }, 1u32 << k))
     }
 
     /// The squared radii of the steps of `level` (2^(level+1) iterations), or of the
