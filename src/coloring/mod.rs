@@ -214,31 +214,38 @@ impl Coloring {
     /// each sample's opacity. Output is linear light, premultiplied by alpha.
     pub fn paint(&self, planes: &Planes, aa: u32, ctx: &Context, mask: Option<&Mask>) -> Vec<[f32; 4]> {
         let mut out = vec![[0.0f32; 4]; planes.len()];
-        self.paint_each(planes, aa, ctx, mask, &mut |k, c| out[k] = c);
+        self.paint_runs(planes, aa, ctx, mask, &mut |start, run| out[start..start + run.len()].copy_from_slice(run));
         out
     }
 
-    /// Colours every sample of `planes`, handing each (index, premultiplied linear RGBA) to
-    /// `sink` in order (no intermediate buffer: the compositor writes its output directly).
-    pub fn paint_each(
+    /// Colours every sample of `planes`, handing them to `sink` in order, in runs of up to
+    /// [`RUN`] samples (the index of the run's first sample, its premultiplied linear RGBA
+    /// colours): no image-sized buffer, as the compositor writes its output directly, and
+    /// one call per run, whose loop the sink's own code is compiled into (a call per sample
+    /// was not inlined where many colourings share one sink).
+    pub fn paint_runs(
         &self,
         planes: &Planes,
         aa: u32,
         ctx: &Context,
         mask: Option<&Mask>,
-        sink: &mut impl FnMut(usize, [f32; 4]),
+        sink: &mut impl FnMut(usize, &[[f32; 4]]),
     ) {
         let px = 1.0 / aa as f64;
         match mask {
             None => self.paint_unmasked(planes, px, ctx, sink),
-            Some(m) => self.paint_unmasked(planes, px, ctx, &mut |k, c: [f32; 4]| {
-                let w = m.at(planes, k, px);
-                sink(k, c.map(|v| v * w))
+            Some(m) => self.paint_unmasked(planes, px, ctx, &mut |start, run: &[[f32; 4]]| {
+                let mut masked = [[0.0f32; 4]; RUN];
+                for ((out, c), k) in masked.iter_mut().zip(run).zip(start..) {
+                    let w = m.at(planes, k, px);
+                    *out = c.map(|v| v * w);
+                }
+                sink(start, &masked[..run.len()])
             }),
         }
     }
 
-    fn paint_unmasked(&self, planes: &Planes, px: f64, ctx: &Context, sink: &mut impl FnMut(usize, [f32; 4])) {
+    fn paint_unmasked(&self, planes: &Planes, px: f64, ctx: &Context, sink: &mut impl FnMut(usize, &[[f32; 4]])) {
         let len = planes.len();
         let inside = |k: usize| planes.n[k] == INTERIOR;
         let distance = |k: usize| {
@@ -358,11 +365,12 @@ impl Coloring {
     }
 }
 
-/// Samples per run of [`in_runs`].
-const RUN: usize = 64;
+/// Samples per run in which colourings paint (the most [`Coloring::paint_runs`] hands over
+/// at once).
+pub const RUN: usize = 64;
 
 /// Paints samples 0..len in runs of [`RUN`], in three passes over each: `value` of every
-/// sample of the run, then `colour` from it, then `sink`. Each pass is a short loop of
+/// sample of the run, then `colour` from it, then `sink` with the run's colours. Each pass is a short loop of
 /// independent iterations, so the core overlaps many samples' logarithms, powers and
 /// palette lookups; one pass per sample chains them all and waits on each (two-layer 4K
 /// recolour, one thread: colour and write 0.88–0.95 s in one pass, 0.63–0.71 s with the
@@ -372,7 +380,7 @@ fn in_runs(
     len: usize,
     value: impl Fn(usize) -> f64,
     colour: impl Fn(usize, f64) -> [f32; 4],
-    sink: &mut impl FnMut(usize, [f32; 4]),
+    sink: &mut impl FnMut(usize, &[[f32; 4]]),
 ) {
     let (mut v, mut c) = ([0.0f64; RUN], [[0.0f32; 4]; RUN]);
     for start in (0..len).step_by(RUN) {
@@ -383,9 +391,7 @@ fn in_runs(
         for ((cj, &vj), k) in c.iter_mut().zip(&v).zip(run.clone()) {
             *cj = colour(k, vj);
         }
-        for (&cj, k) in c.iter().zip(run) {
-            sink(k, cj);
-        }
+        sink(start, &c[..run.len()]);
     }
 }
 

@@ -154,9 +154,11 @@ impl Stack {
         let bg = self.background;
         if let Some(layer) = self.single_opaque() {
             let mut out = vec![[0.0f32; 3]; planes.len()];
-            layer.coloring.paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| {
-                let t = 1.0 - c[3];
-                out[k] = [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t];
+            layer.coloring.paint_runs(planes, aa, ctx, layer.mask.as_ref(), &mut |start, run| {
+                for (o, c) in out[start..start + run.len()].iter_mut().zip(run) {
+                    let t = 1.0 - c[3];
+                    *o = [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t];
+                }
             });
             return out;
         }
@@ -177,11 +179,13 @@ impl Stack {
         if let Some(layer) = self.single_opaque() {
             let mut out = vec![0u8; planes.len() * 3];
             let enc = Srgb8Encoder::get();
-            layer.coloring.paint_each(planes, 1, ctx, layer.mask.as_ref(), &mut |k, c| {
-                let t = 1.0 - c[3];
-                out[3 * k] = enc.encode(c[0] + bg[0] * t);
-                out[3 * k + 1] = enc.encode(c[1] + bg[1] * t);
-                out[3 * k + 2] = enc.encode(c[2] + bg[2] * t);
+            layer.coloring.paint_runs(planes, 1, ctx, layer.mask.as_ref(), &mut |start, run| {
+                for (o, c) in out[3 * start..3 * (start + run.len())].chunks_exact_mut(3).zip(run) {
+                    let t = 1.0 - c[3];
+                    o[0] = enc.encode(c[0] + bg[0] * t);
+                    o[1] = enc.encode(c[1] + bg[1] * t);
+                    o[2] = enc.encode(c[2] + bg[2] * t);
+                }
             });
             return out;
         }
@@ -212,10 +216,12 @@ impl Stack {
         for (i, layer) in self.layers.iter().enumerate() {
             let dst = layer_pixmap.pixels_mut();
             let mut opaque = true;
-            layer.coloring.paint_each(planes, aa, ctx, layer.mask.as_ref(), &mut |k, c| {
-                let p = to_premultiplied_srgb8(c, enc);
-                opaque &= p.alpha() == 255;
-                dst[k] = p;
+            layer.coloring.paint_runs(planes, aa, ctx, layer.mask.as_ref(), &mut |start, run| {
+                for (d, &c) in dst[start..start + run.len()].iter_mut().zip(run) {
+                    let p = to_premultiplied_srgb8(c, enc);
+                    opaque &= p.alpha() == 255;
+                    *d = p;
+                }
             });
             // An opaque bottom layer drawn normally covers the background exactly: source
             // over an opaque pixel is the pixel, so the layer becomes the base as it is.
