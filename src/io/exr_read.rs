@@ -458,10 +458,10 @@ fn decode_blocks(
             }
             in_flight.fetch_add(1, Ordering::AcqRel);
             s.spawn(move |_| {
+                let _counted = Leaving(in_flight);
                 if let Err(e) = decode_block(chunk, meta, layout, pending, done) {
                     fail(e);
                 }
-                in_flight.fetch_sub(1, Ordering::AcqRel);
             });
         }
     });
@@ -473,6 +473,16 @@ fn decode_blocks(
         return Err(format!("the file holds {lines} of its {height} scan lines: it is damaged"));
     }
     Ok(())
+}
+
+/// Takes a block off the count in flight when its task ends, even by a panic (which the
+/// scope then passes on): the reading loop must not wait for a task that is gone.
+struct Leaving<'a>(&'a AtomicUsize);
+
+impl Drop for Leaving<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::AcqRel);
+    }
 }
 
 /// Decompresses one block, puts its lines into their strips and hands on the strips it
