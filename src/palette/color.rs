@@ -30,12 +30,15 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 struct Tables {
     /// Linear value of each 8-bit code.
     decode: [f32; 256],
-    /// Linear thresholds between consecutive codes (code k+1 starts at `encode[k]`).
-    encode: [f32; 255],
-    /// Code at the start of each of `BUCKETS` equal steps of [0, 1]. Neighbouring code
-    /// boundaries are at least 1/(255 * 12.92) ~ 3.0e-4 apart, wider than a bucket (2.4e-4), so at most
-    /// one boundary falls inside a bucket: one comparison finishes the search.
-    start: Vec<u8>,
+    /// Linear thresholds between consecutive codes (code k+1 starts at `encode[k]`); entry
+    /// 255 is NaN, which no value reaches, so code 255 needs no test of its own and a code
+    /// indexes the table without a bounds check.
+    encode: [f32; 256],
+    /// Code at the start of each of `BUCKETS` equal steps of [0, 1], and at 1. Neighbouring
+    /// code boundaries are at least 1/(255 * 12.92) ~ 3.0e-4 apart, wider than a bucket
+    /// (2.4e-4), so at most one boundary falls inside a bucket: one comparison finishes the
+    /// search.
+    start: [u8; BUCKETS + 1],
 }
 
 const BUCKETS: usize = 1 << 12;
@@ -43,8 +46,9 @@ const BUCKETS: usize = 1 << 12;
 fn tables() -> &'static Tables {
     static T: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
     T.get_or_init(|| {
-        let encode: [f32; 255] = std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0));
-        let start = (0..=BUCKETS).map(|b| encode.partition_point(|&t| t <= b as f32 / BUCKETS as f32) as u8).collect();
+        let bounds: [f32; 255] = std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0));
+        let start = std::array::from_fn(|b| bounds.partition_point(|&t| t <= b as f32 / BUCKETS as f32) as u8);
+        let encode = std::array::from_fn(|k| bounds.get(k).copied().unwrap_or(f32::NAN));
         Tables { decode: std::array::from_fn(|k| srgb_to_linear(k as f32 / 255.0)), encode, start }
     })
 }
@@ -77,11 +81,11 @@ impl Srgb8Encoder {
     #[inline(always)]
     pub fn encode(self, v: f32) -> u8 {
         // clamp keeps NaN, and NaN as usize is 0: no branch is needed for either end.
-        // v * 2^12 is exact, so the bucket is floor(v * BUCKETS) exactly.
-        let k = self.0.start[(v.clamp(0.0, 1.0) * BUCKETS as f32) as usize];
-        // `encode` has 255 entries; code 255 has no boundary above it.
-        let above = self.0.encode.get(k as usize).is_some_and(|&b| v >= b);
-        k + u8::from(above)
+        // v * 2^12 is exact, so the bucket is floor(v * BUCKETS) exactly; `min` only tells
+        // the compiler what the clamp already ensures.
+        let k = self.0.start[((v.clamp(0.0, 1.0) * BUCKETS as f32) as usize).min(BUCKETS)];
+        // Code 255's entry is NaN: never above it (nor is a NaN v above anything).
+        k + u8::from(v >= self.0.encode[k as usize])
     }
 }
 
