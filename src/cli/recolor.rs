@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::anyhow;
 use deepfield::coloring::Context;
 use deepfield::field::{Channel, Needs, Planes};
-use deepfield::io::{ExrStrips, IoError, PngEncoder, PngWriter, RawHeader, TrapKind};
+use deepfield::io::{ExrStrips, PngEncoder, PngWriter, RawHeader, TrapKind};
 use deepfield::render;
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
@@ -69,7 +69,7 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Runtime(e.into()))?;
     let png =
         PngWriter::create(&out, scene.width, scene.height, scene.png_bits, &scene.to_toml()).map_err(Failure::input)?;
-    let read_s = write_coloured(&scene, data, &pool, png).map_err(|e| Failure::Runtime(e.into()))?;
+    let read_s = write_coloured(&scene, data, &pool, png)?;
     if args.stats {
         let read = match read_s {
             Some(s) => format!("read {s:.3} s, then colour and write"),
@@ -92,12 +92,14 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
 /// back in order. Layers that need nothing image-wide colour each strip as soon as the
 /// reader has it (reading, colouring and deflating overlap; `None` returned); otherwise the
 /// whole file is read first for the image-wide context (the seconds that took returned).
+/// A fault in the data file is the input's (nothing is written); one writing the PNG, the
+/// run's.
 fn write_coloured(
     scene: &Scene,
     data: ExrStrips,
     pool: &rayon::ThreadPool,
     mut png: PngWriter,
-) -> Result<Option<f64>, IoError> {
+) -> Result<Option<f64>, Failure> {
     use rayon::prelude::*;
     let enc = PngEncoder::new(scene.png_bits);
     let colour = |planes: &Planes, ctx: &Context| match scene.png_bits {
@@ -135,8 +137,8 @@ fn write_coloured(
         drop(tx);
         let written = writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         // A read fault is the cause; the writer's complaint about missing strips follows.
-        let read = read?;
-        written.map(|()| read)
+        let read = read.map_err(Failure::input)?;
+        written.map(|()| read).map_err(|e| Failure::Runtime(e.into()))
     })
 }
 

@@ -130,6 +130,11 @@ fn recolour_layers_from_the_command_line() {
     refused(&deepfield(&["recolor", "n.exr", "--layer", "binary", "-o", "x.png"], &dir), "no T channel");
     std::fs::write(dir.join("big.toml"), VIEW.replace("width = 72", "width = 80")).unwrap();
     refused(&deepfield(&["recolor", "data.exr", "--scene", "big.toml", "-o", "x.png"], &dir), "holds 72 x 54 samples");
+    // A file cut short is found out while the strips stream (after the header read
+    // well): refused as bad input, and no PNG is left behind.
+    let bytes = std::fs::read(dir.join("data.exr")).unwrap();
+    std::fs::write(dir.join("cut.exr"), &bytes[..bytes.len() * 2 / 3]).unwrap();
+    refused(&deepfield(&["recolor", "cut.exr", "-o", "x.png"], &dir), "cut.exr");
     assert!(!dir.join("x.png").exists());
 }
 
