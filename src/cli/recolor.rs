@@ -118,7 +118,7 @@ fn write_coloured(
                     next += 1;
                 }
             }
-            png.finish()
+            Ok(png)
         });
         // A failed writer drops the receiver; the workers' sends then fail and are ignored.
         let read = pool.install(|| {
@@ -136,9 +136,10 @@ fn write_coloured(
         });
         drop(tx);
         let written = writer.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        // A read fault is the cause; the writer's complaint about missing strips follows.
+        // A read fault comes first (the file is then never moved into place, even where every
+        // strip had arrived before the fault showed); then the writer's.
         let read = read.map_err(Failure::input)?;
-        written.map(|()| read).map_err(|e| Failure::Runtime(e.into()))
+        written.and_then(PngWriter::finish).map(|()| read).map_err(|e| Failure::Runtime(e.into()))
     })
 }
 
