@@ -72,9 +72,8 @@ const MAX_EXPANSION: u64 = 1100;
 
 /// Refuses, before anything is allocated, a file whose header claims more decoded data than
 /// its bytes can hold.
-fn check_decoded_size(path: &Path) -> Result<(), IoError> {
+fn check_decoded_size(path: &Path, meta: &MetaData) -> Result<(), IoError> {
     let file_len = std::fs::metadata(path).map_err(|e| IoError::new(path, e))?.len();
-    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::new(path, e))?;
     let mut claimed: u64 = 0;
     for h in meta.headers.iter() {
         let pixels = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
@@ -124,9 +123,11 @@ enum Source {
 impl ExrStrips {
     /// Opens `path` and reads its header; the strips will hold `strip_rows` rows (at least 1).
     pub fn open(path: &Path, strip_rows: usize) -> Result<Self, IoError> {
-        check_decoded_size(path)?;
+        let file = File::open(path).map_err(|e| IoError::new(path, e))?;
+        let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::new(path, e))?;
+        check_decoded_size(path, reader.meta_data())?;
         let rows_per = strip_rows.max(1);
-        if let Some(strips) = open_scanlines(path, rows_per)? {
+        if let Some(strips) = open_scanlines(path, reader, rows_per)? {
             return Ok(strips);
         }
         let raw = read_whole_image(path, rows_per)?;
@@ -256,6 +257,7 @@ fn slot_of(name: &str, traps: &[TrapKind]) -> Slot {
 }
 
 /// One sample (`bytes`, little-endian, of `kind`) as f32.
+#[inline(always)]
 fn float_of(b: &[u8], kind: SampleType) -> f32 {
     match kind {
         SampleType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
@@ -266,31 +268,24 @@ fn float_of(b: &[u8], kind: SampleType) -> f32 {
 
 /// Converts one line of samples (`bytes`, little-endian, of `kind`) to f32.
 fn floats_into(dst: &mut [f32], bytes: &[u8], kind: SampleType) {
+    let size = kind.bytes_per_sample();
+    let pairs = dst.iter_mut().zip(bytes.chunks_exact(size));
+    // One loop per kind, each a plain conversion loop (float_of inlines with its kind fixed).
     match kind {
-        SampleType::F32 => {
-            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(4)) {
-                *d = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            }
-        }
-        SampleType::F16 => {
-            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(2)) {
-                *d = f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
-            }
-        }
-        SampleType::U32 => {
-            for (d, b) in dst.iter_mut().zip(bytes.chunks_exact(4)) {
-                *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32;
-            }
-        }
+        SampleType::F32 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::F32)),
+        SampleType::F16 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::F16)),
+        SampleType::U32 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::U32)),
     }
 }
 
 /// Opens the fast path of [`ExrStrips`]: `None` when the file is not a single-part,
 /// single-level scan-line image with full-resolution channels.
-fn open_scanlines(path: &Path, rows_per: usize) -> Result<Option<ExrStrips>, IoError> {
+fn open_scanlines(
+    path: &Path,
+    reader: ::exr::block::reader::Reader<BufReader<File>>,
+    rows_per: usize,
+) -> Result<Option<ExrStrips>, IoError> {
     let err = |e: ::exr::error::Error| IoError::new(path, e);
-    let file = File::open(path).map_err(|e| IoError::new(path, e))?;
-    let reader = ::exr::block::read(BufReader::new(file), false).map_err(err)?;
     let header = match reader.headers() {
         [h] => h.clone(),
         _ => return Ok(None),
@@ -517,13 +512,11 @@ fn decode_block(
                 p.seen = vec![false; rows];
                 p.planes = Some(layout.planes(rows));
             }
-            let Some(planes) = p.planes.as_mut() else {
-                return Err(format!("scan line {y} appears twice"));
-            };
-            layout.insert_line(planes, row, line);
             if std::mem::replace(&mut p.seen[row], true) {
                 return Err(format!("scan line {y} appears twice"));
             }
+            let Some(planes) = p.planes.as_mut() else { return Err(format!("scan line {y} appears twice")) };
+            layout.insert_line(planes, row, line);
             p.count += 1;
             if p.count == rows { p.planes.take() } else { None }
         };
@@ -656,7 +649,9 @@ mod tests {
         let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}.exr", std::process::id()));
         Image::from_layer(layer).write().to_file(&path).unwrap();
         for rows in [1, 5, 32] {
-            let open = open_scanlines(&path, rows).unwrap().expect("a scan-line file");
+            let file = File::open(&path).unwrap();
+            let reader = ::exr::block::read(BufReader::new(file), false).unwrap();
+            let open = open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file");
             assert!(matches!(open.source, Source::Blocks { .. }));
             let fast = open.collect().unwrap();
             let whole = read_whole_image(&path, rows).unwrap();
