@@ -2,10 +2,12 @@
 //! forced by the user (`--simd`) so that every path the program can take on some CPU can be
 //! run, timed and tested on this one.
 //!
-//! Two families of kernels depend on it: the direct f64 kernels (`field::simd`, generic over
-//! pulp's [`pulp::Simd`]) and the perturbation engine's single-step lanes
+//! Three families of kernels depend on it: the direct f64 kernels (`field::simd`, generic
+//! over pulp's [`pulp::Simd`]), the perturbation engine's single-step lanes
 //! (`orbit::perturb::lanes`, generic over the same trait, with one small load routine per
-//! instruction set). Every level gives the same bits: the kernels do the same IEEE
+//! instruction set), and colouring's arithmetic passes (transfers, distance styles, palette
+//! coordinates: plain loops compiled under the level's features by pulp's dispatch, which
+//! the compiler vectorises). Every level gives the same bits: the kernels do the same IEEE
 //! operations in the same order whatever the vector width, which the tests check by running
 //! every level the CPU has against the scalar one. So the level is a property of a run, never
 //! of a scene: it is not stored in scene files, only reported (`--stats`, the EXR header).

@@ -146,7 +146,7 @@ impl Stack {
             .iter()
             .any(|l| matches!(l.coloring, Coloring::Histogram { .. }))
             .then(|| Histogram::build(strips));
-        Context { histogram }
+        Context { histogram, ..Context::default() }
     }
 
     /// Composites the stack for every sample: opaque linear RGB.
@@ -214,13 +214,22 @@ impl Stack {
         let mut layer_pixmap = Pixmap::new(w, h)?;
         let enc = Srgb8Encoder::get();
         for (i, layer) in self.layers.iter().enumerate() {
-            let dst = layer_pixmap.pixels_mut();
+            let dst = layer_pixmap.data_mut();
             let mut opaque = true;
             layer.coloring.paint_runs(planes, aa, ctx, layer.mask.as_ref(), &mut |start, run| {
-                for (d, &c) in dst[start..start + run.len()].iter_mut().zip(run) {
+                let out = &mut dst[4 * start..4 * (start + run.len())];
+                if run.iter().all(|c| c[3] >= 1.0) {
+                    // Every sample opaque (most layers): three codes and 255 each, in one
+                    // tight loop (what `to_premultiplied_srgb8` gives at alpha 1).
+                    for (o, c) in out.chunks_exact_mut(4).zip(run) {
+                        o.copy_from_slice(&[enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255]);
+                    }
+                    return;
+                }
+                for (o, &c) in out.chunks_exact_mut(4).zip(run) {
                     let p = to_premultiplied_srgb8(c, enc);
                     opaque &= p.alpha() == 255;
-                    *d = p;
+                    o.copy_from_slice(&[p.red(), p.green(), p.blue(), p.alpha()]);
                 }
             });
             // An opaque bottom layer drawn normally covers the background exactly: source

@@ -21,6 +21,8 @@ pub mod import;
 
 use std::sync::Arc;
 
+use crate::simd_level::SimdLevel;
+
 pub use file::{PaletteError, builtin, builtin_names, load, parse, to_toml};
 
 /// Space in which neighbouring stops are interpolated.
@@ -201,17 +203,38 @@ impl Palette {
     /// offset and mode.
     #[inline(always)]
     pub fn at(&self, t: f64) -> [f32; 4] {
-        let t = t * self.density + self.offset;
-        let u = match self.mode {
-            Mode::Repeat => t - floor(t),
-            Mode::Mirror => {
-                let r = t.rem_euclid(2.0);
-                if r > 1.0 { 2.0 - r } else { r }
-            }
-            Mode::Clamp => t.clamp(0.0, 1.0),
-        };
-        let u = if u.is_finite() { u } else { 0.0 };
-        let f = u * (LUT_SIZE - 1) as f64;
+        self.at_coordinate(self.coordinate(t))
+    }
+
+    /// Where position `t` falls in the palette's table, after its density, offset and mode:
+    /// a coordinate in [0, table length - 1] for [`Palette::at_coordinate`].
+    #[inline(always)]
+    pub fn coordinate(&self, t: f64) -> f64 {
+        coordinate(self.mode, self.density, self.offset, t)
+    }
+
+    /// [`Palette::coordinate`] of every position of a run, in place, under `simd`'s
+    /// instruction set: a loop with no branch inside for the repeating and clamped modes,
+    /// which vectorises (exact operations: the same bits at every width).
+    pub fn coordinates(&self, simd: SimdLevel, v: &mut [f64]) {
+        let (mode, density, offset) = (self.mode, self.density, self.offset);
+        match mode {
+            Mode::Mirror => v.iter_mut().for_each(|t| *t = coordinate(mode, density, offset, *t)),
+            _ => simd.arch().dispatch(
+                #[inline(always)]
+                || {
+                    for t in v.iter_mut() {
+                        *t = coordinate(mode, density, offset, *t);
+                    }
+                },
+            ),
+        }
+    }
+
+    /// The colour at a table coordinate from [`Palette::coordinate`]: the two neighbouring
+    /// entries, interpolated.
+    #[inline(always)]
+    pub fn at_coordinate(&self, f: f64) -> [f32; 4] {
         let i = (f as usize).min(LUT_SIZE - 2);
         let w = (f - i as f64) as f32;
         let (a, b) = (self.lut[i], self.lut[i + 1]);
@@ -219,15 +242,33 @@ impl Palette {
     }
 }
 
-/// floor(t) without a libm call (the crate is built for baseline x86-64, where `f64::floor`
-/// is a function call); exact for |t| < 2^62, and the palette repeats long before that.
-#[inline]
+/// The table coordinate of position `t` (see [`Palette::coordinate`]).
+#[inline(always)]
+fn coordinate(mode: Mode, density: f64, offset: f64, t: f64) -> f64 {
+    let t = t * density + offset;
+    let u = match mode {
+        Mode::Repeat => t - floor(t),
+        Mode::Mirror => {
+            let r = t.rem_euclid(2.0);
+            if r > 1.0 { 2.0 - r } else { r }
+        }
+        Mode::Clamp => t.clamp(0.0, 1.0),
+    };
+    let u = if u.is_finite() { u } else { 0.0 };
+    u * (LUT_SIZE - 1) as f64
+}
+
+/// floor(t), exact, without a libm call (the crate is built for baseline x86-64, where
+/// `f64::floor` is a function call) and without a branch or an integer conversion (which
+/// AVX2 lacks for 64-bit integers), so that loops over it vectorise: below 2^52, adding and
+/// subtracting 2^52 rounds |t| to a whole number; above, every f64 is whole already.
+#[inline(always)]
 fn floor(t: f64) -> f64 {
-    if t.is_nan() || t.abs() >= 4.0e18 {
-        return t.floor();
-    }
-    let f = t as i64 as f64;
-    if f > t { f - 1.0 } else { f }
+    const BIG: f64 = 4_503_599_627_370_496.0;
+    let a = t.abs();
+    let r = if a < BIG { ((a + BIG) - BIG).copysign(t) } else { t };
+    // NaN stays NaN (no comparison holds).
+    if r > t { r - 1.0 } else { r }
 }
 
 /// A colour in the coordinates of `space`.
@@ -287,6 +328,32 @@ mod tests {
         let stops =
             vec![Stop { pos: 0.0, srgb: [0.0; 3], opacity: 1.0 }, Stop { pos: 1.0, srgb: [1.0; 3], opacity: 1.0 }];
         Palette::new("bw", Space::Linear, mode, stops)
+    }
+
+    #[test]
+    fn every_instruction_set_gives_the_coordinates_of_one_sample_at_a_time() {
+        let mut state = 3u64;
+        let mut t: Vec<f64> = (0..1000)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e4
+            })
+            .collect();
+        t.extend([0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e17, -1e17, 4.6e18, f64::INFINITY, f64::NAN, 1e300]);
+        for mode in [Mode::Repeat, Mode::Mirror, Mode::Clamp] {
+            let mut p = bw(mode);
+            (p.density, p.offset) = (0.37, 0.1);
+            let want: Vec<u64> = t.iter().map(|&x| p.coordinate(x).to_bits()).collect();
+            for level in SimdLevel::usable() {
+                let mut v = t.clone();
+                p.coordinates(level, &mut v);
+                assert_eq!(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want, "{mode:?} {level}");
+            }
+        }
+        // The branch-free floor is floor.
+        for x in t.iter().chain(&[2.5, -2.5, 3.0, -3.0, 0.9999999999999999, -1e-300]) {
+            assert_eq!(floor(*x).to_bits() & !(1 << 63), x.floor().to_bits() & !(1 << 63), "{x}");
+        }
     }
 
     #[test]

@@ -436,7 +436,7 @@ pub fn render<P: Send>(
         let prepared = prepare(&done).map_err(RenderError::Sink)?;
         Ok((done, prepared))
     };
-    let local = Context::default();
+    let local = Context { simd: options.simd, ..Context::default() };
 
     let (tx, rx) = mpsc::sync_channel::<(RenderedStrip, P)>(threads);
     let result = std::thread::scope(|s| {
@@ -466,7 +466,7 @@ pub fn render<P: Send>(
                     let done: Result<Vec<_>, RenderError> = chunk.par_iter().map(field_of).collect();
                     fields.extend(done?);
                 }
-                let ctx = scene.stack.context(fields.iter().map(|(_, _, p)| p));
+                let ctx = Context { simd: options.simd, ..scene.stack.context(fields.iter().map(|(_, _, p)| p)) };
                 let mut fields = fields.into_iter();
                 loop {
                     let chunk: Vec<_> = fields.by_ref().take(window).collect();
