@@ -34,20 +34,27 @@ struct Tables {
     /// 255 is NaN, which no value reaches, so code 255 needs no test of its own and a code
     /// indexes the table without a bounds check.
     encode: [f32; 256],
-    /// Code at the start of each of `BUCKETS` equal steps of [0, 1], and at 1. Neighbouring
-    /// code boundaries are at least 1/(255 * 12.92) ~ 3.0e-4 apart, wider than a bucket
-    /// (2.4e-4), so at most one boundary falls inside a bucket: one comparison finishes the
-    /// search.
-    start: [u8; BUCKETS + 1],
+    /// Code at the start of each bucket of f32 bit patterns from 0 to 1.0: bucket i holds
+    /// the values whose bits shifted right by [`SHIFT`] are i, 1/128 of a binade each.
+    /// Neighbouring code boundaries are further apart than that (relatively at least
+    /// 2.4 / 255 apart on the power curve, 1/k on the linear segment near code k), so at most
+    /// one boundary falls inside a bucket: one comparison finishes the search. Buckets by
+    /// bit pattern cost one shift where equal steps of [0, 1] cost a multiply and a
+    /// saturating float-to-integer conversion.
+    start: [u8; TOP + 1],
 }
 
-const BUCKETS: usize = 1 << 12;
+/// Bits dropped from an f32's pattern to find its bucket.
+const SHIFT: u32 = 16;
+/// The bucket of 1.0 (and of everything above it).
+const TOP: usize = (0x3f80_0000 >> SHIFT) as usize;
 
 fn tables() -> &'static Tables {
     static T: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
     T.get_or_init(|| {
         let bounds: [f32; 255] = std::array::from_fn(|k| srgb_to_linear((k as f32 + 0.5) / 255.0));
-        let start = std::array::from_fn(|b| bounds.partition_point(|&t| t <= b as f32 / BUCKETS as f32) as u8);
+        let start =
+            std::array::from_fn(|b| bounds.partition_point(|&t| t <= f32::from_bits((b as u32) << SHIFT)) as u8);
         let encode = std::array::from_fn(|k| bounds.get(k).copied().unwrap_or(f32::NAN));
         Tables { decode: std::array::from_fn(|k| srgb_to_linear(k as f32 / 255.0)), encode, start }
     })
@@ -80,11 +87,9 @@ impl Srgb8Encoder {
     /// The 8-bit sRGB code nearest to linear `v`; NaN and negatives give 0, >= 1 gives 255.
     #[inline(always)]
     pub fn encode(self, v: f32) -> u8 {
-        // clamp keeps NaN, and NaN as usize is 0: no branch is needed for either end.
-        // v * 2^12 is exact, so the bucket is floor(v * BUCKETS) exactly; `min` only tells
-        // the compiler what the clamp already ensures.
-        let k = self.0.start[((v.clamp(0.0, 1.0) * BUCKETS as f32) as usize).min(BUCKETS)];
-        // Code 255's entry is NaN: never above it (nor is a NaN v above anything).
+        // NaN, negatives and -0 become +0; above 1 every value falls in the top bucket.
+        let v = if v > 0.0 { v } else { 0.0 };
+        let k = self.0.start[((v.to_bits() >> SHIFT) as usize).min(TOP)];
         k + u8::from(v >= self.0.encode[k as usize])
     }
 }
@@ -156,6 +161,30 @@ pub fn parse_hex(text: &str) -> Option<[f32; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn encoding_agrees_with_a_search_of_the_boundaries_everywhere() {
+        // The code by binary search over the boundaries, for any f32.
+        let want = |v: f32| if v > 0.0 { tables().encode.partition_point(|&t| t <= v) as u8 } else { 0 };
+        let enc = Srgb8Encoder::get();
+        // Every boundary and its neighbours (where a bucket holding two would show), the
+        // first and last value of every bucket, and a sweep of bit patterns.
+        let mut bits: Vec<u32> = tables().encode[..255]
+            .iter()
+            .flat_map(|t| (-3i32..=3).map(move |d| t.to_bits().wrapping_add_signed(d)))
+            .collect();
+        bits.extend((0..=TOP as u32).flat_map(|b| [b << SHIFT, (b << SHIFT) | ((1 << SHIFT) - 1)]));
+        bits.extend((0..0x4000_0000u32).step_by(4099));
+        for b in bits {
+            let v = f32::from_bits(b);
+            assert_eq!(enc.encode(v), want(v), "{v:e} ({b:#x})");
+        }
+        for (v, code) in
+            [(f32::NAN, 0), (-f32::NAN, 0), (-0.0, 0), (-1.0, 0), (f32::INFINITY, 255), (f32::NEG_INFINITY, 0)]
+        {
+            assert_eq!(enc.encode(v), code, "{v}");
+        }
+    }
 
     #[test]
     fn round_trips() {
