@@ -162,12 +162,14 @@ impl Stack {
             });
             return out;
         }
-        let Some(base) = self.blend(planes, aa, ctx) else { return vec![bg; planes.len()] };
         // The base is opaque (background first), so its pixels need no demultiplying.
-        base.pixels()
-            .iter()
-            .map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())])
-            .collect()
+        self.blend(planes, aa, ctx, |base| {
+            base.pixels()
+                .iter()
+                .map(|p| [srgb8_to_linear(p.red()), srgb8_to_linear(p.green()), srgb8_to_linear(p.blue())])
+                .collect()
+        })
+        .unwrap_or_else(|| vec![bg; planes.len()])
     }
 
     /// The composited samples as 8-bit sRGB bytes (R, G, B per sample), exactly what
@@ -189,10 +191,14 @@ impl Stack {
             });
             return out;
         }
-        match self.blend(planes, 1, ctx) {
-            Some(base) => base.pixels().iter().flat_map(|p| [p.red(), p.green(), p.blue()]).collect(),
-            None => bg.map(linear_to_srgb8).repeat(planes.len()),
-        }
+        self.blend(planes, 1, ctx, |base| {
+            let mut out = Vec::with_capacity(planes.len() * 3);
+            for p in base.data().chunks_exact(4) {
+                out.extend_from_slice(&p[..3]);
+            }
+            out
+        })
+        .unwrap_or_else(|| bg.map(linear_to_srgb8).repeat(planes.len()))
     }
 
     /// The one layer of a stack that needs no blending, if that is what the stack is.
@@ -204,14 +210,40 @@ impl Stack {
     }
 
     /// Every layer blended by tiny-skia over the background, in premultiplied sRGB bytes.
-    fn blend(&self, planes: &Planes, aa: u32, ctx: &Context) -> Option<Pixmap> {
-        let bg = self.background;
+    /// Blends the layers over the background into an opaque pixmap and hands it to `read`
+    /// (None for an empty raster). The two pixmaps are the thread's own, kept from strip to
+    /// strip (every pixel of both is written before it is read), so a strip allocates,
+    /// zeroes and page-faults none.
+    fn blend<R>(&self, planes: &Planes, aa: u32, ctx: &Context, read: impl FnOnce(&Pixmap) -> R) -> Option<R> {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<Vec<Pixmap>> = const { std::cell::RefCell::new(Vec::new()) };
+        }
         let (w, h) = (planes.width as u32, planes.rows as u32);
-        let mut base = Pixmap::new(w, h)?;
+        let take = || {
+            SCRATCH
+                .with_borrow_mut(|s| s.iter().position(|p| (p.width(), p.height()) == (w, h)).map(|i| s.swap_remove(i)))
+                .or_else(|| Pixmap::new(w, h))
+        };
+        let (mut base, mut layer) = (take()?, take()?);
+        self.blend_into(planes, aa, ctx, &mut base, &mut layer);
+        let out = read(&base);
+        SCRATCH.with_borrow_mut(|s| {
+            // Two per thread at most (strips of one size; a different size replaces them).
+            s.retain(|p| (p.width(), p.height()) == (w, h));
+            s.extend([base, layer]);
+            let extra = s.len().saturating_sub(2);
+            s.drain(..extra);
+        });
+        Some(out)
+    }
+
+    /// [`Stack::blend`] into the given pixmaps (of the planes' size; their contents do not
+    /// matter): the result in `base`.
+    fn blend_into(&self, planes: &Planes, aa: u32, ctx: &Context, base: &mut Pixmap, layer_pixmap: &mut Pixmap) {
+        let bg = self.background;
         let bg8 = tiny_skia::Color::from_rgba(linear_to_srgb(bg[0]), linear_to_srgb(bg[1]), linear_to_srgb(bg[2]), 1.0)
             .unwrap_or(tiny_skia::Color::BLACK);
         base.fill(bg8);
-        let mut layer_pixmap = Pixmap::new(w, h)?;
         let enc = Srgb8Encoder::get();
         for (i, layer) in self.layers.iter().enumerate() {
             let dst = layer_pixmap.data_mut();
@@ -235,7 +267,7 @@ impl Stack {
             // An opaque bottom layer drawn normally covers the background exactly: source
             // over an opaque pixel is the pixel, so the layer becomes the base as it is.
             if i == 0 && opaque && layer.blend == BlendMode::Normal && layer.opacity == 1.0 {
-                std::mem::swap(&mut base, &mut layer_pixmap);
+                std::mem::swap(base, layer_pixmap);
                 continue;
             }
             let paint = PixmapPaint {
@@ -245,7 +277,6 @@ impl Stack {
             };
             base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
         }
-        Some(base)
     }
 }
 
