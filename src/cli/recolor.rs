@@ -131,7 +131,7 @@ fn write_coloured(
                 Ok(Some(read_s))
             } else {
                 let ctx = Context::default();
-                data.for_each_strip(|k, p| drop(tx.send((k, colour(&p, &ctx))))).map(|()| None)
+                data.for_each_strip_lent(|k, p| drop(tx.send((k, colour(p, &ctx))))).map(|()| None)
             }
         });
         drop(tx);

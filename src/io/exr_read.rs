@@ -13,9 +13,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use ::exr::block::UncompressedBlock;
-use ::exr::block::chunk::Chunk;
+use ::exr::block::chunk::{Chunk, CompressedBlock};
 use ::exr::block::reader::{AllChunksReader, ChunksReader};
+use ::exr::block::{BlockIndex, UncompressedBlock};
+use ::exr::compression::Compression;
 use ::exr::math::Vec2;
 use ::exr::meta::BlockDescription;
 use ::exr::meta::MetaData;
@@ -25,6 +26,7 @@ use rayon::prelude::*;
 
 use super::IoError;
 use super::exr::SCENE_ATTRIBUTE;
+use super::exr_rle::RleScratch;
 use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
 
 /// What a raw-data EXR's header says: enough to check that a scene fits the data before
@@ -144,14 +146,33 @@ impl ExrStrips {
     /// no particular order, every strip exactly once when the result is `Ok`. A damaged
     /// file stops the decoding at its first fault (some strips may have been handed on).
     pub fn for_each_strip(self, done: impl Fn(usize, Planes) + Sync) -> Result<(), IoError> {
+        self.strips(&|k, planes| {
+            done(k, planes);
+            None
+        })
+    }
+
+    /// [`ExrStrips::for_each_strip`], lending each strip to `done` instead of giving it:
+    /// once `done` returns, the strip's planes are filled again with a later strip's rows,
+    /// so reading allocates a few strips' planes in all, not one per strip (no zeroing and
+    /// no page faults per strip).
+    pub fn for_each_strip_lent(self, done: impl Fn(usize, &Planes) + Sync) -> Result<(), IoError> {
+        self.strips(&|k, planes| {
+            done(k, &planes);
+            Some(planes)
+        })
+    }
+
+    /// The strips, each handed to `done`, which may hand the planes back for reuse.
+    fn strips(self, done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync)) -> Result<(), IoError> {
         match self.source {
             Source::Whole(strips) => {
-                strips.into_par_iter().enumerate().for_each(|(k, p)| done(k, p));
+                strips.into_par_iter().enumerate().for_each(|(k, p)| drop(done(k, p)));
                 Ok(())
             }
             Source::Blocks { chunks, slots, line_bytes } => {
                 let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
-                decode_blocks(*chunks, &layout, &done).map_err(|e| IoError::new(&self.path, e))
+                decode_blocks(*chunks, &layout, done).map_err(|e| IoError::new(&self.path, e))
             }
         }
     }
@@ -329,6 +350,24 @@ struct Layout<'a> {
 }
 
 impl Layout<'_> {
+    /// Planes for a strip of `rows` rows: handed-back planes of that size where `spare` holds
+    /// some (every plane is overwritten line by line, but for a bitmap trap's colour plane,
+    /// whose RGBA channels the file may hold only some of: that is zeroed), else new ones.
+    fn planes_from(&self, rows: usize, spare: &Mutex<Vec<Planes>>) -> Planes {
+        let reused = {
+            let mut spare = lock(spare);
+            let i = spare.iter().position(|p| p.rows == rows);
+            i.map(|i| spare.swap_remove(i))
+        };
+        let Some(mut planes) = reused else { return self.planes(rows) };
+        for t in &mut planes.traps {
+            if let TrapPlane::Color(v) = t {
+                v.fill([0.0; 4]);
+            }
+        }
+        planes
+    }
+
     /// Empty planes for a strip of `rows` rows (zeroed allocations: the pages are touched
     /// only as the lines arrive).
     fn planes(&self, rows: usize) -> Planes {
@@ -420,10 +459,11 @@ type Fault = Mutex<Option<String>>;
 fn decode_blocks(
     chunks: AllChunksReader<BufReader<File>>,
     layout: &Layout<'_>,
-    done: &(impl Fn(usize, Planes) + Sync),
+    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
 ) -> Result<(), String> {
     let (height, rows_per) = (layout.header.height, layout.rows_per);
     let meta = chunks.meta_data().clone();
+    let spare = Mutex::new(Vec::new());
     let pending: Vec<Mutex<Pending>> = (0..height.div_ceil(rows_per)).map(|_| Mutex::new(Pending::default())).collect();
     let fault: Fault = Mutex::new(None);
     let failed = AtomicBool::new(false);
@@ -433,7 +473,7 @@ fn decode_blocks(
         failed.store(true, Ordering::Relaxed);
         lock(&fault).get_or_insert(message);
     };
-    let (meta, pending, fail, in_flight) = (&meta, &pending, &fail, &in_flight);
+    let (meta, pending, fail, in_flight, spare) = (&meta, &pending, &fail, &in_flight, &spare);
     rayon::scope(|s| {
         for chunk in chunks {
             if failed.load(Ordering::Relaxed) {
@@ -454,7 +494,7 @@ fn decode_blocks(
             in_flight.fetch_add(1, Ordering::AcqRel);
             s.spawn(move |_| {
                 let _counted = Leaving(in_flight);
-                if let Err(e) = decode_block(chunk, meta, layout, pending, done) {
+                if let Err(e) = decode_block(chunk, meta, layout, pending, spare, done) {
                     fail(e);
                 }
             });
@@ -487,19 +527,62 @@ fn decode_block(
     meta: &MetaData,
     layout: &Layout<'_>,
     pending: &[Mutex<Pending>],
-    done: &(impl Fn(usize, Planes) + Sync),
+    spare: &Mutex<Vec<Planes>>,
+    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
 ) -> Result<(), String> {
-    let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
-    let index = block.index;
+    let header = meta.headers.get(chunk.layer_index).ok_or("a block of a part the file does not have")?;
+    if header.compression != Compression::RLE {
+        let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
+        return place_lines(block.index, &block.data, layout, pending, spare, done);
+    }
+    // RLE (what deepfield writes): decoded here, into buffers the thread keeps.
+    thread_local! {
+        static SCRATCH: std::cell::RefCell<RleScratch> = std::cell::RefCell::default();
+    }
+    let err = |e: ::exr::error::Error| e.to_string();
+    let tile = header.get_block_data_indices(&chunk.compressed_block).map_err(err)?;
+    let bounds = header.get_absolute_block_pixel_coordinates(tile).map_err(err)?;
+    bounds.validate(Some(header.layer_size)).map_err(err)?;
+    let CompressedBlock::ScanLine(block) = &chunk.compressed_block else {
+        return Err("a tile in a scan-line file".into());
+    };
+    let index = BlockIndex {
+        layer: chunk.layer_index,
+        pixel_position: bounds.position.to_usize("block position").map_err(err)?,
+        level: tile.level_index,
+        pixel_size: bounds.size,
+    };
+    let expected = bounds.size.area() * header.channels.bytes_per_pixel;
+    // Taken out of the thread's slot while in use: colouring a finished strip (inside
+    // `done`) may run another block's task on this thread.
+    let mut scratch = SCRATCH.take();
+    let placed = match scratch.decompress(&block.compressed_pixels_le, expected) {
+        Ok(data) => place_lines(index, data, layout, pending, spare, done),
+        Err(e) => Err(e.to_string()),
+    };
+    SCRATCH.set(scratch);
+    placed
+}
+
+/// Puts the lines of a decompressed block into their strips and hands on the strips it
+/// completes.
+fn place_lines(
+    index: BlockIndex,
+    data: &[u8],
+    layout: &Layout<'_>,
+    pending: &[Mutex<Pending>],
+    spare: &Mutex<Vec<Planes>>,
+    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
+) -> Result<(), String> {
     let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
     if index.layer != 0 || index.level != Vec2(0, 0) {
         return Ok(());
     }
     let lines = index.pixel_size.1;
-    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * layout.line_bytes {
+    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || data.len() != lines * layout.line_bytes {
         return Err("a scan-line block of the wrong size".into());
     }
-    for (l, line) in block.data.chunks_exact(layout.line_bytes).enumerate() {
+    for (l, line) in data.chunks_exact(layout.line_bytes).enumerate() {
         let y = index.pixel_position.1 + l;
         if y >= height {
             return Err("a scan line outside the data window".into());
@@ -510,7 +593,7 @@ fn decode_block(
             let mut p = lock(&pending[k]);
             if p.seen.is_empty() {
                 p.seen = vec![false; rows];
-                p.planes = Some(layout.planes(rows));
+                p.planes = Some(layout.planes_from(rows, spare));
             }
             if std::mem::replace(&mut p.seen[row], true) {
                 return Err(format!("scan line {y} appears twice"));
@@ -520,8 +603,8 @@ fn decode_block(
             p.count += 1;
             if p.count == rows { p.planes.take() } else { None }
         };
-        if let Some(planes) = complete {
-            done(k, planes);
+        if let Some(back) = complete.and_then(|planes| done(k, planes)) {
+            lock(spare).push(back);
         }
     }
     Ok(())
@@ -610,9 +693,16 @@ mod tests {
 
     /// A file with every kind of channel the reader maps (u32 N, f16 NF, f32 DEX, a colour
     /// trap, a distance trap as u32) and one it skips, ZIP-compressed in 16-line blocks over
-    /// 37 rows: the block path and the whole-image path read the same planes.
+    /// 37 rows, and RLE-compressed in 1-line blocks (decoded by our own decoder on the block
+    /// path, by the exr crate's on the whole-image path): the two paths read the same planes.
     #[test]
     fn block_and_whole_image_readers_agree() {
+        for compression in [Compression::ZIP16, Compression::RLE, Compression::Uncompressed] {
+            readers_agree(compression);
+        }
+    }
+
+    fn readers_agree(compression: Compression) {
         let (w, h) = (7usize, 37usize);
         let k = |x: usize, y: usize| (y * w + x) as f32;
         let channels = SpecificChannels::build()
@@ -642,11 +732,11 @@ mod tests {
         let mut layer = Layer::new(
             (w, h),
             LayerAttributes::named("deepfield"),
-            Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
+            Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
             channels,
         );
         layer.attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from("version = 1")));
-        let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}.exr", std::process::id()));
+        let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}-{compression:?}.exr", std::process::id()));
         Image::from_layer(layer).write().to_file(&path).unwrap();
         for rows in [1, 5, 32] {
             let file = File::open(&path).unwrap();
@@ -657,6 +747,13 @@ mod tests {
             let whole = read_whole_image(&path, rows).unwrap();
             assert_eq!(fast.strips, whole.strips, "{rows} rows per strip");
             assert_eq!(fast.header, whole.header);
+            // Lent strips, whose planes are refilled for later strips, read the same.
+            let reader = ::exr::block::read(BufReader::new(File::open(&path).unwrap()), false).unwrap();
+            let open = open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file");
+            let lent: Vec<Mutex<Option<Planes>>> = whole.strips.iter().map(|_| Mutex::new(None)).collect();
+            open.for_each_strip_lent(|k, p| *lock(&lent[k]) = Some(p.clone())).unwrap();
+            let lent: Vec<Planes> = lent.into_iter().map(|m| m.into_inner().unwrap().expect("every strip")).collect();
+            assert_eq!(lent, whole.strips, "{rows} rows per strip, lent");
             let h0 = &fast.header;
             assert_eq!((h0.width, h0.height, &h0.scene), (w, h, &Some("version = 1".to_string())));
             assert_eq!(h0.traps, [TrapKind::Color, TrapKind::Distance]);

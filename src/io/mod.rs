@@ -9,6 +9,7 @@ mod atomic;
 mod bitmap;
 mod exr;
 mod exr_read;
+mod exr_rle;
 pub mod output;
 mod png;
 mod scene_source;
