@@ -13,10 +13,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use ::exr::block::chunk::{Chunk, CompressedBlock};
+use ::exr::block::chunk::Chunk;
 use ::exr::block::reader::{AllChunksReader, ChunksReader};
 use ::exr::block::{BlockIndex, UncompressedBlock};
-use ::exr::compression::Compression;
 use ::exr::math::Vec2;
 use ::exr::meta::BlockDescription;
 use ::exr::meta::MetaData;
@@ -26,7 +25,6 @@ use rayon::prelude::*;
 
 use super::IoError;
 use super::exr::SCENE_ATTRIBUTE;
-use super::exr_rle::RleScratch;
 use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
 
 /// What a raw-data EXR's header says: enough to check that a scene fits the data before
@@ -530,38 +528,8 @@ fn decode_block(
     spare: &Mutex<Vec<Planes>>,
     done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
 ) -> Result<(), String> {
-    let header = meta.headers.get(chunk.layer_index).ok_or("a block of a part the file does not have")?;
-    if header.compression != Compression::RLE {
-        let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
-        return place_lines(block.index, &block.data, layout, pending, spare, done);
-    }
-    // RLE (what deepfield writes): decoded here, into buffers the thread keeps.
-    thread_local! {
-        static SCRATCH: std::cell::RefCell<RleScratch> = std::cell::RefCell::default();
-    }
-    let err = |e: ::exr::error::Error| e.to_string();
-    let tile = header.get_block_data_indices(&chunk.compressed_block).map_err(err)?;
-    let bounds = header.get_absolute_block_pixel_coordinates(tile).map_err(err)?;
-    bounds.validate(Some(header.layer_size)).map_err(err)?;
-    let CompressedBlock::ScanLine(block) = &chunk.compressed_block else {
-        return Err("a tile in a scan-line file".into());
-    };
-    let index = BlockIndex {
-        layer: chunk.layer_index,
-        pixel_position: bounds.position.to_usize("block position").map_err(err)?,
-        level: tile.level_index,
-        pixel_size: bounds.size,
-    };
-    let expected = bounds.size.area() * header.channels.bytes_per_pixel;
-    // Taken out of the thread's slot while in use: colouring a finished strip (inside
-    // `done`) may run another block's task on this thread.
-    let mut scratch = SCRATCH.take();
-    let placed = match scratch.decompress(&block.compressed_pixels_le, expected) {
-        Ok(data) => place_lines(index, data, layout, pending, spare, done),
-        Err(e) => Err(e.to_string()),
-    };
-    SCRATCH.set(scratch);
-    placed
+    let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
+    place_lines(block.index, &block.data, layout, pending, spare, done)
 }
 
 /// Puts the lines of a decompressed block into their strips and hands on the strips it
@@ -693,8 +661,8 @@ mod tests {
 
     /// A file with every kind of channel the reader maps (u32 N, f16 NF, f32 DEX, a colour
     /// trap, a distance trap as u32) and one it skips, ZIP-compressed in 16-line blocks over
-    /// 37 rows, and RLE-compressed in 1-line blocks (decoded by our own decoder on the block
-    /// path, by the exr crate's on the whole-image path): the two paths read the same planes.
+    /// 37 rows, RLE-compressed in 1-line blocks and uncompressed: the two paths read the same
+    /// planes.
     #[test]
     fn block_and_whole_image_readers_agree() {
         for compression in [Compression::ZIP16, Compression::RLE, Compression::Uncompressed] {

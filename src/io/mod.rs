@@ -9,7 +9,6 @@ mod atomic;
 mod bitmap;
 mod exr;
 mod exr_read;
-mod exr_rle;
 pub mod output;
 mod png;
 mod scene_source;
