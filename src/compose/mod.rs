@@ -254,7 +254,14 @@ impl Stack {
                     // Every sample opaque (most layers): three codes and 255 each, in one
                     // tight loop (what `to_premultiplied_srgb8` gives at alpha 1).
                     for (o, c) in out.chunks_exact_mut(4).zip(run) {
-                        o.copy_from_slice(&[enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255]);
+                        // Grey layers (slope, distance without a palette) encode one value.
+                        let code = if c[0] == c[1] && c[1] == c[2] {
+                            let g = enc.encode(c[0]);
+                            [g, g, g, 255]
+                        } else {
+                            [enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255]
+                        };
+                        o.copy_from_slice(&code);
                     }
                     return;
                 }
