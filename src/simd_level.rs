@@ -176,6 +176,39 @@ impl SimdChoice {
     }
 }
 
+/// Checks for run-wise kernels written as plain loops under pulp's dispatch.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::SimdLevel;
+
+    /// `n` numbers uniform in [0, 1), pseudo-random from `seed` (a fixed generator: every
+    /// run and platform sees the same).
+    pub(crate) fn uniform(seed: u64, n: usize) -> Vec<f64> {
+        let mut state = seed;
+        (0..n)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            })
+            .collect()
+    }
+
+    /// `all` over `inputs` at every level this CPU runs gives `one` of each input, bit for bit.
+    pub(crate) fn every_level_matches(
+        inputs: &[f64],
+        one: impl Fn(f64) -> f64,
+        all: impl Fn(SimdLevel, &mut [f64]),
+        what: &str,
+    ) {
+        let want: Vec<u64> = inputs.iter().map(|&x| one(x).to_bits()).collect();
+        for level in SimdLevel::usable() {
+            let mut v = inputs.to_vec();
+            all(level, &mut v);
+            assert_eq!(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want, "{what} {level}");
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

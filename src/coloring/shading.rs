@@ -114,6 +114,7 @@ impl Light {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd_level::testing::{every_level_matches, uniform};
 
     #[test]
     fn soft_distance_is_quilez_s_fifth_root() {
@@ -126,24 +127,13 @@ mod tests {
 
     #[test]
     fn every_instruction_set_gives_the_values_of_one_sample_at_a_time() {
-        let mut state = 7u64;
-        let mut d: Vec<f64> = (0..1000)
-            .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                // Distances from 1e-12 to 1e6 pixels.
-                10f64.powf((state >> 11) as f64 / (1u64 << 53) as f64 * 18.0 - 12.0)
-            })
-            .collect();
+        // Distances from 1e-12 to 1e6 pixels, and the edges.
+        let mut d: Vec<f64> = uniform(7, 1000).into_iter().map(|u| 10f64.powf(u * 18.0 - 12.0)).collect();
         d.extend([0.0, 1.0, 1.0 / 32.0, f64::INFINITY, f64::NAN, 1e-320]);
         for style in
             [DistanceStyle::Soft { k: 8.0 }, DistanceStyle::Soft { k: 0.01 }, DistanceStyle::Log { density: 0.3 }]
         {
-            let want: Vec<u64> = d.iter().map(|&x| style.value(x).to_bits()).collect();
-            for level in SimdLevel::usable() {
-                let mut v = d.clone();
-                style.values(level, &mut v);
-                assert_eq!(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want, "{style:?} {level}");
-            }
+            every_level_matches(&d, |x| style.value(x), |l, v| style.values(l, v), &format!("{style:?}"));
         }
     }
 

@@ -78,25 +78,15 @@ impl Transfer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd_level::testing::{every_level_matches, uniform};
 
     #[test]
     fn every_instruction_set_gives_the_values_of_one_sample_at_a_time() {
-        let mut state = 11u64;
-        let mut nu: Vec<f64> = (0..1000)
-            .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                // Smooth iteration counts from 1e-3 to 4e9.
-                10f64.powf((state >> 11) as f64 / (1u64 << 53) as f64 * 12.6 - 3.0)
-            })
-            .collect();
+        // Smooth iteration counts from 1e-3 to 4e9, and the edges.
+        let mut nu: Vec<f64> = uniform(11, 1000).into_iter().map(|u| 10f64.powf(u * 12.6 - 3.0)).collect();
         nu.extend([0.0, -1.0, 1.0, 4294967295.0, 1e-17, f64::NAN]);
         for (t, name) in Transfer::ALL {
-            let want: Vec<u64> = nu.iter().map(|&x| t.apply(x).to_bits()).collect();
-            for level in SimdLevel::usable() {
-                let mut v = nu.clone();
-                t.apply_all(level, &mut v);
-                assert_eq!(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want, "{name} {level}");
-            }
+            every_level_matches(&nu, |x| t.apply(x), |l, v| t.apply_all(l, v), name);
         }
     }
 

@@ -323,6 +323,7 @@ fn finish(space: Space, mix: [f32; 3], a: Stop, b: Stop, w: f32) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd_level::testing::{every_level_matches, uniform};
 
     fn bw(mode: Mode) -> Palette {
         let stops =
@@ -332,23 +333,12 @@ mod tests {
 
     #[test]
     fn every_instruction_set_gives_the_coordinates_of_one_sample_at_a_time() {
-        let mut state = 3u64;
-        let mut t: Vec<f64> = (0..1000)
-            .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e4
-            })
-            .collect();
+        let mut t: Vec<f64> = uniform(3, 1000).into_iter().map(|u| (u - 0.5) * 1e4).collect();
         t.extend([0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e17, -1e17, 4.6e18, f64::INFINITY, f64::NAN, 1e300]);
         for mode in [Mode::Repeat, Mode::Mirror, Mode::Clamp] {
             let mut p = bw(mode);
             (p.density, p.offset) = (0.37, 0.1);
-            let want: Vec<u64> = t.iter().map(|&x| p.coordinate(x).to_bits()).collect();
-            for level in SimdLevel::usable() {
-                let mut v = t.clone();
-                p.coordinates(level, &mut v);
-                assert_eq!(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), want, "{mode:?} {level}");
-            }
+            every_level_matches(&t, |x| p.coordinate(x), |l, v| p.coordinates(l, v), &format!("{mode:?}"));
         }
         // The branch-free floor is floor.
         for x in t.iter().chain(&[2.5, -2.5, 3.0, -3.0, 0.9999999999999999, -1e-300]) {
