@@ -30,8 +30,9 @@ use crate::simd_level::SimdLevel;
 pub struct Context {
     /// Distribution of escape counts (for histogram colouring).
     pub histogram: Option<Histogram>,
-    /// The instruction set the arithmetic passes (transfers, distance styles) run with: the
-    /// same bits at every level (default: the widest this CPU has).
+    /// The instruction set the arithmetic passes (transfers, distance styles, palette
+    /// coordinates) run with: the same bits at every level (default: the widest this CPU
+    /// has).
     pub simd: SimdLevel,
 }
 
@@ -396,7 +397,7 @@ pub const RUN: usize = 64;
 /// of the run, `then` over those values as a whole, `colour` from each, then `sink` with
 /// the run's colours. Each pass is a short loop of independent iterations, so the core
 /// overlaps many samples' palette lookups, and the arithmetic passes (a transfer, a
-/// distance style: branch-free loops over the run) vectorise; one pass per sample chains
+/// distance style, palette coordinates: branch-free loops over the run) vectorise; one pass per sample chains
 /// everything and waits on each (two-layer 4K recolour, one thread: colour and write
 /// 0.88–0.95 s in one pass, 0.63–0.71 s with the transfer and the sink in passes of their
 /// own). The bytes do not change.

@@ -209,9 +209,8 @@ impl Stack {
         }
     }
 
-    /// Every layer blended by tiny-skia over the background, in premultiplied sRGB bytes.
-    /// Blends the layers over the background into an opaque pixmap and hands it to `read`
-    /// (None for an empty raster). The two pixmaps are the thread's own, kept from strip to
+    /// Every layer blended by tiny-skia over the background, in premultiplied sRGB bytes:
+    /// an opaque pixmap, handed to `read` (None for an empty raster). The two pixmaps are the thread's own, kept from strip to
     /// strip (every pixel of both is written before it is read), so a strip allocates,
     /// zeroes and page-faults none.
     fn blend<R>(&self, planes: &Planes, aa: u32, ctx: &Context, read: impl FnOnce(&Pixmap) -> R) -> Option<R> {

@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
+use ::exr::block::UncompressedBlock;
 use ::exr::block::chunk::Chunk;
 use ::exr::block::reader::{AllChunksReader, ChunksReader};
-use ::exr::block::{BlockIndex, UncompressedBlock};
 use ::exr::math::Vec2;
 use ::exr::meta::BlockDescription;
 use ::exr::meta::MetaData;
@@ -529,19 +529,7 @@ fn decode_block(
     done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
 ) -> Result<(), String> {
     let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
-    place_lines(block.index, &block.data, layout, pending, spare, done)
-}
-
-/// Puts the lines of a decompressed block into their strips and hands on the strips it
-/// completes.
-fn place_lines(
-    index: BlockIndex,
-    data: &[u8],
-    layout: &Layout<'_>,
-    pending: &[Mutex<Pending>],
-    spare: &Mutex<Vec<Planes>>,
-    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-) -> Result<(), String> {
+    let (index, data) = (block.index, &block.data);
     let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
     if index.layer != 0 || index.level != Vec2(0, 0) {
         return Ok(());
