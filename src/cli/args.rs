@@ -236,6 +236,9 @@ pub struct RecolorArgs {
     /// Worker threads (default: one per core). Output does not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
+    /// Vector instruction set of the colouring's arithmetic (output does not depend on it).
+    #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
+    pub simd: Option<String>,
     /// Print the time spent reading, colouring and writing.
     #[arg(long)]
     pub stats: bool,

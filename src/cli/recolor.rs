@@ -17,6 +17,7 @@ use deepfield::io::{ExrStrips, PngEncoder, PngWriter, RawHeader, TrapKind};
 use deepfield::render;
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
+use deepfield::simd_level::SimdLevel;
 use deepfield::trap::Trap;
 
 use super::Failure;
@@ -33,6 +34,7 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
     if abs(&out) == abs(&args.data) || args.scene.as_deref().is_some_and(|s| abs(s) == abs(&out)) {
         return Err(Failure::Input(anyhow!("-o {} would overwrite an input; choose another name", out.display())));
     }
+    let simd = super::simd_level(args.simd.as_deref())?;
     let data = ExrStrips::open(&args.data, 32).map_err(Failure::input)?;
     let (origin, text, base) = match &args.scene {
         Some(path) => super::scene::read_source(path)?,
@@ -69,18 +71,19 @@ pub fn run(args: RecolorArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Runtime(e.into()))?;
     let png =
         PngWriter::create(&out, scene.width, scene.height, scene.png_bits, &scene.to_toml()).map_err(Failure::input)?;
-    let read_s = write_coloured(&scene, data, &pool, png)?;
+    let read_s = write_coloured(&scene, data, &pool, png, simd)?;
     if args.stats {
         let read = match read_s {
             Some(s) => format!("read {s:.3} s, then colour and write"),
             None => "read, colour and write (streamed)".into(),
         };
         let line = format!(
-            "{read}: {:.3} s in all ({} x {} pixels, {} layers)\n",
+            "{read}: {:.3} s in all ({} x {} pixels, {} layers; simd {})\n",
             t0.elapsed().as_secs_f64(),
             scene.width,
             scene.height,
             scene.stack.layers.len(),
+            simd.describe(),
         );
         std::io::stdout().lock().write_all(line.as_bytes()).map_err(|e| Failure::Runtime(e.into()))?;
     }
@@ -99,6 +102,7 @@ fn write_coloured(
     data: ExrStrips,
     pool: &rayon::ThreadPool,
     mut png: PngWriter,
+    simd: SimdLevel,
 ) -> Result<Option<f64>, Failure> {
     use rayon::prelude::*;
     let enc = PngEncoder::new(scene.png_bits);
@@ -126,11 +130,11 @@ fn write_coloured(
                 let t = Instant::now();
                 let raw = data.collect()?;
                 let read_s = t.elapsed().as_secs_f64();
-                let ctx = render::context(&scene.stack, &raw.strips);
+                let ctx = Context { simd, ..render::context(&scene.stack, &raw.strips) };
                 raw.strips.par_iter().enumerate().for_each(|(k, p)| drop(tx.send((k, colour(p, &ctx)))));
                 Ok(Some(read_s))
             } else {
-                let ctx = Context::default();
+                let ctx = Context { simd, ..Context::default() };
                 data.for_each_strip_lent(|k, p| drop(tx.send((k, colour(p, &ctx))))).map(|()| None)
             }
         });

@@ -382,6 +382,25 @@ fn same_bytes_on_every_simd_level_this_cpu_has() {
             assert!(*bytes == pngs[0].1, "{name}: --simd {level} differs from scalar");
         }
     }
+    // Recolouring: the colouring's vectorised passes (a log transfer, the soft distance's
+    // fifth root, palette coordinates) at every level give the render's bytes.
+    let dir = scratch("cli-simd-recolor");
+    let looks = "[[layer]]\nkind = \"smooth\"\ntransfer = \"log\"\ndensity = 0.7\n[[layer]]\nkind = \"distance\"\nblend = \"multiply\"\nopacity = 0.6\n";
+    write(&dir, "scene.toml", &format!("{SMALL}{looks}"));
+    let o = deepfield(&["render", "scene.toml", "--simd", "scalar", "-o", "render.png", "--exr", "data.exr"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let want = std::fs::read(dir.join("render.png")).unwrap();
+    for level in &levels {
+        let png = format!("recolor-{}.png", level.name());
+        let o = deepfield(&["recolor", "data.exr", "--simd", level.name(), "--stats", "-o", &png], &dir);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains(level.describe()), "recolor --simd {}", level.name());
+        assert!(
+            std::fs::read(dir.join(&png)).unwrap() == want,
+            "recolor --simd {} differs from the render",
+            level.name()
+        );
+    }
 }
 
 fn same_bytes(name: &str, scene: &str) {
