@@ -40,7 +40,7 @@ impl Transfer {
         match self {
             Transfer::Linear => nu,
             Transfer::Sqrt => nu.sqrt(),
-            Transfer::Cbrt => nu.cbrt(),
+            Transfer::Cbrt => fastmath::cbrt(nu),
             Transfer::Log => fastmath::ln_1p(nu),
             Transfer::LogLog => fastmath::ln_1p(fastmath::ln_1p(nu)),
         }
@@ -54,7 +54,14 @@ impl Transfer {
         match self {
             Transfer::Linear => v.iter_mut().for_each(|x| *x = x.max(0.0)),
             Transfer::Sqrt => v.iter_mut().for_each(|x| *x = x.max(0.0).sqrt()),
-            Transfer::Cbrt => v.iter_mut().for_each(|x| *x = x.max(0.0).cbrt()),
+            Transfer::Cbrt => arch.dispatch(
+                #[inline(always)]
+                || {
+                    for x in v.iter_mut() {
+                        *x = fastmath::cbrt(x.max(0.0));
+                    }
+                },
+            ),
             Transfer::Log => arch.dispatch(
                 #[inline(always)]
                 || {
