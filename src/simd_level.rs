@@ -123,6 +123,22 @@ impl SimdLevel {
         SimdLevel::usable().into_iter().max_by_key(|l| l.f64_lanes()).unwrap_or(SimdLevel::Scalar)
     }
 
+    /// Replaces every value of `v` by `f` of it, in a loop compiled under this level's
+    /// features (pulp's dispatch), which the compiler vectorises where `f` is branch-free
+    /// arithmetic: the run-wise form of colouring's per-sample functions. `f` is inlined
+    /// into the loop, so every level computes the same operations in the same order.
+    #[inline(always)]
+    pub fn map(self, v: &mut [f64], f: impl Fn(f64) -> f64) {
+        self.arch().dispatch(
+            #[inline(always)]
+            || {
+                for x in v.iter_mut() {
+                    *x = f(*x);
+                }
+            },
+        )
+    }
+
     /// pulp's dispatcher for this level (scalar if the CPU cannot run it; levels are checked
     /// where they are chosen, [`SimdChoice::resolve`]).
     pub(crate) fn arch(self) -> pulp::Arch {

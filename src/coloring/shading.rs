@@ -33,35 +33,18 @@ impl DistanceStyle {
     /// The value for distance `d` (pixels, >= 0).
     #[inline(always)]
     pub fn value(self, d: f64) -> f64 {
-        match self {
-            DistanceStyle::Soft { k } => soft(k, d),
-            DistanceStyle::Linear { density } => d * density,
-            DistanceStyle::Log { density } => fastmath::ln_1p(d) * density,
-        }
+        let mut v = [d];
+        self.values(SimdLevel::Scalar, &mut v);
+        v[0]
     }
 
     /// [`DistanceStyle::value`] of every distance of a run, in place, under `simd`'s
-    /// instruction set (see [`super::Transfer::apply_all`]): the same bits at every width.
+    /// instruction set ([`SimdLevel::map`]): the same bits at every width.
     pub fn values(self, simd: SimdLevel, v: &mut [f64]) {
-        let arch = simd.arch();
         match self {
-            DistanceStyle::Soft { k } => arch.dispatch(
-                #[inline(always)]
-                || {
-                    for d in v.iter_mut() {
-                        *d = soft(k, *d);
-                    }
-                },
-            ),
-            DistanceStyle::Linear { density } => v.iter_mut().for_each(|d| *d *= density),
-            DistanceStyle::Log { density } => arch.dispatch(
-                #[inline(always)]
-                || {
-                    for d in v.iter_mut() {
-                        *d = fastmath::ln_1p(*d) * density;
-                    }
-                },
-            ),
+            DistanceStyle::Soft { k } => simd.map(v, |d| soft(k, d)),
+            DistanceStyle::Linear { density } => simd.map(v, |d| d * density),
+            DistanceStyle::Log { density } => simd.map(v, |d| fastmath::ln_1p(d) * density),
         }
     }
 }

@@ -36,48 +36,22 @@ impl Transfer {
     /// Applies the transfer to nu (negative values count as 0).
     #[inline(always)]
     pub fn apply(self, nu: f64) -> f64 {
-        let nu = nu.max(0.0);
-        match self {
-            Transfer::Linear => nu,
-            Transfer::Sqrt => nu.sqrt(),
-            Transfer::Cbrt => fastmath::cbrt(nu),
-            Transfer::Log => fastmath::ln_1p(nu),
-            Transfer::LogLog => fastmath::ln_1p(fastmath::ln_1p(nu)),
-        }
+        let mut v = [nu];
+        self.apply_all(SimdLevel::Scalar, &mut v);
+        v[0]
     }
 
-    /// [`Transfer::apply`] to every value of a run, in place, under `simd`'s instruction set:
-    /// a loop with no branch inside, which vectorises at that width. The functions are IEEE
-    /// operations in a fixed order, so every width gives [`Transfer::apply`]'s bits.
+    /// [`Transfer::apply`] to every value of a run, in place, under `simd`'s instruction set
+    /// ([`SimdLevel::map`]): a loop with no branch inside, which vectorises at that width.
+    /// The functions are IEEE operations in a fixed order, so every width gives the same
+    /// bits.
     pub fn apply_all(self, simd: SimdLevel, v: &mut [f64]) {
-        let arch = simd.arch();
         match self {
-            Transfer::Linear => v.iter_mut().for_each(|x| *x = x.max(0.0)),
-            Transfer::Sqrt => v.iter_mut().for_each(|x| *x = x.max(0.0).sqrt()),
-            Transfer::Cbrt => arch.dispatch(
-                #[inline(always)]
-                || {
-                    for x in v.iter_mut() {
-                        *x = fastmath::cbrt(x.max(0.0));
-                    }
-                },
-            ),
-            Transfer::Log => arch.dispatch(
-                #[inline(always)]
-                || {
-                    for x in v.iter_mut() {
-                        *x = fastmath::ln_1p(x.max(0.0));
-                    }
-                },
-            ),
-            Transfer::LogLog => arch.dispatch(
-                #[inline(always)]
-                || {
-                    for x in v.iter_mut() {
-                        *x = fastmath::ln_1p(fastmath::ln_1p(x.max(0.0)));
-                    }
-                },
-            ),
+            Transfer::Linear => simd.map(v, |x| x.max(0.0)),
+            Transfer::Sqrt => simd.map(v, |x| x.max(0.0).sqrt()),
+            Transfer::Cbrt => simd.map(v, |x| fastmath::cbrt(x.max(0.0))),
+            Transfer::Log => simd.map(v, |x| fastmath::ln_1p(x.max(0.0))),
+            Transfer::LogLog => simd.map(v, |x| fastmath::ln_1p(fastmath::ln_1p(x.max(0.0)))),
         }
     }
 }

@@ -210,9 +210,9 @@ impl Stack {
     }
 
     /// Every layer blended by tiny-skia over the background, in premultiplied sRGB bytes:
-    /// an opaque pixmap, handed to `read` (None for an empty raster). The two pixmaps are the thread's own, kept from strip to
-    /// strip (every pixel of both is written before it is read), so a strip allocates,
-    /// zeroes and page-faults none.
+    /// an opaque pixmap, handed to `read` (None for an empty raster). The two pixmaps are
+    /// the thread's own, kept from strip to strip (every pixel of both is written before it
+    /// is read), so a strip allocates, zeroes and page-faults none.
     fn blend<R>(&self, planes: &Planes, aa: u32, ctx: &Context, read: impl FnOnce(&Pixmap) -> R) -> Option<R> {
         thread_local! {
             static SCRATCH: std::cell::RefCell<Vec<Pixmap>> = const { std::cell::RefCell::new(Vec::new()) };
@@ -226,12 +226,10 @@ impl Stack {
         let (mut base, mut layer) = (take()?, take()?);
         self.blend_into(planes, aa, ctx, &mut base, &mut layer);
         let out = read(&base);
+        // The last strip's two are what the thread keeps (a strip of another size replaces them).
         SCRATCH.with_borrow_mut(|s| {
-            // Two per thread at most (strips of one size; a different size replaces them).
-            s.retain(|p| (p.width(), p.height()) == (w, h));
+            s.clear();
             s.extend([base, layer]);
-            let extra = s.len().saturating_sub(2);
-            s.drain(..extra);
         });
         Some(out)
     }
@@ -253,14 +251,8 @@ impl Stack {
                     // Every sample opaque (most layers): three codes and 255 each, in one
                     // tight loop (what `to_premultiplied_srgb8` gives at alpha 1).
                     for (o, c) in out.chunks_exact_mut(4).zip(run) {
-                        // Grey layers (slope, distance without a palette) encode one value.
-                        let code = if c[0] == c[1] && c[1] == c[2] {
-                            let g = enc.encode(c[0]);
-                            [g, g, g, 255]
-                        } else {
-                            [enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2]), 255]
-                        };
-                        o.copy_from_slice(&code);
+                        let [r, g, b] = opaque_srgb8(*c, enc);
+                        o.copy_from_slice(&[r, g, b, 255]);
                     }
                     return;
                 }
@@ -286,6 +278,17 @@ impl Stack {
     }
 }
 
+/// The sRGB codes of an opaque sample's colour. Grey layers (slope, distance without a
+/// palette) encode one value, not three.
+#[inline(always)]
+fn opaque_srgb8(c: [f32; 4], enc: Srgb8Encoder) -> [u8; 3] {
+    if c[0] == c[1] && c[1] == c[2] {
+        [enc.encode(c[0]); 3]
+    } else {
+        [enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2])]
+    }
+}
+
 /// Linear premultiplied RGBA to tiny-skia's premultiplied sRGB-encoded bytes.
 #[inline(always)]
 fn to_premultiplied_srgb8(c: [f32; 4], enc: Srgb8Encoder) -> PremultipliedColorU8 {
@@ -295,12 +298,7 @@ fn to_premultiplied_srgb8(c: [f32; 4], enc: Srgb8Encoder) -> PremultipliedColorU
     }
     let a8 = (a * 255.0 + 0.5) as u8;
     if a8 == 255 {
-        // Grey layers (slope, distance without a palette) encode one value, not three.
-        let [r, g, b] = if c[0] == c[1] && c[1] == c[2] {
-            [enc.encode(c[0]); 3]
-        } else {
-            [enc.encode(c[0]), enc.encode(c[1]), enc.encode(c[2])]
-        };
+        let [r, g, b] = opaque_srgb8(c, enc);
         return PremultipliedColorU8::from_rgba(r, g, b, 255).unwrap_or(PremultipliedColorU8::TRANSPARENT);
     }
     let scale = a8 as f32 / 255.0;

@@ -529,16 +529,16 @@ fn decode_block(
     done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
 ) -> Result<(), String> {
     let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
-    let (index, data) = (block.index, &block.data);
+    let index = block.index;
     let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
     if index.layer != 0 || index.level != Vec2(0, 0) {
         return Ok(());
     }
     let lines = index.pixel_size.1;
-    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || data.len() != lines * layout.line_bytes {
+    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * layout.line_bytes {
         return Err("a scan-line block of the wrong size".into());
     }
-    for (l, line) in data.chunks_exact(layout.line_bytes).enumerate() {
+    for (l, line) in block.data.chunks_exact(layout.line_bytes).enumerate() {
         let y = index.pixel_position.1 + l;
         if y >= height {
             return Err("a scan line outside the data window".into());
@@ -694,20 +694,20 @@ mod tests {
         layer.attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from("version = 1")));
         let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}-{compression:?}.exr", std::process::id()));
         Image::from_layer(layer).write().to_file(&path).unwrap();
+        let open = |rows: usize| {
+            let reader = ::exr::block::read(BufReader::new(File::open(&path).unwrap()), false).unwrap();
+            open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file")
+        };
         for rows in [1, 5, 32] {
-            let file = File::open(&path).unwrap();
-            let reader = ::exr::block::read(BufReader::new(file), false).unwrap();
-            let open = open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file");
-            assert!(matches!(open.source, Source::Blocks { .. }));
-            let fast = open.collect().unwrap();
+            let strips = open(rows);
+            assert!(matches!(strips.source, Source::Blocks { .. }));
+            let fast = strips.collect().unwrap();
             let whole = read_whole_image(&path, rows).unwrap();
             assert_eq!(fast.strips, whole.strips, "{rows} rows per strip");
             assert_eq!(fast.header, whole.header);
             // Lent strips, whose planes are refilled for later strips, read the same.
-            let reader = ::exr::block::read(BufReader::new(File::open(&path).unwrap()), false).unwrap();
-            let open = open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file");
             let lent: Vec<Mutex<Option<Planes>>> = whole.strips.iter().map(|_| Mutex::new(None)).collect();
-            open.for_each_strip_lent(|k, p| *lock(&lent[k]) = Some(p.clone())).unwrap();
+            open(rows).for_each_strip_lent(|k, p| *lock(&lent[k]) = Some(p.clone())).unwrap();
             let lent: Vec<Planes> = lent.into_iter().map(|m| m.into_inner().unwrap().expect("every strip")).collect();
             assert_eq!(lent, whole.strips, "{rows} rows per strip, lent");
             let h0 = &fast.header;

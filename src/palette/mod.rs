@@ -214,21 +214,11 @@ impl Palette {
     }
 
     /// [`Palette::coordinate`] of every position of a run, in place, under `simd`'s
-    /// instruction set: a loop with no branch inside for the repeating and clamped modes,
-    /// which vectorises (exact operations: the same bits at every width).
+    /// instruction set ([`SimdLevel::map`]): branch-free for the repeating and clamped
+    /// modes, so the loop vectorises (exact operations: the same bits at every width).
     pub fn coordinates(&self, simd: SimdLevel, v: &mut [f64]) {
         let (mode, density, offset) = (self.mode, self.density, self.offset);
-        match mode {
-            Mode::Mirror => v.iter_mut().for_each(|t| *t = coordinate(mode, density, offset, *t)),
-            _ => simd.arch().dispatch(
-                #[inline(always)]
-                || {
-                    for t in v.iter_mut() {
-                        *t = coordinate(mode, density, offset, *t);
-                    }
-                },
-            ),
-        }
+        simd.map(v, |t| coordinate(mode, density, offset, t));
     }
 
     /// The colour at a table coordinate from [`Palette::coordinate`]: the two neighbouring
