@@ -4,10 +4,13 @@
 //! [`super::square`].
 //!
 //! Each column k is the sum of the products a_i a_(k-i), i < k - i, doubled, plus a_(k/2)^2
-//! when k is even: the off-diagonal products run through two u128 accumulators, each with
-//! a carry counter (so a column of any length is exact in 192 bits), which the compiler
-//! turns into one 64 x 64 -> 128-bit multiply and three additions with carry per product,
-//! two independent chains in flight. There are (64 / 26)^2, about six, times fewer
+//! when k is even: the off-diagonal products run through a u128 accumulator with a carry
+//! counter (so a column of any length is exact in 192 bits), which the compiler turns into
+//! one 64 x 64 -> 128-bit multiply and three additions with carry per product. Columns are
+//! taken two at a time (2m and 2m + 1 multiply the same a_i by neighbouring limbs): two
+//! independent chains in flight, each limb loaded once for two products, and half the
+//! per-column bookkeeping, which on the short columns of a 60-limb square was a third of
+//! the instructions. There are (64 / 26)^2, about six, times fewer
 //! products than with 26-bit digits, no conversion to digits and back, and no vector
 //! instructions: the same bits on every CPU. The digits' vector multiplies overtake it past
 //! about 10000 bits on AVX2 (`cargo bench --bench reference`).
@@ -34,41 +37,24 @@ pub fn end_column(n: usize) -> usize {
     2 * n - 1
 }
 
-/// The sum of x_q y_(len-1-q) over q: the products of one column's off-diagonal pairs, as
-/// 192 bits (low, middle, high).
+/// Adds a 128-bit product to a 192-bit sum kept as a u128 and a count of its carries.
 #[inline(always)]
-fn dot(x: &[u64], y: &[u64]) -> [u64; 3] {
-    let (mut s0, mut s1) = (0u128, 0u128);
-    let (mut t0, mut t1) = (0u64, 0u64);
-    for (xa, ya) in x.chunks_exact(2).zip(y.rchunks_exact(2)) {
-        let (v0, c0) = s0.overflowing_add(xa[0] as u128 * ya[1] as u128);
-        let (v1, c1) = s1.overflowing_add(xa[1] as u128 * ya[0] as u128);
-        (s0, s1) = (v0, v1);
-        t0 += c0 as u64;
-        t1 += c1 as u64;
-    }
-    if x.len() % 2 == 1 {
-        let (v, c) = s0.overflowing_add(x[x.len() - 1] as u128 * y[0] as u128);
-        s0 = v;
-        t0 += c as u64;
-    }
-    let (s, c) = s0.overflowing_add(s1);
-    [s as u64, (s >> 64) as u64, t0 + t1 + c as u64]
+fn accumulate(s: &mut (u128, u64), p: u128) {
+    let (v, c) = s.0.overflowing_add(p);
+    s.0 = v;
+    s.1 += c as u64;
 }
 
-/// Column k of a^2: twice its off-diagonal products plus the diagonal one, in 192 bits.
+/// A sum from [`accumulate`] as 192 bits (low, middle, high).
 #[inline(always)]
-fn column(a: &[u64], k: usize) -> [u64; 3] {
-    let n = a.len();
-    let lo = k.saturating_sub(n - 1);
-    let hi = k.div_ceil(2);
-    let [s0, s1, s2] = if hi > lo { dot(&a[lo..hi], &a[k + 1 - hi..=k - lo]) } else { [0; 3] };
-    let doubled = [s0 << 1, (s1 << 1) | (s0 >> 63), (s2 << 1) | (s1 >> 63)];
-    if k % 2 == 1 {
-        return doubled;
-    }
-    let d = a[k / 2] as u128 * a[k / 2] as u128;
-    add3(doubled, [d as u64, (d >> 64) as u64, 0])
+fn words(s: (u128, u64)) -> [u64; 3] {
+    [s.0 as u64, (s.0 >> 64) as u64, s.1]
+}
+
+/// 2 s in 192 bits (the off-diagonal products count twice).
+#[inline(always)]
+fn doubled([s0, s1, s2]: [u64; 3]) -> [u64; 3] {
+    [s0 << 1, (s1 << 1) | (s0 >> 63), (s2 << 1) | (s1 >> 63)]
 }
 
 /// a + b in 192 bits (mod 2^192).
@@ -80,6 +66,46 @@ fn add3(a: [u64; 3], b: [u64; 3]) -> [u64; 3] {
     [v0, v1, a[2].wrapping_add(b[2]).wrapping_add((c1 | c2) as u64)]
 }
 
+/// The diagonal product a_i^2 as 192 bits.
+#[inline(always)]
+fn diagonal(a: &[u64], i: usize) -> [u64; 3] {
+    let d = a[i] as u128 * a[i] as u128;
+    [d as u64, (d >> 64) as u64, 0]
+}
+
+/// Columns 2m and 2m + 1 of a^2 together, each as 192 bits. They pair the same a_i with
+/// neighbouring limbs (a_(2m-i) and a_(2m+1-i)), so one pass over i loads each limb once
+/// for two products and keeps two independent carry chains in flight; column 2m + 1 has
+/// one more pair (a_m a_(m+1)), and column 2m one more where it reaches the top limb.
+#[inline(always)]
+fn pair(a: &[u64], m: usize) -> ([u64; 3], [u64; 3]) {
+    let n = a.len();
+    // Column 2m + 1's first i (its partner a_(2m+1-i) is at most a_(n-1)).
+    let lo = (2 * m + 2).saturating_sub(n);
+    let (mut even, mut odd) = ((0u128, 0u64), (0u128, 0u64));
+    for (&x, y) in a[lo..m].iter().zip(a[m + 1..=2 * m + 1 - lo].windows(2).rev()) {
+        accumulate(&mut even, x as u128 * y[0] as u128);
+        accumulate(&mut odd, x as u128 * y[1] as u128);
+    }
+    accumulate(&mut odd, a[m] as u128 * a[m + 1] as u128);
+    if lo > 0 {
+        accumulate(&mut even, a[lo - 1] as u128 * a[n - 1] as u128);
+    }
+    (add3(doubled(words(even)), diagonal(a, m)), doubled(words(odd)))
+}
+
+/// Column k of a^2 alone (where a range starts or ends between pairs), as 192 bits.
+#[inline(always)]
+fn column(a: &[u64], k: usize) -> [u64; 3] {
+    let n = a.len();
+    let mut s = (0u128, 0u64);
+    for i in k.saturating_sub(n - 1)..k.div_ceil(2) {
+        accumulate(&mut s, a[i] as u128 * a[k - i] as u128);
+    }
+    let s = doubled(words(s));
+    if k % 2 == 1 { s } else { add3(s, diagonal(a, k / 2)) }
+}
+
 /// Columns `cols` of the square of `a` (n limbs), with no carry coming in from below:
 /// writes limb k - (n - 2) of `out` (limbs n - 2 .. 2n - 2 of the square, n + 1 of them) for
 /// every column k >= n - 2 in the range, and returns the carry out of the range's last
@@ -87,12 +113,26 @@ fn add3(a: [u64; 3], b: [u64; 3]) -> [u64; 3] {
 pub fn columns(a: &[u64], cols: Range<usize>, out: &mut [u64]) -> [u64; 2] {
     let base = a.len() - 2;
     let mut carry = [0u64; 2];
-    for k in cols {
-        let [v0, v1, v2] = add3(column(a, k), [carry[0], carry[1], 0]);
+    let mut put = |k: usize, v: [u64; 3]| {
+        let [v0, v1, v2] = add3(v, [carry[0], carry[1], 0]);
         if k >= base {
             out[k - base] = v0;
         }
         carry = [v1, v2];
+    };
+    let mut k = cols.start;
+    if k % 2 == 1 && k < cols.end {
+        put(k, column(a, k));
+        k += 1;
+    }
+    while k + 1 < cols.end {
+        let (even, odd) = pair(a, k / 2);
+        put(k, even);
+        put(k + 1, odd);
+        k += 2;
+    }
+    if k < cols.end {
+        put(k, column(a, k));
     }
     carry
 }
@@ -110,17 +150,22 @@ pub fn add_carry(n: usize, at: usize, carry: [u64; 2], out: &mut [u64]) {
     }
 }
 
-/// Where the columns of an n-limb square split between two threads: 60% of the products
-/// below, 40% above (the caller's thread, which takes the lower part, is also the one that
-/// runs the step's additions and stores the orbit; on the e1086 benchmark's 60 limbs 60/40
-/// beat 50/50 and 70/30), and at or above column n - 2 so that the carry lands in `out`.
+/// Per cent of a square's products that the lower part of a shared square takes. Each
+/// thread also squares one real whole, finishes the step and prepares the next; the caller's
+/// thread, which takes the lower part, also stores the orbit (`cargo bench --bench
+/// reference`, 2 threads, on the e1086 benchmark's 60 limbs).
+pub const LOWER_SHARE: usize = 45;
+
+/// Where the columns of an n-limb square split between two threads: [`LOWER_SHARE`] per
+/// cent of the products below, and at or above column n - 2 so that the carry lands in
+/// `out`.
 pub fn split(n: usize) -> usize {
     let cost = |k: usize| k.div_ceil(2).saturating_sub(k.saturating_sub(n - 1)) + 1;
     let cols = first_column(n)..end_column(n);
     let total: usize = cols.clone().map(cost).sum();
     let mut sum = 0;
     for k in cols {
-        if 5 * sum >= 3 * total {
+        if 100 * sum >= LOWER_SHARE * total {
             return k.max(n - 2);
         }
         sum += cost(k);
@@ -142,7 +187,8 @@ mod tests {
     use super::*;
 
     /// Against malachite's exact square: every kept limb but the lowest two agree exactly,
-    /// limb n - 1 to one unit, and two threads' halves joined give the bits of one pass.
+    /// limb n - 1 to one unit, and two threads' parts joined give the bits of one pass, wherever
+    /// they split (odd and even columns: the columns run in pairs).
     #[test]
     fn high_limbs_of_the_square_are_exact() {
         for n in [2usize, 3, 4, 5, 17, 59, 60, 61, 130, MAX_LIMBS] {
@@ -157,15 +203,16 @@ mod tests {
                 assert_eq!(out[2..], exact[n..2 * n - 1], "{n} limbs");
                 let diff = out[1].abs_diff(exact[n - 1]);
                 assert!(diff <= 1, "{n} limbs: limb n - 1 off by {diff}");
-                let mid = split(n);
-                let mut halves = vec![0; n + 1];
-                let carry = columns(&a, first_column(n)..mid, &mut halves);
-                let mut upper = vec![0; n + 1];
-                columns(&a, mid..end_column(n), &mut upper);
-                let from = mid - (n - 2);
-                halves[from..].copy_from_slice(&upper[from..]);
-                add_carry(n, mid, carry, &mut halves);
-                assert_eq!(halves, out, "{n} limbs: split at column {mid}");
+                for mid in (n - 2).max(first_column(n))..end_column(n) {
+                    let mut halves = vec![0; n + 1];
+                    let carry = columns(&a, first_column(n)..mid, &mut halves);
+                    let mut upper = vec![0; n + 1];
+                    columns(&a, mid..end_column(n), &mut upper);
+                    let from = mid - (n - 2);
+                    halves[from..].copy_from_slice(&upper[from..]);
+                    add_carry(n, mid, carry, &mut halves);
+                    assert_eq!(halves, out, "{n} limbs: split at column {mid}");
+                }
             }
         }
     }
