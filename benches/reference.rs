@@ -1,5 +1,5 @@
 //! Nanoseconds per reference-orbit iteration for each way deepfield can iterate it, at 1000,
-//! 4000 and 16000 bits: malachite-float (pure Rust floats), fixed point on machine words
+//! 2000, 4000 and 16000 bits (2000: near where a helper thread starts to pay): malachite-float (pure Rust floats), fixed point on machine words
 //! on one thread and shared with a helper thread (`orbit::fixed`), and MPFR through rug
 //! when built with `--features mpfr`.
 //!
@@ -46,7 +46,7 @@ fn main() {
         columns.iter().map(|c| format!("{c} ns/iteration")).collect::<Vec<_>>().join(" | ")
     );
     println!("|---|---|{}", "---|".repeat(columns.len()));
-    for (bits, steps) in [(1000u64, 40000u32), (4000, 10000), (16000, 1500)] {
+    for (bits, steps) in [(1000u64, 40000u32), (2000, 20000), (4000, 10000), (16000, 1500)] {
         let steps = (steps / scale).max(2);
         let c = parameter(bits);
         let zero = || [Float::from(0u32), Float::from(0u32)];

@@ -18,9 +18,12 @@
 //! Up to [`comba::MAX_LIMBS`] limbs the squares run on 64-bit limbs column by column
 //! ([`comba`]); beyond, on 26-bit digits in vector lanes ([`square`]), which overtake it
 //! there. The choice depends on the limb count only, so every instruction set gives the
-//! same bits. With a helper thread, the caller's thread squares x and the lower part of
-//! x + y (columns, or rows of digits), the helper squares y and the upper part, and the two
-//! parts of (x + y)^2 are joined exactly: the same bits as one thread. `cargo bench --bench
+//! same bits. With a helper thread, each thread keeps its own copy of the orbit: the
+//! caller's thread squares x and the lower part of (x + y)^2 (columns, or rows of digits),
+//! the helper squares y and the upper part, each publishes what it computed and takes the
+//! other's, and both join the parts exactly and finish the same step: the same bits as one
+//! thread, with one hand-over each way per step, made at the same moment (a request and an
+//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step). `cargo bench --bench
 //! reference` compares this with malachite-float (and MPFR through rug with the `mpfr`
 //! feature) at 1000, 4000 and 16000 bits.
 
@@ -70,12 +73,11 @@ enum Kernel {
     Digits { layout: Layout, mid: usize },
 }
 
-/// A squaring's scratch: the digits, column sums and carry of a square in progress.
+/// A squaring's scratch: the digits and column sums of a square in progress.
 #[derive(Debug, Clone)]
 struct Scratch {
     digits: Vec<u32>,
     acc: Vec<u64>,
-    carry: [u64; 2],
 }
 
 impl Kernel {
@@ -93,13 +95,13 @@ impl Kernel {
             Kernel::Limbs { .. } => (Vec::new(), Vec::new()),
             Kernel::Digits { layout, .. } => (vec![0; layout.digit_len()], vec![0; layout.columns()]),
         };
-        Scratch { digits, acc, carry: [0; 2] }
+        Scratch { digits, acc }
     }
 
-    /// Words of the upper part of a shared square ([`Kernel::upper`]).
-    fn upper_len(self) -> usize {
+    /// Words of a part of a shared square ([`Kernel::part`]).
+    fn part_len(self) -> usize {
         match self {
-            Kernel::Limbs { n, .. } => n + 1,
+            Kernel::Limbs { n, .. } => n + 3,
             Kernel::Digits { layout, .. } => layout.columns(),
         }
     }
@@ -112,45 +114,43 @@ impl Kernel {
         }
     }
 
-    /// The lower part of a shared square of `a`: lower columns into `out` and the carry
-    /// into `w`, or the digits and lower rows' column sums into `w`.
-    fn lower(self, a: &[u64], w: &mut Scratch, out: &mut [u64], simd: SimdLevel) {
-        match self {
-            Kernel::Limbs { n, mid } => w.carry = comba::columns(a, comba::first_column(n)..mid, out),
-            Kernel::Digits { layout, mid } => {
-                square::digits(a, &mut w.digits);
-                w.acc.fill(0);
-                square::rows(layout, &w.digits, 0..mid, &mut w.acc, simd);
-            }
-        }
-    }
-
-    /// The upper part of a shared square of `a` into `up` ([`Kernel::upper_len`] words).
-    fn upper(self, a: &[u64], w: &mut Scratch, up: &mut [u64], simd: SimdLevel) {
+    /// One part of a square of `a` shared by two threads, into `part` ([`Kernel::part_len`]
+    /// words): the lower part (`upper` false) is the columns below the split, their limbs
+    /// and the carry out of them, or the column sums of the rows below the split; the upper
+    /// part the columns or rows from the split on.
+    fn part(self, upper: bool, a: &[u64], w: &mut Scratch, part: &mut [u64], simd: SimdLevel) {
         match self {
             Kernel::Limbs { n, mid } => {
-                comba::columns(a, mid..comba::end_column(n), up);
+                let (limbs, carry) = part.split_at_mut(n + 1);
+                if upper {
+                    comba::columns(a, mid..comba::end_column(n), limbs);
+                } else {
+                    carry.copy_from_slice(&comba::columns(a, comba::first_column(n)..mid, limbs));
+                }
             }
             Kernel::Digits { layout, mid } => {
                 square::digits(a, &mut w.digits);
-                up.fill(0);
-                square::rows(layout, &w.digits, mid..layout.m, up, simd);
+                part.fill(0);
+                let rows = if upper { mid..layout.m } else { 0..mid };
+                square::rows(layout, &w.digits, rows, part, simd);
             }
         }
     }
 
-    /// Joins the upper part `up` to the lower part in `w` and `out`: the square, exactly as
+    /// Joins the two parts of a shared square of `a` into `out`: the square, exactly as
     /// [`Kernel::square`] gives it.
-    fn join(self, w: &mut Scratch, up: &[u64], out: &mut [u64]) {
+    fn join(self, lower: &[u64], upper: &[u64], a: &[u64], w: &mut Scratch, out: &mut [u64]) {
         match self {
             Kernel::Limbs { n, mid } => {
                 let from = mid - (n - 2);
-                out[from..].copy_from_slice(&up[from..]);
-                comba::add_carry(n, mid, w.carry, out);
+                out[..from].copy_from_slice(&lower[..from]);
+                out[from..].copy_from_slice(&upper[from..n + 1]);
+                comba::add_carry(n, mid, [lower[n + 1], lower[n + 2]], out);
             }
             Kernel::Digits { layout, .. } => {
-                for (v, &u) in w.acc.iter_mut().zip(up) {
-                    *v += u;
+                square::digits(a, &mut w.digits);
+                for ((v, &l), &u) in w.acc.iter_mut().zip(lower).zip(upper) {
+                    *v = l + u;
                 }
                 square::finish(layout, &w.digits, &mut w.acc);
                 square::pack(layout, &w.acc, out);
@@ -172,8 +172,8 @@ struct Work {
     y2: Vec<u64>,
     s2: Vec<u64>,
     scratch: Scratch,
-    /// The helper's upper part of (x + y)^2, when a step is shared.
-    up: Vec<u64>,
+    /// The lower and upper parts of (x + y)^2, when a step is shared.
+    parts: [Vec<u64>; 2],
 }
 
 impl Work {
@@ -188,7 +188,7 @@ impl Work {
             y2: v(n + 1),
             s2: v(n + 1),
             scratch: kernel.scratch(),
-            up: v(kernel.upper_len()),
+            parts: [v(kernel.part_len()), v(kernel.part_len())],
         }
     }
 }
@@ -311,19 +311,69 @@ impl FixedOrbit {
         if share && self.n >= THREADED_LIMBS && cores >= 2 && rayon::current_num_threads() >= 2 {
             self.with_helper(body)
         } else {
-            body(&mut Stepper { orbit: self, shared: None })
+            body(&mut Stepper { orbit: self, shared: None, seq: 0 })
         }
     }
 
     /// Runs `body` with a stepper that always shares each step with a helper thread.
     pub fn with_helper<R>(&mut self, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        let shared = Shared::new(self.n, self.kernel, self.simd);
+        let shared = Shared::new(self.n, self.kernel);
+        let mut twin = self.clone();
         std::thread::scope(|s| {
-            s.spawn(|| shared.helper());
-            let result = body(&mut Stepper { orbit: self, shared: Some(&shared) });
+            s.spawn(|| {
+                let mut seq = 0;
+                loop {
+                    seq += 1;
+                    if !twin.shared_step(&shared, Role::Helper, seq) {
+                        return;
+                    }
+                }
+            });
+            let result = body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0 });
             shared.stop.store(true, Ordering::Release);
             result
         })
+    }
+
+    /// Step `seq` (from 1) shared with the other thread, which runs the same step on its own
+    /// copy of the orbit: this thread squares its real (x for the caller, y for the helper)
+    /// and its part of (x + y)^2, publishes them, takes the other's, and both finish the step
+    /// from the same squares, so the two copies stay the same bits. One hand-over each way
+    /// per step, both at once: no thread waits for a request before it starts. False when
+    /// the caller has stopped before this step.
+    fn shared_step(&mut self, sh: &Shared, role: Role, seq: u64) -> bool {
+        self.inputs();
+        let (k, simd, w) = (self.kernel, self.simd, &mut self.w);
+        let (me, other) = (role as usize, 1 - role as usize);
+        let (own, own_square, other_square) = match role {
+            Role::Caller => (&w.ax, &mut w.x2, &mut w.y2),
+            Role::Helper => (&w.ay, &mut w.y2, &mut w.x2),
+        };
+        k.square(own, &mut w.scratch, own_square, simd);
+        let [lower, upper] = &mut w.parts;
+        let (own_part, other_part) = match role {
+            Role::Caller => (lower, upper),
+            Role::Helper => (upper, lower),
+        };
+        k.part(role == Role::Helper, &w.asum, &mut w.scratch, own_part, simd);
+        // Each side's words alternate between two boxes by the step's parity: a box is
+        // written again two steps later, after its reader has answered the step between.
+        let slot = (seq % 2) as usize;
+        for (b, &v) in sh.boxes[me][slot].iter().zip(own_square.iter().chain(own_part.iter())) {
+            b.store(v, Ordering::Relaxed);
+        }
+        sh.done[me].0.store(seq, Ordering::Release);
+        wait(|| sh.done[other].0.load(Ordering::Acquire) >= seq || sh.stop.load(Ordering::Acquire));
+        if sh.done[other].0.load(Ordering::Acquire) < seq {
+            return false;
+        }
+        for (v, b) in other_square.iter_mut().chain(other_part.iter_mut()).zip(sh.boxes[other][slot].iter()) {
+            *v = b.load(Ordering::Relaxed);
+        }
+        let [lower, upper] = &w.parts;
+        k.join(lower, upper, &w.asum, &mut w.scratch, &mut w.s2);
+        self.finish();
+        true
     }
 }
 
@@ -331,6 +381,8 @@ impl FixedOrbit {
 pub struct Stepper<'a> {
     orbit: &'a mut FixedOrbit,
     shared: Option<&'a Shared>,
+    /// Steps taken, when shared.
+    seq: u64,
 }
 
 impl Stepper<'_> {
@@ -341,30 +393,24 @@ impl Stepper<'_> {
 
     /// One step, z <- z^2 + c.
     pub fn step(&mut self) {
-        let Some(sh) = self.shared else {
-            self.orbit.step();
-            return;
-        };
-        let n = self.orbit.n;
-        self.orbit.inputs();
-        let (k, simd, w) = (self.orbit.kernel, self.orbit.simd, &mut self.orbit.w);
-        // Hand |y| and |x + y| to the helper, then square |x| and the lower part of |x + y|
-        // here.
-        for (slot, &v) in sh.input.iter().zip(w.ay.iter().chain(&w.asum)) {
-            slot.store(v, Ordering::Relaxed);
+        match self.shared {
+            None => self.orbit.step(),
+            Some(sh) => {
+                self.seq += 1;
+                let stepped = self.orbit.shared_step(sh, Role::Caller, self.seq);
+                debug_assert!(stepped, "only the caller stops the helper");
+            }
         }
-        let seq = sh.seq.load(Ordering::Relaxed) + 1;
-        sh.seq.store(seq, Ordering::Release);
-        k.square(&w.ax, &mut w.scratch, &mut w.x2, simd);
-        k.lower(&w.asum, &mut w.scratch, &mut w.s2, simd);
-        wait(|| sh.done.load(Ordering::Acquire) == seq);
-        for (v, slot) in w.y2.iter_mut().chain(w.up.iter_mut()).zip(&sh.output) {
-            *v = slot.load(Ordering::Relaxed);
-        }
-        debug_assert_eq!(w.y2.len(), n + 1);
-        k.join(&mut w.scratch, &w.up, &mut w.s2);
-        self.orbit.finish();
     }
+}
+
+/// The two threads of a shared step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    /// The caller's thread: squares x and the lower part of (x + y)^2, and stores the orbit.
+    Caller = 0,
+    /// The helper: squares y and the upper part.
+    Helper = 1,
 }
 
 /// Spins until `ready` (the other thread answers within a fraction of a microsecond when
@@ -384,58 +430,27 @@ fn wait(ready: impl Fn() -> bool) {
     }
 }
 
-/// What the two threads exchange: inputs |y| and |x + y| (2n limbs), outputs y^2 (n + 1
-/// limbs) and the upper part of (x + y)^2 ([`Kernel::upper`]), and a step counter each way.
+/// A value alone on its cache lines (the two threads' step counters would otherwise share
+/// one, and every store to either would take it from the reader of the other).
+#[repr(align(128))]
+struct Line<T>(T);
+
+/// What the two threads exchange: each publishes its whole square (n + 1 words) and its part
+/// of (x + y)^2 ([`Kernel::part`]) in one of two boxes, and the last step it published.
 struct Shared {
-    n: usize,
-    kernel: Kernel,
-    simd: SimdLevel,
-    input: Vec<AtomicU64>,
-    output: Vec<AtomicU64>,
-    seq: AtomicU64,
-    done: AtomicU64,
+    /// By role, then by the step's parity.
+    boxes: [[Vec<AtomicU64>; 2]; 2],
+    done: [Line<AtomicU64>; 2],
     stop: AtomicBool,
 }
 
 impl Shared {
-    fn new(n: usize, kernel: Kernel, simd: SimdLevel) -> Shared {
-        let words = |k: usize| (0..k).map(|_| AtomicU64::new(0)).collect();
+    fn new(n: usize, kernel: Kernel) -> Shared {
+        let words = || (0..n + 1 + kernel.part_len()).map(|_| AtomicU64::new(0)).collect();
         Shared {
-            n,
-            kernel,
-            simd,
-            input: words(2 * n),
-            output: words(n + 1 + kernel.upper_len()),
-            seq: AtomicU64::new(0),
-            done: AtomicU64::new(0),
+            boxes: [[words(), words()], [words(), words()]],
+            done: [Line(AtomicU64::new(0)), Line(AtomicU64::new(0))],
             stop: AtomicBool::new(false),
-        }
-    }
-
-    /// The helper's loop: waits for a step's inputs, squares its share, publishes it.
-    fn helper(&self) {
-        let (n, k) = (self.n, self.kernel);
-        let (mut ay, mut asum) = (vec![0; n], vec![0; n]);
-        let mut y2 = vec![0; n + 1];
-        let mut up = vec![0; k.upper_len()];
-        let mut scratch = k.scratch();
-        let mut last = 0;
-        loop {
-            wait(|| self.seq.load(Ordering::Acquire) != last || self.stop.load(Ordering::Acquire));
-            let seq = self.seq.load(Ordering::Acquire);
-            if seq == last {
-                return;
-            }
-            last = seq;
-            for (v, slot) in ay.iter_mut().chain(asum.iter_mut()).zip(&self.input) {
-                *v = slot.load(Ordering::Relaxed);
-            }
-            k.square(&ay, &mut scratch, &mut y2, self.simd);
-            k.upper(&asum, &mut scratch, &mut up, self.simd);
-            for (slot, &v) in self.output.iter().zip(y2.iter().chain(&up)) {
-                slot.store(v, Ordering::Relaxed);
-            }
-            self.done.store(seq, Ordering::Release);
         }
     }
 }
