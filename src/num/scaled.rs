@@ -98,6 +98,28 @@ impl Scaled {
     pub fn to_fe(self) -> [FloatExp; 2] {
         [FloatExp::new(self.m[0], self.e), FloatExp::new(self.m[1], self.e)]
     }
+
+    /// A [`FloatExp`] pair, on the larger part's exponent (a part more than
+    /// [`ALIGN_LIMIT`] binades below it is below its last bit and becomes 0).
+    pub fn from_fe(v: [FloatExp; 2]) -> Scaled {
+        let e = match (v[0].is_zero(), v[1].is_zero()) {
+            (true, true) => return Scaled::ZERO,
+            (false, true) => v[0].exponent(),
+            (true, false) => v[1].exponent(),
+            (false, false) => v[0].exponent().max(v[1].exponent()),
+        };
+        let part = |x: FloatExp| {
+            let d = x.exponent().saturating_sub(e);
+            if x.is_zero() || d < -ALIGN_LIMIT { 0.0 } else { x.mantissa() * exp2i(d) }
+        };
+        Scaled::new([part(v[0]), part(v[1])], e)
+    }
+
+    /// The modulus.
+    #[inline(always)]
+    pub fn abs(self) -> FloatExp {
+        FloatExp::new((self.m[0] * self.m[0] + self.m[1] * self.m[1]).sqrt(), self.e)
+    }
 }
 
 impl Mul for Scaled {
@@ -174,6 +196,14 @@ mod tests {
             assert!(rel((x + y).to_fe(), sum) < 1e-15, "{a:?} + {b:?}");
             assert!(rel(x.ldexp(-77).to_fe(), [fx[0].ldexp(-77), fx[1].ldexp(-77)]) == 0.0);
         }
+        for (a, e) in [([1.5, -0.25], 3000), ([1e-30, 7.0], -2_000_000), ([-2.0, 0.0], 0), ([0.0, 1e-300], 9)] {
+            let f = fe(a, e);
+            assert!(rel(Scaled::from_fe(f).to_fe(), f) < 1e-15, "{a:?} from FloatExp");
+            let n = (f[0] * f[0] + f[1] * f[1]).sqrt();
+            assert!(((Scaled::from_fe(f).abs() - n) / n).to_f64().abs() < 1e-15, "|{a:?}|");
+        }
+        assert!(Scaled::from_fe([FloatExp::ZERO; 2]).is_zero());
+        assert!(Scaled::ZERO.abs().is_zero());
         let v = Scaled::from_f64([3.0, -0.125]) * Scaled::from_f64([0.5, 2.0]);
         assert_eq!(v.to_fe().map(|x| x.to_f64()), [1.75, 5.9375]);
         assert!((Scaled::ZERO + Scaled::ZERO).is_zero());
