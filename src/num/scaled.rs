@@ -100,7 +100,7 @@ impl Scaled {
     }
 
     /// A [`FloatExp`] pair, on the larger part's exponent (a part more than
-    /// [`ALIGN_LIMIT`] binades below it is below its last bit and becomes 0).
+    /// 120 binades below it is below its last bit and becomes 0).
     pub fn from_fe(v: [FloatExp; 2]) -> Scaled {
         let e = match (v[0].is_zero(), v[1].is_zero()) {
             (true, true) => return Scaled::ZERO,
