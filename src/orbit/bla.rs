@@ -317,14 +317,15 @@ impl<T: Real> BlaTable<T> {
 
 #[cfg(test)]
 mod tests {
+    use malachite_float::Float;
+    use std::sync::atomic::AtomicBool;
+
     use super::*;
     use crate::num::real::norm2;
 
     fn cabs(v: [FloatExp; 2]) -> FloatExp {
         norm2(v).sqrt()
     }
-    use malachite_float::Float;
-    use std::sync::atomic::AtomicBool;
 
     #[test]
     fn merged_step_matches_iterated_steps_to_second_order() {

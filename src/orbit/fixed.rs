@@ -23,9 +23,9 @@
 //! the helper squares y and the upper part, each publishes what it computed and takes the
 //! other's, and both join the parts exactly and finish the same step: the same bits as one
 //! thread, with one hand-over each way per step, made at the same moment (a request and an
-//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step). `cargo bench --bench
-//! reference` compares this with malachite-float (and MPFR through rug with the `mpfr`
-//! feature) at 1000, 4000 and 16000 bits.
+//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step).
+//! `cargo bench --bench reference` compares this with malachite-float (and MPFR through
+//! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -329,9 +329,10 @@ impl FixedOrbit {
                     }
                 }
             });
-            let result = body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0 });
-            shared.stop.store(true, Ordering::Release);
-            result
+            // Stops the helper however `body` ends (a panic too: the scope would otherwise
+            // wait for a helper waiting for a step that never comes).
+            let _stop = StopOnDrop(&shared.stop);
+            body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0 })
         })
     }
 
@@ -428,6 +429,15 @@ fn wait(ready: impl Fn() -> bool) {
         } else {
             std::thread::yield_now();
         }
+    }
+}
+
+/// Sets its flag when dropped.
+struct StopOnDrop<'a>(&'a AtomicBool);
+
+impl Drop for StopOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
     }
 }
 
@@ -581,6 +591,23 @@ mod tests {
                 }
             });
         }
+    }
+
+    /// A caller that panics between shared steps does not leave the helper waiting (the
+    /// scope would then never end): the panic reaches the caller.
+    #[test]
+    fn a_panic_between_shared_steps_stops_the_helper() {
+        let bits = 2000;
+        let c = [big(-0.75, bits), big(0.1, bits)];
+        let mut orbit =
+            FixedOrbit::new(&[big(0.0, bits), big(0.0, bits)], &c, bits, 65536.0, SimdLevel::Scalar).expect("in range");
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            orbit.with_helper(|s| {
+                s.step();
+                panic!("the caller's work failed");
+            })
+        }));
+        assert!(outcome.is_err());
     }
 
     #[test]
