@@ -27,6 +27,7 @@
 //! `cargo bench --bench reference` compares this with malachite-float (and MPFR through
 //! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use malachite_base::num::conversion::traits::RoundingFrom;
@@ -101,8 +102,22 @@ impl Kernel {
     /// Words of a part of a shared square ([`Kernel::part`]).
     fn part_len(self) -> usize {
         match self {
+            // n + 1 limbs, and room for the lower part's carry after its last limb.
             Kernel::Limbs { n, .. } => n + 3,
             Kernel::Digits { layout, .. } => layout.columns(),
+        }
+    }
+
+    /// The words of a part that hold something (the rest is the other part's): what a
+    /// shared step hands over.
+    fn part_words(self, upper: bool) -> Range<usize> {
+        match self {
+            // The lower columns' limbs end at `from`, and their carry follows them.
+            Kernel::Limbs { n, mid } => {
+                let from = mid - (n - 2);
+                if upper { from..n + 1 } else { 0..from + 2 }
+            }
+            Kernel::Digits { layout, .. } => 0..layout.columns(),
         }
     }
 
@@ -121,11 +136,12 @@ impl Kernel {
     fn part(self, upper: bool, a: &[u64], w: &mut Scratch, part: &mut [u64], simd: SimdLevel) {
         match self {
             Kernel::Limbs { n, mid } => {
-                let (limbs, carry) = part.split_at_mut(n + 1);
                 if upper {
-                    comba::columns(a, mid..comba::end_column(n), limbs);
+                    comba::columns(a, mid..comba::end_column(n), part);
                 } else {
-                    carry.copy_from_slice(&comba::columns(a, comba::first_column(n)..mid, limbs));
+                    let carry = comba::columns(a, comba::first_column(n)..mid, part);
+                    let from = mid - (n - 2);
+                    part[from..from + 2].copy_from_slice(&carry);
                 }
             }
             Kernel::Digits { layout, mid } => {
@@ -145,7 +161,7 @@ impl Kernel {
                 let from = mid - (n - 2);
                 out[..from].copy_from_slice(&lower[..from]);
                 out[from..].copy_from_slice(&upper[from..n + 1]);
-                comba::add_carry(n, mid, [lower[n + 1], lower[n + 2]], out);
+                comba::add_carry(n, mid, [lower[from], lower[from + 1]], out);
             }
             Kernel::Digits { layout, .. } => {
                 square::digits(a, &mut w.digits);
@@ -360,7 +376,8 @@ impl FixedOrbit {
         // Each side's words alternate between two boxes by the step's parity: a box is
         // written again two steps later, after its reader has answered the step between.
         let slot = (seq % 2) as usize;
-        for (b, &v) in sh.boxes[me][slot].iter().zip(own_square.iter().chain(own_part.iter())) {
+        let (mine, theirs) = (k.part_words(role == Role::Helper), k.part_words(role == Role::Caller));
+        for (b, &v) in sh.boxes[me][slot].iter().zip(own_square.iter().chain(&own_part[mine])) {
             b.store(v, Ordering::Relaxed);
         }
         sh.done[me].0.store(seq, Ordering::Release);
@@ -368,7 +385,7 @@ impl FixedOrbit {
         if sh.done[other].0.load(Ordering::Acquire) < seq {
             return false;
         }
-        for (v, b) in other_square.iter_mut().chain(other_part.iter_mut()).zip(sh.boxes[other][slot].iter()) {
+        for (v, b) in other_square.iter_mut().chain(&mut other_part[theirs]).zip(sh.boxes[other][slot].iter()) {
             *v = b.load(Ordering::Relaxed);
         }
         let [lower, upper] = &w.parts;
