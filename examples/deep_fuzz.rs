@@ -10,8 +10,8 @@
 //!
 //! Flags: `--seed S` (default 1), `--seconds T` (default 60), `--count N` (stop after N
 //! views), `--out DIR` (default `fuzz-failures`), `--pixels K` (sampled pixels per view,
-//! default 24), `--size WxH` (default 64x48), `--max-depth D` (log10 of the deepest zoom,
-//! default 2000), `--max-iter N` (default 1000000), `--kinds a,b` (default all:
+//! default 24), `--size WxH` (default 64x48), `--min-depth D` and `--max-depth D` (log10 of the
+//! shallowest and deepest zoom, default 15 and 2000), `--max-iter N` (default 1000000), `--kinds a,b` (default all:
 //! descent, minibrot, misiurewicz, early-escape, floatexp-line, julia).
 #![allow(clippy::print_stdout)] // printing the findings is the point
 
@@ -29,6 +29,7 @@ struct Flags {
     out: std::path::PathBuf,
     pixels: u32,
     size: (u32, u32),
+    min_depth: f64,
     max_depth: f64,
     max_iter: u32,
     kinds: Vec<ViewKind>,
@@ -42,6 +43,7 @@ fn flags() -> Result<Flags, String> {
         out: "fuzz-failures".into(),
         pixels: 24,
         size: (64, 48),
+        min_depth: 15.0,
         max_depth: 2000.0,
         max_iter: 1_000_000,
         kinds: ViewKind::ALL.to_vec(),
@@ -57,6 +59,7 @@ fn flags() -> Result<Flags, String> {
             "--count" => f.count = value()?.parse().map_err(|_| bad(a))?,
             "--out" => f.out = value()?.into(),
             "--pixels" => f.pixels = value()?.parse().map_err(|_| bad(a))?,
+            "--min-depth" => f.min_depth = value()?.parse().map_err(|_| bad(a))?,
             "--max-depth" => f.max_depth = value()?.parse().map_err(|_| bad(a))?,
             "--max-iter" => f.max_iter = value()?.parse().map_err(|_| bad(a))?,
             "--size" => {
@@ -98,13 +101,14 @@ fn main() {
     let mut draw = 0u32;
     while checked < f.count && start.elapsed().as_secs_f64() < f.seconds {
         let kind = f.kinds[draw as usize % f.kinds.len()];
-        // Depths log-uniform from 1e15 to the deepest asked (minibrot descents stop sooner
+        // Depths log-uniform from the shallowest to the deepest asked (minibrot descents stop sooner
         // where their periods grow past what the check can iterate).
         let top = match kind {
             ViewKind::Misiurewicz | ViewKind::Julia => f.max_depth,
             _ => f.max_depth.min(400.0),
         };
-        let depth = 10f64.powf(rng.uniform(15f64.log10(), top.max(16.0).log10()));
+        let bottom = f.min_depth.max(1.0);
+        let depth = 10f64.powf(rng.uniform(bottom.log10(), top.max(bottom + 1.0).log10()));
         let spec = ViewSpec { kind, log10_zoom: depth, max_iter: f.max_iter, width: f.size.0, height: f.size.1 };
         draw += 1;
         let Some(view) = views::generate(f.seed, draw, &spec) else { continue };

@@ -8,7 +8,7 @@
 #   scripts/fuzz-deep.sh [SECONDS] [OUT] [EXTRA FLAGS...]   # default 600 s, fuzz-failures/
 #
 # Extra flags go to the fuzzer (examples/deep_fuzz.rs): --seed S, --pixels K, --size WxH,
-# --max-depth D, --max-iter N, --kinds a,b, --count N.
+# --min-depth D, --max-depth D, --max-iter N, --kinds a,b, --count N.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-600}"

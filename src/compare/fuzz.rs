@@ -56,11 +56,11 @@ pub fn configurations(scene: &Scene) -> Vec<Variant> {
             VariantKind::Engine(crate::scene::EngineKind::Perturb { bla: Some(eps), .. }) => {
                 eps != super::LOOSE_BLA_TOLERANCE || scene.bla == Some(super::LOOSE_BLA_TOLERANCE)
             }
-            // Direct f64 only where the engine choice would use it (a forced f64 is refused
-            // beyond that: its coordinates no longer resolve a sample).
-            VariantKind::Engine(crate::scene::EngineKind::Direct) => {
-                scene.engine_for(crate::scene::EngineChoice::F64).is_ok()
-            }
+            // Direct f64 only where `auto` chooses it: deeper, a forced f64 is a speed
+            // setting (`compare` shows what it costs in accuracy), not an exact engine.
+            VariantKind::Engine(crate::scene::EngineKind::Direct) => scene
+                .engine_for(crate::scene::EngineChoice::Auto)
+                .is_ok_and(|plan| matches!(plan.kind, crate::scene::EngineKind::Direct)),
             VariantKind::Engine(_) => true,
             VariantKind::F32 | VariantKind::Gpu(_) => false,
         })

@@ -11,6 +11,7 @@
 use std::sync::atomic::AtomicBool;
 
 use astro_float::BigFloat;
+use deepfield::compare::fuzz;
 use deepfield::field::{self, ChannelSet};
 use deepfield::num::{Decimal, FloatExp};
 use deepfield::orbit::bigfloat;
@@ -212,6 +213,34 @@ fn assert_targets(name: &str, s: &[Sample], engine: &str, expect_engine: &str, s
     }
     let de_median = median(s.iter().filter_map(|x| x.de_err).collect());
     assert!(de_median <= 1e-3, "{name}: median distance error {de_median}");
+}
+
+/// The shipped seahorse spiral, `scenes/spiral-deep.toml` at zoom 4e8: direct f64 still
+/// resolves its coordinates (millions of ulps per sample), but its rounding shows in N and
+/// NF (`deepfield compare scenes/spiral-deep.toml --samples 200 --sample-only`: 12.6% of N
+/// wrong with `f64`), so `auto` chooses perturbation past zoom 1e5, and every configuration
+/// of it meets the deep fuzzer's bar on sampled pixels of the full 800×600 view. Both sides
+/// of that line, at 3e4 and 2e6, from the engine plans (a forced `f64` still resolves them).
+#[test]
+fn auto_leaves_direct_f64_past_zoom_1e5() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spiral-deep.toml");
+    let spiral = super::util::scene(&std::fs::read_to_string(path).expect("shipped scene"));
+    assert_eq!(spiral.engine().expect("an engine").name, "perturb-f64");
+    let levels = deepfield::simd_level::SimdLevel::usable();
+    let verdict = fuzz::check(&spiral, 24, &levels, fuzz::BAR, &AtomicBool::new(false)).expect("checked");
+    let names: Vec<&str> = verdict.rows.iter().map(|r| r.engine.as_str()).collect();
+    assert!(names.iter().all(|n| n.starts_with("perturb")), "{names:?}");
+    assert!(verdict.failures.is_empty(), "{}", verdict.failures.join("\n"));
+    let [re, im] = [spiral.center[0].to_string(), spiral.center[1].to_string()];
+    for (zoom, engine) in [("3e4", "f64"), ("9e4", "f64"), ("2e5", "perturb-f64"), ("2e6", "perturb-f64")] {
+        let text = format!(
+            "version = 1\n[view]\ncenter = [\"{re}\", \"{im}\"]\nzoom = \"{zoom}\"\nwidth = 3840\nheight = 2160\n"
+        );
+        let plan = super::util::scene(&text).engine().expect("an engine");
+        assert_eq!(plan.name, engine, "zoom {zoom}: {}", plan.reason);
+        let forced = super::util::scene(&format!("{text}[render]\nengine = \"f64\"\n")).engine();
+        assert_eq!(forced.expect("forced f64 resolves the view").name, "f64", "zoom {zoom}");
+    }
 }
 
 #[test]
