@@ -47,29 +47,46 @@ pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Opti
     None
 }
 
-/// The smallest preperiod k <= `max_preperiod` and period p <= `max_period` with
-/// |z_(k+p) - z_k| below 2^(32 - bits) (relative to |z_k| or 1): what the orbit of `c` really
-/// is, to the precision it was found with. None when nothing repeats that soon; a nucleus
-/// (z_p = 0, so preperiod 0) is reported as (0, p).
+/// The smallest preperiod k <= `max_preperiod` and period p <= `max_period` for which `c` is
+/// a root of z_(k+p) = z_k to its precision: the first-order distance from `c` to that
+/// root, |z_(k+p) - z_k| / |z'_(k+p) - z'_k|, is below 2^(24 - bits) (relative to |c| or 1).
+/// What the orbit of `c` really is. Measured as a distance in the parameter rather than as
+/// |z_(k+p) - z_k| itself, because a deep point's orbit amplifies its own rounding by the
+/// derivative (2^100 and more at depth 1e-30): the difference left at a root found to the
+/// last bit is that large, its distance is not. None when nothing repeats that soon; a
+/// nucleus (z_p = 0, so preperiod 0) is reported as (0, p).
 pub fn orbit_type(c: &BigC, max_preperiod: u32, max_period: u32) -> Option<(u32, u32)> {
-    let tolerance = FloatExp::new(1.0, 32 - c.bits as i32);
-    let mut orbit = vec![BigC::zero(c.bits)];
+    let tolerance = FloatExp::new(1.0, 24 - c.bits as i32) * FloatExp::ONE.max(c.abs());
+    let one = BigC::from_f64(1.0, 0.0, c.bits);
+    let (mut z, mut dz) = (BigC::zero(c.bits), BigC::zero(c.bits));
+    let mut orbit = vec![(z.clone(), z.to_fe(), dz.to_fe())];
     for _ in 0..max_preperiod + max_period {
-        let z = orbit.last().unwrap_or(&orbit[0]).square().add(c);
-        orbit.push(z);
+        dz = z.mul(&dz).ldexp(1).add(&one);
+        z = z.square().add(c);
+        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
     }
     for k in 0..=max_preperiod as usize {
         for p in 1..=max_period as usize {
-            if k + p >= orbit.len() {
-                break;
+            let Some((zkp, zkp_fe, dkp)) = orbit.get(k + p) else { break };
+            let (zk, zk_fe, dk) = &orbit[k];
+            let df = norm(dkp[0] - dk[0], dkp[1] - dk[1]);
+            // In 53 bits first: only a difference that cancels there can be small enough.
+            let rough = norm(zkp_fe[0] - zk_fe[0], zkp_fe[1] - zk_fe[1]);
+            let scale = FloatExp::ONE.max(zk_fe[0].abs().max(zk_fe[1].abs()));
+            if rough > df * tolerance + scale.mul_f64(1e-14) {
+                continue;
             }
-            let scale = FloatExp::ONE.max(orbit[k].abs());
-            if orbit[k + p].sub(&orbit[k]).abs() <= tolerance * scale {
+            if zkp.sub(zk).abs() <= df * tolerance {
                 return Some((k as u32, p as u32));
             }
         }
     }
     None
+}
+
+/// |re + i im|.
+pub fn norm(re: FloatExp, im: FloatExp) -> FloatExp {
+    (re * re + im * im).sqrt()
 }
 
 #[cfg(test)]

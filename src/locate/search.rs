@@ -4,11 +4,14 @@
 //! Minibrot: the ball method gives the lowest period p of a nucleus in the view's disc,
 //! Newton's method from the view's centre finds that nucleus, and the size estimate frames
 //! it. Misiurewicz point: one pass over the centre's orbit (with its derivative in c)
-//! gives, for every preperiod k and period p in range, the Newton step length
+//! gives, for every period p in range, the first preperiod k >= 2 whose Newton step length
 //! |z_(k+p) - z_k| / |z'_(k+p) - z'_k| — a first-order distance from the centre to a root
-//! of z_(k+p) = z_k. The candidates closer than the view's radius are tried in order of
-//! k + p (the simplest first), and the first whose Newton root lies in the view and whose
-//! orbit really has preperiod k and period p wins.
+//! of z_(k+p) = z_k — is inside the view, leaving out the roots that belong to a lower
+//! preperiod (nuclei among them). The candidates are tried in order of k + p (the simplest
+//! first) with Newton's method, at the view's precision plus the bits the candidate's
+//! derivative amplifies rounding by, and the first whose root lies in the view and whose
+//! orbit really has preperiod k and period p wins. At depth that extra precision is what
+//! makes the root and its check possible: bench-e1086's centre at 1e60 needs ~200 more bits.
 
 use crate::num::{Decimal, FloatExp};
 
@@ -85,6 +88,10 @@ pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Res
     nucleus::minibrot(center, p).ok_or(SearchError::NoNucleus { period: p })
 }
 
+/// Bits Newton's method and the check of a candidate get beyond the view's precision and
+/// the candidate's derivative (the factor by which its orbit amplifies rounding).
+const NEWTON_MARGIN_BITS: u64 = 64;
+
 /// The simplest Misiurewicz point (smallest preperiod + period) within `radius` of
 /// `center`, with preperiod at most `max_preperiod` and period at most `max_period`.
 pub fn misiurewicz_in_view(
@@ -94,11 +101,12 @@ pub fn misiurewicz_in_view(
     max_period: u32,
 ) -> Result<MisiurewiczPoint, SearchError> {
     let none = SearchError::NoMisiurewicz { max_preperiod, max_period };
-    let candidates = newton_distances(center, max_preperiod, max_period);
-    let mut near: Vec<(u32, u32, FloatExp)> = candidates.into_iter().filter(|&(_, _, d)| d < radius).collect();
-    near.sort_by_key(|&(k, p, _)| (k + p, p));
-    for &(k, p, _) in near.iter().take(MAX_NEWTON_TRIES) {
-        let Some(point) = misiurewicz::newton(center, k, p, 64) else { continue };
+    let mut near = candidates(center, radius, max_preperiod, max_period);
+    near.sort_by_key(|c| (c.preperiod + c.period, c.period));
+    for c in near.iter().take(MAX_NEWTON_TRIES) {
+        let (k, p) = (c.preperiod, c.period);
+        let bits = center.bits + c.log2_derivative.max(0.0).ceil() as u64 + NEWTON_MARGIN_BITS;
+        let Some(point) = misiurewicz::newton(&center.with_bits(bits), k, p, 64) else { continue };
         if point.sub(center).abs() > radius {
             continue;
         }
@@ -109,41 +117,62 @@ pub fn misiurewicz_in_view(
     Err(none)
 }
 
-/// For every preperiod k in 1..=`max_preperiod` and period p in 1..=`max_period`, the
-/// first-order distance from `c` to a root of z_(k+p) = z_k: |f| / |f'| with
-/// f = z_(k+p) - z_k. The orbit runs in `c`'s precision; differences are taken in 53 bits
-/// unless they cancel (near a root, where they are small compared with z): then in big floats.
-fn newton_distances(c: &BigC, max_preperiod: u32, max_period: u32) -> Vec<(u32, u32, FloatExp)> {
+/// A preperiod and period worth Newton's method.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    preperiod: u32,
+    period: u32,
+    /// log2 |z'_(k+p) - z'_k| at the centre.
+    log2_derivative: f64,
+}
+
+/// For each period p in 1..=`max_period`, the smallest preperiod k in 2..=`max_preperiod`
+/// (a Misiurewicz point has preperiod 2 at least) whose first-order distance from `c` to a
+/// root of z_(k+p) = z_k, |f| / |f'| with f = z_(k+p) - z_k, is below `radius`. One pass
+/// over the centre's orbit (with its derivative in c), up to where it leaves |z| <= 2: an
+/// escaping orbit follows no cycle after that. Differences are taken in 53 bits unless they
+/// cancel (near a root, where they are small compared with z): then in big floats.
+///
+/// A root of z_(k+p) = z_k where z_(k+p-1) = +z_(k-1) is a root of lower preperiod (every
+/// nucleus of period p is one of z_(p+1) = z_1, z_(p+2) = z_2, ...), so only candidates
+/// where z_(k+p-1) is nearer -z_(k-1) than +z_(k-1) are kept: the step into the cycle.
+/// Later preperiods of the same point (z_(k+1+p) = z_(k+1), ...) are not candidates either;
+/// Newton's method from them reaches the same point.
+fn candidates(c: &BigC, radius: FloatExp, max_preperiod: u32, max_period: u32) -> Vec<Candidate> {
     let n = (max_preperiod + max_period) as usize;
     let bits = c.bits;
     let one = BigC::from_f64(1.0, 0.0, bits);
+    let two = FloatExp::from(2.0);
     let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
     let mut orbit = Vec::with_capacity(n + 1);
     orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
     for _ in 0..n {
         dz = z.mul(&dz).ldexp(1).add(&one);
         z = z.square().add(c);
-        let escaped = z.abs() > FloatExp::from(1e10);
-        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
-        if escaped {
+        if z.abs() > two {
             break;
         }
+        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
     }
+    let norm = |v: [FloatExp; 2]| misiurewicz::norm(v[0], v[1]);
     let mut out = Vec::new();
-    for k in 1..=max_preperiod as usize {
-        for p in 1..=max_period as usize {
+    for p in 1..=max_period as usize {
+        for k in 2..=max_preperiod as usize {
             let Some((zkp, zkp_fe, dkp)) = orbit.get(k + p) else { break };
             let (zk, zk_fe, dk) = &orbit[k];
-            // In 53 bits unless the difference cancels (near a root): then in big floats.
-            let d = [zkp_fe[0] - zk_fe[0], zkp_fe[1] - zk_fe[1]];
-            let f53 = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let f53 = norm([zkp_fe[0] - zk_fe[0], zkp_fe[1] - zk_fe[1]]);
             let scale = FloatExp::ONE.max(zk_fe[0].abs().max(zk_fe[1].abs()));
             let f = if f53 > scale.mul_f64(1e-9) { f53 } else { zkp.sub(zk).abs() };
-            let df = [dkp[0] - dk[0], dkp[1] - dk[1]];
-            let dfa = (df[0] * df[0] + df[1] * df[1]).sqrt();
-            if !dfa.is_zero() {
-                out.push((k as u32, p as u32, f / dfa));
+            let df = norm([dkp[0] - dk[0], dkp[1] - dk[1]]);
+            if df.is_zero() || f / df >= radius {
+                continue;
             }
+            let (a, b) = (orbit[k + p - 1].1, orbit[k - 1].1);
+            if norm([a[0] - b[0], a[1] - b[1]]) < norm([a[0] + b[0], a[1] + b[1]]) {
+                continue;
+            }
+            out.push(Candidate { preperiod: k as u32, period: p as u32, log2_derivative: df.log2() });
+            break;
         }
     }
     out
