@@ -177,12 +177,14 @@ pub struct FindArgs {
     /// Find a Misiurewicz point (preperiod and period) instead of a minibrot.
     #[arg(long)]
     pub misiurewicz: bool,
-    /// Largest period searched (default: 100000 for minibrots, 64 for Misiurewicz points).
+    /// Largest period searched (default: 100000 for minibrots; for Misiurewicz points the
+    /// view's lowest minibrot period, between 64 and 4096).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     pub max_period: Option<u32>,
-    /// Largest preperiod searched (Misiurewicz points).
-    #[arg(long, value_name = "N", default_value_t = 5000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-    pub max_preperiod: u32,
+    /// Largest preperiod searched (Misiurewicz points; default: twice the view's lowest
+    /// minibrot period, between 5000 and 8192).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub max_preperiod: Option<u32>,
     /// Write the scene here instead of printing it.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,

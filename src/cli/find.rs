@@ -34,7 +34,13 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
     let (center, disc) = search::disc(&scene.center, log10_disc);
     let mut file = scene.file.clone();
     let header = if args.misiurewicz {
-        let m = search::misiurewicz_in_view(&center, disc, args.max_preperiod, args.max_period.unwrap_or(64))
+        let (auto_preperiod, auto_period) = match (args.max_preperiod, args.max_period) {
+            (Some(k), Some(p)) => (k, p),
+            _ => search::misiurewicz_limits(&center, disc),
+        };
+        let (max_preperiod, max_period) =
+            (args.max_preperiod.unwrap_or(auto_preperiod), args.max_period.unwrap_or(auto_period));
+        let m = search::misiurewicz_in_view(&center, disc, max_preperiod, max_period)
             .map_err(|e| Failure::Runtime(e.into()))?;
         file.view.center = cli(decimals(&m.point));
         format!(

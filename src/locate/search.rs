@@ -88,6 +88,20 @@ pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Res
     nucleus::minibrot(center, p).ok_or(SearchError::NoNucleus { period: p })
 }
 
+/// Periods searched by [`misiurewicz_limits`] at most, and preperiods at most twice that.
+pub const MAX_AUTO_PERIOD: u32 = 4096;
+
+/// Limits for a Misiurewicz search of a view when none are given: periods up to the view's
+/// lowest minibrot period P (the ball method) and preperiods up to 2P, at least 64 and 5000
+/// and at most [`MAX_AUTO_PERIOD`] and twice that. The simplest Misiurewicz points of deep
+/// views lie within those: at bench-e1086's centre (P = 1282 at 1e30, 2578 at 1e60) they are
+/// (283, 324) and (1227, 1296), at deep-e318's at 1e40 (P = 1676) (1657, 836), at
+/// floral-fantasy's at 1e30 (P = 260) (244, 1). Returns (max preperiod, max period).
+pub fn misiurewicz_limits(center: &BigC, radius: FloatExp) -> (u32, u32) {
+    let p = period::ball_period(center, radius, MAX_AUTO_PERIOD).unwrap_or(MAX_AUTO_PERIOD);
+    (p.saturating_mul(2).clamp(5000, 2 * MAX_AUTO_PERIOD), p.clamp(64, MAX_AUTO_PERIOD))
+}
+
 /// Bits Newton's method and the check of a candidate get beyond the view's precision and
 /// the candidate's derivative (the factor by which its orbit amplifies rounding).
 const NEWTON_MARGIN_BITS: u64 = 64;

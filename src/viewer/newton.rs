@@ -44,7 +44,8 @@ pub fn newton_zoom(nav: &Nav, at: [f64; 2], height: f64, target: Target, factor:
             Ok((Nav { center: text(&m.nucleus), log10_zoom, transform: nav.transform }, line))
         }
         Target::Misiurewicz => {
-            let m = search::misiurewicz_in_view(&c, disc, 2000, 64).map_err(|e| e.to_string())?;
+            let (max_preperiod, max_period) = search::misiurewicz_limits(&c, disc);
+            let m = search::misiurewicz_in_view(&c, disc, max_preperiod, max_period).map_err(|e| e.to_string())?;
             let step = if factor > 1.0 { factor } else { 4.0 };
             let line = format!("Misiurewicz point of preperiod {} and period {}", m.preperiod, m.period);
             Ok((

@@ -606,6 +606,12 @@ fn find_prints_the_minibrot_or_misiurewicz_point_of_a_view_as_a_scene() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("preperiod 2 and period 2"), "{text}");
 
+    // At depth the limits follow the view's lowest minibrot period (1282 here).
+    let e1086 = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench-e1086.toml");
+    let o = deepfield(&["find", e1086.to_str().unwrap(), "--zoom", "1e30", "--misiurewicz"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("preperiod 283 and period 324"), "{}", stderr(&o));
+
     let o = deepfield(&["find", "--center=0.5,0.5", "--zoom", "1e6", "--max-period", "40"], &dir);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("no minibrot of period up to 40"), "{}", stderr(&o));
