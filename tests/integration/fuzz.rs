@@ -11,8 +11,9 @@ use deepfield::compare::fuzz::{self, BAR};
 use deepfield::compare::views::{self, ViewKind, ViewSpec};
 use deepfield::simd_level::SimdLevel;
 
-/// Generates a view of `kind` (the first of a few draws that finds one) and checks it.
-fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) {
+/// Generates a view of `kind` (the first of a few draws that finds one) and checks it;
+/// returns the configurations checked.
+fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) -> Vec<String> {
     let spec = ViewSpec { kind, log10_zoom, max_iter, width: 32, height: 24 };
     let view = (0..16).find_map(|d| views::generate(seed, d, &spec)).unwrap_or_else(|| panic!("no {kind:?} view"));
     let verdict = fuzz::check(&view.scene, 12, &SimdLevel::usable(), BAR, &AtomicBool::new(false)).expect("ran");
@@ -20,6 +21,17 @@ fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) {
     eprintln!("{}: {names:?}", view.name);
     assert!(names.iter().any(|n| n.contains("bla")) && names.iter().any(|n| !n.contains("bla")), "{names:?}");
     assert!(verdict.failures.is_empty(), "{}:\n{}\n{}", view.name, verdict.failures.join("\n"), view.toml);
+    names.iter().map(|n| n.to_string()).collect()
+}
+
+/// Either side of the zoom (1e5) where `auto` leaves direct f64: shallower, direct f64 is one
+/// of the configurations held to the bar; deeper, it is not `auto`'s and is left out.
+#[test]
+fn generated_views_either_side_of_the_direct_f64_line() {
+    let shallow = fuzz(ViewKind::Misiurewicz, 41, 4.0, 20_000);
+    assert!(shallow.iter().any(|n| n == "f64"), "{shallow:?}");
+    let deeper = fuzz(ViewKind::Misiurewicz, 42, 7.0, 20_000);
+    assert!(!deeper.iter().any(|n| n == "f64"), "{deeper:?}");
 }
 
 #[test]
