@@ -45,6 +45,17 @@ use crate::trap::{Trap, TrapState};
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
 const MAX_CYCLE_PERIODS: u32 = 8;
+/// The longest cycle the quadratic model's orbit is searched for, in periods (bulbs of the
+/// minibrot whose samples the anchor test above would reach only after many turns).
+const MODEL_MAX_PERIODS: u32 = 64;
+/// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]), and how
+/// often it is tested for a cycle.
+const MODEL_ITERATIONS: u32 = 512;
+/// See [`MODEL_ITERATIONS`].
+const MODEL_CHECK: u32 = 64;
+/// A model orbit back within this squared distance after k steps is on a k-cycle, to the
+/// accuracy Newton's method needs for a start.
+const MODEL_SETTLED2: f64 = 1e-12;
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
@@ -642,10 +653,11 @@ impl Perturbation {
     /// went away at the first end. Where that holds, |dz/dz|^2 shrank since the anchor, and
     /// the iteration count has reached the sample's `at`, Newton's method looks for an
     /// attracting cycle of period k p from the value ([`interior::newton_attracting`]). At
-    /// the first end, before any anchor, a test of period p starts from the attracting
-    /// fixed point of the one-period quadratic model ([`Perturbation::model_fixed_point`])
-    /// wherever the model has one: inside the minibrot's cardioid that start is close
-    /// enough for Newton to certify within a few turns, without waiting for the orbit.
+    /// the first end, before any anchor, a test of period k p starts from a point of the
+    /// attracting cycle of the one-period quadratic model ([`Perturbation::model_cycle`])
+    /// wherever the model has one: inside the minibrot's cardioid (k = 1) and its bulbs that
+    /// start is close enough for Newton to certify within a few turns, without waiting for
+    /// the orbit.
     /// Found, the sample is interior (its parameter lies in a hyperbolic component); else
     /// the next test waits until the iteration count has doubled, from a new anchor. This
     /// finds most interior samples within a few periods, where the contraction criterion
@@ -669,8 +681,8 @@ impl Perturbation {
         // At the first end, a start from the fixed point of the quadratic model, where the
         // model says it attracts: no need to wait for the orbit to settle.
         if pr.anchor_n == 0
-            && let Some(w0) = self.model_fixed_point(w)
-            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, 1, second))
+            && let Some((w0, turns)) = self.model_cycle(w)
+            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))
         {
             return true;
         }
@@ -684,6 +696,43 @@ impl Perturbation {
         }
         *pr = Probe { anchor_n: s.n, anchor_exp: exp, anchor: w, ..*pr };
         false
+    }
+
+    /// A point of the attracting cycle of the quadratic model w -> a + Λ w^2 of one period
+    /// near 0 (see [`Perturbation::model_fixed_point`]) and its period k in turns, k at
+    /// most [`MODEL_MAX_PERIODS`]: the fixed point where the model has one (the minibrot's
+    /// cardioid); elsewhere the model's own orbit z -> z^2 + c' (z = Λ w, c' = Λ a) from 0,
+    /// which settles on the attracting k-cycle where c' lies in a bulb of the standard
+    /// Mandelbrot set's period k, so that samples in the minibrot's bulbs get Newton's test
+    /// of period k p at their first period end too, rather than after waiting for their
+    /// orbit to come back to an anchor. None where the model's orbit escapes or has not
+    /// settled within [`MODEL_ITERATIONS`].
+    fn model_cycle(&self, a: [f64; 2]) -> Option<([f64; 2], u32)> {
+        if let Some(w) = self.model_fixed_point(a) {
+            return Some((w, 1));
+        }
+        let lam = self.renormal?;
+        let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
+        let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        let mut z = [0.0, 0.0];
+        for _ in 0..MODEL_ITERATIONS / MODEL_CHECK {
+            for _ in 0..MODEL_CHECK {
+                z = step(z);
+                if z[0] * z[0] + z[1] * z[1] > 4.0 {
+                    return None;
+                }
+            }
+            let mut y = z;
+            for k in 1..=MODEL_MAX_PERIODS {
+                y = step(y);
+                let d2 = (y[0] - z[0]) * (y[0] - z[0]) + (y[1] - z[1]) * (y[1] - z[1]);
+                if k > 1 && d2 < MODEL_SETTLED2 {
+                    let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+                    return (w[0].is_finite() && w[1].is_finite()).then_some((w, k));
+                }
+            }
+        }
+        None
     }
 
     /// The attracting fixed point of the quadratic model w -> a + Λ w^2 of one period near 0
