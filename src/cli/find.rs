@@ -34,12 +34,14 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
     let (center, disc) = search::disc(&scene.center, log10_disc);
     let mut file = scene.file.clone();
     let header = if args.misiurewicz {
-        let (auto_preperiod, auto_period) = match (args.max_preperiod, args.max_period) {
+        // Limits not given follow the view's lowest minibrot period.
+        let (max_preperiod, max_period) = match (args.max_preperiod, args.max_period) {
             (Some(k), Some(p)) => (k, p),
-            _ => search::misiurewicz_limits(&center, disc),
+            (k, p) => {
+                let (auto_k, auto_p) = search::misiurewicz_limits(&center, disc);
+                (k.unwrap_or(auto_k), p.unwrap_or(auto_p))
+            }
         };
-        let (max_preperiod, max_period) =
-            (args.max_preperiod.unwrap_or(auto_preperiod), args.max_period.unwrap_or(auto_period));
         let m = search::misiurewicz_in_view(&center, disc, max_preperiod, max_period)
             .map_err(|e| Failure::Runtime(e.into()))?;
         file.view.center = cli(decimals(&m.point));

@@ -678,8 +678,8 @@ impl Perturbation {
             }
             _ => away2(pr.anchor) * 16.0 < pr.first2,
         };
-        // At the first end, a start from the fixed point of the quadratic model, where the
-        // model says it attracts: no need to wait for the orbit to settle.
+        // At the first end, a start from the quadratic model's attracting cycle, where the
+        // model has one: no need to wait for the orbit to settle.
         if pr.anchor_n == 0
             && let Some((w0, turns)) = self.model_cycle(w)
             && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))

@@ -58,6 +58,7 @@ fn find_and_check(name: &str, center: [&str; 2], log10_zoom: f64) {
         assert!(distance < log2_radius - 40.0, "{name}: {what} holds only to 2^{distance} (radius 2^{log2_radius})");
     }
     // Not a lower preperiod (z_(k-1) is no point of the cycle) and no shorter period.
+    // (sign 0: log2 |z_k| itself.)
     let scale = log2_norm(&o[k].0, &o[k].0, 0.0, bits).max(0.0);
     assert!(log2_norm(&o[k + p - 1].0, &o[k - 1].0, -1.0, bits) > scale - 20.0, "{name}: preperiod below {k}");
     for q in (1..p).filter(|q| p % q == 0) {
