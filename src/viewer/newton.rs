@@ -87,4 +87,21 @@ mod tests {
         let far = Nav { center: ["0.6".into(), "0.6".into()], log10_zoom: 6.0, transform: Default::default() };
         assert!(newton_zoom(&far, [0.0, 0.0], 600.0, Target::Minibrot, 0.0).is_err());
     }
+
+    /// At depth the search's limits follow the view's minibrot period: Kalles Fraktaler's
+    /// 1e1086 benchmark location seen at 1e30 holds Misiurewicz points of periods in the
+    /// hundreds (fixed limits of 64 found none there).
+    #[test]
+    fn finds_a_misiurewicz_point_at_depth() {
+        let text = include_str!("../../scenes/bench-e1086.toml");
+        let centre = |key: usize| {
+            let line = text.lines().find(|l| l.starts_with("center")).expect("centre");
+            line.split('"').nth(2 * key + 1).expect("part").to_string()
+        };
+        let nav = Nav { center: [centre(0), centre(1)], log10_zoom: 30.0, transform: Default::default() };
+        let (at, line) = newton_zoom(&nav, [0.0, 0.0], 600.0, Target::Misiurewicz, 0.0).unwrap();
+        let period: u32 = line.rsplit(' ').next().and_then(|p| p.parse().ok()).expect("a period");
+        assert!(period > 64, "{line}");
+        assert!((at.log10_zoom - 30.0 - 4f64.log10()).abs() < 1e-12);
+    }
 }
