@@ -49,6 +49,8 @@ bench-e227 40
 bench-e1086 20
 floral-fantasy 1000
 rug 200
+spiral-deep 4000
+lit-spiral 4000
 locations/11-dimensions 100
 locations/all-seeing-eye 400
 locations/e401 100
