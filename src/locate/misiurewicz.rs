@@ -57,31 +57,72 @@ pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Opti
 /// nucleus (z_p = 0, so preperiod 0) is reported as (0, p).
 pub fn orbit_type(c: &BigC, max_preperiod: u32, max_period: u32) -> Option<(u32, u32)> {
     let tolerance = FloatExp::new(1.0, 24 - c.bits as i32) * FloatExp::ONE.max(c.abs());
-    let one = BigC::from_f64(1.0, 0.0, c.bits);
-    let (mut z, mut dz) = (BigC::zero(c.bits), BigC::zero(c.bits));
-    let mut orbit = vec![(z.clone(), z.to_fe(), dz.to_fe())];
-    for _ in 0..max_preperiod + max_period {
-        dz = z.mul(&dz).ldexp(1).add(&one);
-        z = z.square().add(c);
-        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
-    }
+    let orbit = Orbit::of(c, (max_preperiod + max_period) as usize, None);
     for k in 0..=max_preperiod as usize {
         for p in 1..=max_period as usize {
-            let Some((zkp, zkp_fe, dkp)) = orbit.get(k + p) else { break };
-            let (zk, zk_fe, dk) = &orbit[k];
-            let df = norm(dkp[0] - dk[0], dkp[1] - dk[1]);
-            // In 53 bits first: only a difference that cancels there can be small enough.
-            let rough = norm(zkp_fe[0] - zk_fe[0], zkp_fe[1] - zk_fe[1]);
-            let scale = FloatExp::ONE.max(zk_fe[0].abs().max(zk_fe[1].abs()));
-            if rough > df * tolerance + scale.mul_f64(1e-14) {
-                continue;
+            if k + p >= orbit.len() {
+                break;
             }
-            if zkp.sub(zk).abs() <= df * tolerance {
+            if orbit.gap(k + p, k) <= orbit.slope(k + p, k) * tolerance {
                 return Some((k as u32, p as u32));
             }
         }
     }
     None
+}
+
+/// The orbit of a parameter c from z_0 = 0, with the derivative in c, for comparing its
+/// points: each z_n in big floats and, for speed, in 53 bits beside z'_n.
+pub struct Orbit(Vec<(BigC, [FloatExp; 2], [FloatExp; 2])>);
+
+impl Orbit {
+    /// z_0 .. z_n of `c` (n steps), at `c`'s precision; it ends before the first z_n with
+    /// |z_n| above `bound`, if one is given.
+    pub fn of(c: &BigC, n: usize, bound: Option<FloatExp>) -> Orbit {
+        let one = BigC::from_f64(1.0, 0.0, c.bits);
+        let (mut z, mut dz) = (BigC::zero(c.bits), BigC::zero(c.bits));
+        let mut orbit = Vec::with_capacity(n + 1);
+        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
+        for _ in 0..n {
+            dz = z.mul(&dz).ldexp(1).add(&one);
+            z = z.square().add(c);
+            if bound.is_some_and(|b| z.abs() > b) {
+                break;
+            }
+            orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
+        }
+        Orbit(orbit)
+    }
+
+    /// Points held (n + 1 unless the orbit left the bound).
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Never: z_0 is always there.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// z_i to 53 bits.
+    pub fn point(&self, i: usize) -> [FloatExp; 2] {
+        self.0[i].1
+    }
+
+    /// |z_i - z_j|: in 53 bits unless the difference cancels there (near a root of
+    /// z_i = z_j, where it is small compared with z), then in big floats.
+    pub fn gap(&self, i: usize, j: usize) -> FloatExp {
+        let ((zi, a, _), (zj, b, _)) = (&self.0[i], &self.0[j]);
+        let rough = norm(a[0] - b[0], a[1] - b[1]);
+        let scale = FloatExp::ONE.max(b[0].abs().max(b[1].abs()));
+        if rough > scale.mul_f64(1e-9) { rough } else { zi.sub(zj).abs() }
+    }
+
+    /// |z'_i - z'_j|: the derivative of z_i - z_j in c.
+    pub fn slope(&self, i: usize, j: usize) -> FloatExp {
+        let (a, b) = (self.0[i].2, self.0[j].2);
+        norm(a[0] - b[0], a[1] - b[1])
+    }
 }
 
 /// |re + i im|.

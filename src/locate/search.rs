@@ -153,36 +153,19 @@ struct Candidate {
 /// Later preperiods of the same point (z_(k+1+p) = z_(k+1), ...) are not candidates either;
 /// Newton's method from them reaches the same point.
 fn candidates(c: &BigC, radius: FloatExp, max_preperiod: u32, max_period: u32) -> Vec<Candidate> {
-    let n = (max_preperiod + max_period) as usize;
-    let bits = c.bits;
-    let one = BigC::from_f64(1.0, 0.0, bits);
-    let two = FloatExp::from(2.0);
-    let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
-    let mut orbit = Vec::with_capacity(n + 1);
-    orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
-    for _ in 0..n {
-        dz = z.mul(&dz).ldexp(1).add(&one);
-        z = z.square().add(c);
-        if z.abs() > two {
-            break;
-        }
-        orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
-    }
-    let norm = |v: [FloatExp; 2]| misiurewicz::norm(v[0], v[1]);
+    let orbit = misiurewicz::Orbit::of(c, (max_preperiod + max_period) as usize, Some(FloatExp::from(2.0)));
     let mut out = Vec::new();
     for p in 1..=max_period as usize {
         for k in 2..=max_preperiod as usize {
-            let Some((zkp, zkp_fe, dkp)) = orbit.get(k + p) else { break };
-            let (zk, zk_fe, dk) = &orbit[k];
-            let f53 = norm([zkp_fe[0] - zk_fe[0], zkp_fe[1] - zk_fe[1]]);
-            let scale = FloatExp::ONE.max(zk_fe[0].abs().max(zk_fe[1].abs()));
-            let f = if f53 > scale.mul_f64(1e-9) { f53 } else { zkp.sub(zk).abs() };
-            let df = norm([dkp[0] - dk[0], dkp[1] - dk[1]]);
-            if df.is_zero() || f / df >= radius {
+            if k + p >= orbit.len() {
+                break;
+            }
+            let df = orbit.slope(k + p, k);
+            if df.is_zero() || orbit.gap(k + p, k) / df >= radius {
                 continue;
             }
-            let (a, b) = (orbit[k + p - 1].1, orbit[k - 1].1);
-            if norm([a[0] - b[0], a[1] - b[1]]) < norm([a[0] + b[0], a[1] + b[1]]) {
+            let (a, b) = (orbit.point(k + p - 1), orbit.point(k - 1));
+            if misiurewicz::norm(a[0] - b[0], a[1] - b[1]) < misiurewicz::norm(a[0] + b[0], a[1] + b[1]) {
                 continue;
             }
             out.push(Candidate { preperiod: k as u32, period: p as u32, log2_derivative: df.log2() });

@@ -37,6 +37,12 @@ pub fn end_column(n: usize) -> usize {
     2 * n - 1
 }
 
+/// The limb of `out` (as [`columns`] indexes it) that column `column` of an n-limb square
+/// writes: columns below it fill the limbs below, and a carry out of them enters here.
+pub fn limb_of_column(n: usize, column: usize) -> usize {
+    column - (n - 2)
+}
+
 /// Adds a 128-bit product to a 192-bit sum kept as a u128 and a count of its carries.
 #[inline(always)]
 fn accumulate(s: &mut (u128, u64), p: u128) {
@@ -140,9 +146,10 @@ pub fn columns(a: &[u64], cols: Range<usize>, out: &mut [u64]) -> [u64; 2] {
 /// Adds a carry returned by [`columns`] for the range ending at column `at` into the limbs
 /// of `out` (indexed as there) from that column up.
 pub fn add_carry(n: usize, at: usize, carry: [u64; 2], out: &mut [u64]) {
+    let from = limb_of_column(n, at);
     let mut c = 0u64;
-    for (k, o) in out.iter_mut().enumerate().skip(at - (n - 2)) {
-        let add = carry.get(k - (at - (n - 2))).copied().unwrap_or(0);
+    for (k, o) in out.iter_mut().enumerate().skip(from) {
+        let add = carry.get(k - from).copied().unwrap_or(0);
         let (v, c1) = o.overflowing_add(add);
         let (v, c2) = v.overflowing_add(c);
         *o = v;
@@ -208,7 +215,7 @@ mod tests {
                     let carry = columns(&a, first_column(n)..mid, &mut halves);
                     let mut upper = vec![0; n + 1];
                     columns(&a, mid..end_column(n), &mut upper);
-                    let from = mid - (n - 2);
+                    let from = limb_of_column(n, mid);
                     halves[from..].copy_from_slice(&upper[from..]);
                     add_carry(n, mid, carry, &mut halves);
                     assert_eq!(halves, out, "{n} limbs: split at column {mid}");

@@ -114,7 +114,7 @@ impl Kernel {
         match self {
             // The lower columns' limbs end at `from`, and their carry follows them.
             Kernel::Limbs { n, mid } => {
-                let from = mid - (n - 2);
+                let from = comba::limb_of_column(n, mid);
                 if upper { from..n + 1 } else { 0..from + 2 }
             }
             Kernel::Digits { layout, .. } => 0..layout.columns(),
@@ -140,7 +140,7 @@ impl Kernel {
                     comba::columns(a, mid..comba::end_column(n), part);
                 } else {
                     let carry = comba::columns(a, comba::first_column(n)..mid, part);
-                    let from = mid - (n - 2);
+                    let from = comba::limb_of_column(n, mid);
                     part[from..from + 2].copy_from_slice(&carry);
                 }
             }
@@ -158,7 +158,7 @@ impl Kernel {
     fn join(self, lower: &[u64], upper: &[u64], a: &[u64], w: &mut Scratch, out: &mut [u64]) {
         match self {
             Kernel::Limbs { n, mid } => {
-                let from = mid - (n - 2);
+                let from = comba::limb_of_column(n, mid);
                 out[..from].copy_from_slice(&lower[..from]);
                 out[from..].copy_from_slice(&upper[from..n + 1]);
                 comba::add_carry(n, mid, [lower[from], lower[from + 1]], out);

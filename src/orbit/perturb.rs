@@ -57,6 +57,43 @@ const MODEL_CHECK: u32 = 64;
 /// accuracy Newton's method needs for a start.
 const MODEL_SETTLED2: f64 = 1e-12;
 
+/// The attracting fixed point of z -> z^2 + c, (1 - sqrt(1 - 4c)) / 2, whose multiplier is
+/// 1 - sqrt(1 - 4c); None where that is not below 1 in modulus (c outside the main cardioid)
+/// or not a number (an overflowed c).
+fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
+    let (x, y) = (1.0 - 4.0 * c[0], -4.0 * c[1]);
+    let r = x.hypot(y);
+    let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
+    let mult = [1.0 - sq[0], -sq[1]];
+    if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
+        return None;
+    }
+    Some([mult[0] / 2.0, mult[1] / 2.0])
+}
+
+/// A point of the attracting cycle of z -> z^2 + c, of period 2 to [`MODEL_MAX_PERIODS`], that
+/// the orbit of 0 settles on within [`MODEL_ITERATIONS`], and its period.
+fn model_settled_cycle(c: [f64; 2]) -> Option<([f64; 2], u32)> {
+    let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+    let mut z = [0.0, 0.0];
+    for _ in 0..MODEL_ITERATIONS / MODEL_CHECK {
+        for _ in 0..MODEL_CHECK {
+            z = step(z);
+            if z[0] * z[0] + z[1] * z[1] > 4.0 {
+                return None;
+            }
+        }
+        let mut y = step(z);
+        for k in 2..=MODEL_MAX_PERIODS {
+            y = step(y);
+            if (y[0] - z[0]) * (y[0] - z[0]) + (y[1] - z[1]) * (y[1] - z[1]) < MODEL_SETTLED2 {
+                return Some((z, k));
+            }
+        }
+    }
+    None
+}
+
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
 /// above the offset δc, which at these depths is below the f64 range.
@@ -699,61 +736,21 @@ impl Perturbation {
     }
 
     /// A point of the attracting cycle of the quadratic model w -> a + Λ w^2 of one period
-    /// near 0 (see [`Perturbation::model_fixed_point`]) and its period k in turns, k at
-    /// most [`MODEL_MAX_PERIODS`]: the fixed point where the model has one (the minibrot's
-    /// cardioid); elsewhere the model's own orbit z -> z^2 + c' (z = Λ w, c' = Λ a) from 0,
+    /// near 0 (a the sample's value at its first period end, f^p(0)) and its period k in
+    /// turns, k at most [`MODEL_MAX_PERIODS`]. In the renormalised coordinate z = Λ w the
+    /// model is z -> z^2 + c' with c' = Λ a: its attracting fixed point where it has one
+    /// (the minibrot's cardioid, [`model_fixed_point`]); elsewhere its own orbit from 0,
     /// which settles on the attracting k-cycle where c' lies in a bulb of the standard
     /// Mandelbrot set's period k, so that samples in the minibrot's bulbs get Newton's test
     /// of period k p at their first period end too, rather than after waiting for their
-    /// orbit to come back to an anchor. None where the model's orbit escapes or has not
-    /// settled within [`MODEL_ITERATIONS`].
+    /// orbit to come back to an anchor. None where Λ is unknown, or the model's orbit escapes
+    /// or has not settled within [`MODEL_ITERATIONS`].
     fn model_cycle(&self, a: [f64; 2]) -> Option<([f64; 2], u32)> {
-        if let Some(w) = self.model_fixed_point(a) {
-            return Some((w, 1));
-        }
         let lam = self.renormal?;
         let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
-        let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-        let mut z = [0.0, 0.0];
-        for _ in 0..MODEL_ITERATIONS / MODEL_CHECK {
-            for _ in 0..MODEL_CHECK {
-                z = step(z);
-                if z[0] * z[0] + z[1] * z[1] > 4.0 {
-                    return None;
-                }
-            }
-            let mut y = z;
-            for k in 1..=MODEL_MAX_PERIODS {
-                y = step(y);
-                let d2 = (y[0] - z[0]) * (y[0] - z[0]) + (y[1] - z[1]) * (y[1] - z[1]);
-                if k > 1 && d2 < MODEL_SETTLED2 {
-                    let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-                    return (w[0].is_finite() && w[1].is_finite()).then_some((w, k));
-                }
-            }
-        }
-        None
-    }
-
-    /// The attracting fixed point of the quadratic model w -> a + Λ w^2 of one period near 0
-    /// (a the sample's value at its first period end, f^p(0)): in the renormalised
-    /// coordinate z = Λ w it is z^2 + c' with c' = Λ a, whose attracting fixed point is
-    /// (1 - sqrt(1 - 4c')) / 2, with multiplier 1 - sqrt(1 - 4c'). None where the model
-    /// does not attract (multiplier of modulus 1 or more: the sample is outside the
-    /// minibrot's cardioid, to the model's accuracy) or Λ is unknown.
-    fn model_fixed_point(&self, a: [f64; 2]) -> Option<[f64; 2]> {
-        let lam = self.renormal?;
-        let cp = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
-        let (x, y) = (1.0 - 4.0 * cp[0], -4.0 * cp[1]);
-        let r = x.hypot(y);
-        let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
-        let mult = [1.0 - sq[0], -sq[1]];
-        // Not below 1, or not a number (an overflowed c'): no attracting fixed point.
-        if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
-            return None;
-        }
-        let w = cto_f64(cmul(cconv::<f64, FloatExp>([mult[0] / 2.0, mult[1] / 2.0]), interior::cinv(lam)));
-        (w[0].is_finite() && w[1].is_finite()).then_some(w)
+        let (z, k) = model_fixed_point(c).map(|z| (z, 1)).or_else(|| model_settled_cycle(c))?;
+        let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+        (w[0].is_finite() && w[1].is_finite()).then_some((w, k))
     }
 
     /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and

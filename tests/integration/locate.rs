@@ -74,15 +74,13 @@ fn find_and_check(name: &str, center: [&str; 2], log10_zoom: f64) {
 /// centre at 1e40 and floral-fantasy's at 1e30.
 #[test]
 fn misiurewicz_points_of_deep_views_are_what_their_orbits_say() {
-    let scene = |file: &str| {
+    let centre = |file: &str| {
         let text = std::fs::read_to_string(format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"))).expect("scene");
-        let line = text.lines().find(|l| l.starts_with("center")).expect("centre").to_string();
-        let parts: Vec<String> = line.split('"').map(str::to_string).collect();
-        [parts[1].clone(), parts[3].clone()]
+        super::util::scene(&text).center.map(|d| d.text().to_string())
     };
-    let e1086 = scene("bench-e1086.toml");
-    let e318 = scene("deep-e318.toml");
-    let floral = scene("floral-fantasy.toml");
+    let e1086 = centre("bench-e1086.toml");
+    let e318 = centre("deep-e318.toml");
+    let floral = centre("floral-fantasy.toml");
     find_and_check("bench-e1086 at 1e20", [e1086[0].as_str(), e1086[1].as_str()], 20.0);
     find_and_check("bench-e1086 at 1e30", [e1086[0].as_str(), e1086[1].as_str()], 30.0);
     find_and_check("deep-e318 at 1e40", [e318[0].as_str(), e318[1].as_str()], 40.0);
