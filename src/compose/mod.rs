@@ -7,6 +7,7 @@
 //! downsampling of supersampled pixels always averages in linear light.
 
 pub mod sheet;
+mod table;
 pub mod text;
 
 use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
@@ -192,9 +193,9 @@ impl Stack {
             return out;
         }
         self.blend(planes, 1, ctx, |base| {
-            let mut out = Vec::with_capacity(planes.len() * 3);
-            for p in base.data().chunks_exact(4) {
-                out.extend_from_slice(&p[..3]);
+            let mut out = vec![0u8; planes.len() * 3];
+            for (o, p) in out.chunks_exact_mut(3).zip(base.data().chunks_exact(4)) {
+                o.copy_from_slice(&p[..3]);
             }
             out
         })
@@ -240,7 +241,10 @@ impl Stack {
         let bg = self.background;
         let bg8 = tiny_skia::Color::from_rgba(linear_to_srgb(bg[0]), linear_to_srgb(bg[1]), linear_to_srgb(bg[2]), 1.0)
             .unwrap_or(tiny_skia::Color::BLACK);
-        base.fill(bg8);
+        // The background is filled in only where the bottom layer does not replace it.
+        let mut filled = false;
+        // Whether every pixel of `base` is opaque, which the table blend needs.
+        let mut base_opaque = true;
         let enc = Srgb8Encoder::get();
         for (i, layer) in self.layers.iter().enumerate() {
             let dst = layer_pixmap.data_mut();
@@ -266,14 +270,33 @@ impl Stack {
             // over an opaque pixel is the pixel, so the layer becomes the base as it is.
             if i == 0 && opaque && layer.blend == BlendMode::Normal && layer.opacity == 1.0 {
                 std::mem::swap(base, layer_pixmap);
+                filled = true;
                 continue;
             }
-            let paint = PixmapPaint {
-                opacity: layer.opacity,
-                blend_mode: layer.blend.skia(),
-                quality: tiny_skia::FilterQuality::Nearest,
+            if !filled {
+                base.fill(bg8);
+                filled = true;
+            }
+            // Opaque over opaque: tiny-skia's bytes from its table (`table`), else its pipeline.
+            let (mode, opacity) = (layer.blend.skia(), layer.opacity);
+            let tabled = (opaque && base_opaque)
+                .then(|| {
+                    table::with_table(mode, opacity, |t| {
+                        t.map(|t| t.blend_opaque(base.data_mut(), layer_pixmap.data()))
+                    })
+                })
+                .flatten();
+            base_opaque = match tabled {
+                Some(opaque_after) => opaque_after,
+                None => {
+                    let paint = PixmapPaint { opacity, blend_mode: mode, quality: tiny_skia::FilterQuality::Nearest };
+                    base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
+                    base.pixels().iter().all(|p| p.alpha() == 255)
+                }
             };
-            base.draw_pixmap(0, 0, layer_pixmap.as_ref(), &paint, Transform::identity(), None);
+        }
+        if !filled {
+            base.fill(bg8);
         }
     }
 }
@@ -363,6 +386,77 @@ mod tests {
             assert_eq!(back, m);
         }
         assert_eq!(BlendMode::SoftLight.name(), "soft-light");
+    }
+
+    /// A stack mixing every path of [`Stack::blend_into`] (an opaque bottom layer taking the
+    /// base's place, opaque layers blended through tiny-skia's tables, translucent ones
+    /// through its pipeline, a table blend again after those) gives the bytes of drawing
+    /// each layer with tiny-skia over the background, one after another.
+    #[test]
+    fn stacks_give_tiny_skias_bytes() {
+        use crate::coloring::{DistanceStyle, Light, Transfer};
+        use crate::field::INTERIOR;
+        let (w, rows) = (61, 23);
+        let needs = Needs { nf: true, de: true, ..Needs::default() };
+        let mut planes = Planes::new(w, rows, &needs);
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in 0..w * rows {
+            planes.n[k] = if next() < 0.1 { INTERIOR } else { (next() * 400.0) as u32 };
+            planes.nf[k] = next() as f32;
+            planes.dex[k] = (next() * 6.0 - 3.0) as f32;
+            planes.dey[k] = (next() * 6.0 - 3.0) as f32;
+        }
+        let palette = crate::palette::builtin("classic").expect("classic");
+        let layer = |coloring, blend, opacity| Layer { coloring, blend, opacity, mask: None };
+        let distance = || Coloring::Distance { style: DistanceStyle::Soft { k: 0.5 }, palette: None, offset: 0.0 };
+        let stack = Stack {
+            layers: vec![
+                layer(
+                    Coloring::Smooth {
+                        palette,
+                        density: 0.3,
+                        offset: 0.1,
+                        transfer: Transfer::Linear,
+                        interior: [0.0, 0.0, 0.0, 1.0],
+                    },
+                    BlendMode::Normal,
+                    1.0,
+                ),
+                layer(distance(), BlendMode::Multiply, 0.6),
+                layer(Coloring::Boundary { width: 2.0, color: [1.0, 0.2, 0.1, 0.7] }, BlendMode::Normal, 1.0),
+                layer(distance(), BlendMode::Overlay, 0.35),
+                layer(Coloring::Slope { light: Light::new(45.0, 1.5, 0.8) }, BlendMode::Screen, 0.5),
+                layer(distance(), BlendMode::ColorBurn, 1.0),
+            ],
+            background: [0.1, 0.3, 0.2],
+        };
+        let ctx = Context::default();
+        let got = stack.composite_rgb8(&planes, &ctx);
+
+        let enc = Srgb8Encoder::get();
+        let bg = stack.background.map(linear_to_srgb);
+        let mut want = Pixmap::new(w as u32, rows as u32).expect("pixmap");
+        want.fill(tiny_skia::Color::from_rgba(bg[0], bg[1], bg[2], 1.0).expect("colour"));
+        for l in &stack.layers {
+            let mut pix = Pixmap::new(w as u32, rows as u32).expect("pixmap");
+            for (p, c) in pix.pixels_mut().iter_mut().zip(l.coloring.paint(&planes, 1, &ctx, None)) {
+                *p = to_premultiplied_srgb8(c, enc);
+            }
+            let paint = PixmapPaint {
+                opacity: l.opacity,
+                blend_mode: l.blend.skia(),
+                quality: tiny_skia::FilterQuality::Nearest,
+            };
+            want.draw_pixmap(0, 0, pix.as_ref(), &paint, Transform::identity(), None);
+        }
+        let want: Vec<u8> = want.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        assert_eq!(got, want);
     }
 
     #[test]
