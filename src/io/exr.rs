@@ -1,6 +1,6 @@
 //! Streaming OpenEXR output of the raw planes, channels named as in KF2+ / Fraktaler-3.
 //!
-//! Scan-line blocks, RLE-compressed ([`COMPRESSION`]). Blocks are built and compressed by the
+//! Scan-line blocks, uncompressed ([`COMPRESSION`]). Blocks are built and compressed by the
 //! render workers ([`ExrWriter::encode`], parallel) and written in order by a dedicated
 //! thread that owns the file, because the exr crate's block writer drives the file from a
 //! closure. The scene TOML and the engine's choice go into the header as text attributes.
@@ -27,14 +27,17 @@ pub const SCENE_ATTRIBUTE: &str = "deepfield.scene";
 /// Header attribute of a work unit's place in the whole image (`render --tile K/N --exr`),
 /// in the text of [`super::tile_text`].
 pub const TILE_ATTRIBUTE: &str = "deepfield.tile";
-/// How the planes are compressed, chosen by measurement for recolouring, which reads the
-/// whole file every time: a 3840x2160 seahorse-valley render (`N`, `NF`, `DEX`, `DEY`) is
-/// 134.7 MB with ZIP, 152.6 MB with RLE and 165.9 MB uncompressed, and `deepfield recolor
-/// --stats` reads it in 0.40, 0.14 and 0.12 s (two cores); a 1920x1080 minibrot-e102 render
-/// (large interior) is 24.1, 26.6 and 41.5 MB, read in 0.098, 0.034 and 0.035 s. RLE costs
-/// little space where ZIP wins most and reads as fast as no compression; every OpenEXR
-/// reader (Kalles Fraktaler's and Fraktaler-3's tools, zoomasm) decodes it.
-pub const COMPRESSION: Compression = Compression::RLE;
+/// How the planes are stored: uncompressed, chosen by measurement for recolouring, which
+/// reads the whole file every time. A 3840x2160 seahorse-valley render (`N`, `NF`, `DEX`,
+/// `DEY`) is 134.7 MB with ZIP, 152.6 MB with RLE and 165.9 MB uncompressed (float planes
+/// barely compress); its two-layer recolour on one thread takes 4.94e9 instructions from
+/// the RLE file and 3.98e9 from the uncompressed one (valgrind; the difference is RLE
+/// decoding and the `exr` crate's copies), 0.43 against 0.37 s wall on two cores (nine
+/// alternating runs each; `scripts/ab-run.sh`). Where RLE saves most, a render with a
+/// large interior (1920x1080 minibrot-e102: 26.6 MB RLE, 41.5 MB uncompressed), the file
+/// is small either way. Every OpenEXR reader (Kalles Fraktaler's and Fraktaler-3's tools,
+/// zoomasm) reads uncompressed files; deepfield reads files of any compression.
+pub const COMPRESSION: Compression = Compression::Uncompressed;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Source {
