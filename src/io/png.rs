@@ -70,6 +70,11 @@ impl PngWriter {
         enc.set_depth(if bits == 16 { ::png::BitDepth::Sixteen } else { ::png::BitDepth::Eight });
         enc.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
         enc.set_compression(::png::Compression::Fast);
+        // Paeth on every row rather than the png crate's adaptive choice (all five filters
+        // tried per row): at 640x480, five shipped scenes' files within 2% of the adaptive
+        // size (three smaller), the 4K seahorse recolour's 3% smaller, and 1.5e8 fewer
+        // instructions there (valgrind). `Fastest` (the Up filter) was 4-8% larger.
+        enc.set_filter(::png::Filter::Paeth);
         enc.add_itxt_chunk(SCENE_KEYWORD.into(), scene_toml.into()).map_err(|e| IoError::new(path, e))?;
         for (key, text) in extra {
             enc.add_itxt_chunk((*key).into(), text.clone()).map_err(|e| IoError::new(path, e))?;
