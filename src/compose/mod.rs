@@ -241,8 +241,10 @@ impl Stack {
         let bg = self.background;
         let bg8 = tiny_skia::Color::from_rgba(linear_to_srgb(bg[0]), linear_to_srgb(bg[1]), linear_to_srgb(bg[2]), 1.0)
             .unwrap_or(tiny_skia::Color::BLACK);
-        // The background is filled in only where the bottom layer does not replace it.
-        let mut filled = false;
+        // The background is filled in only where no opaque bottom layer replaces it (below).
+        if self.layers.is_empty() {
+            base.fill(bg8);
+        }
         // Whether every pixel of `base` is opaque, which the table blend needs.
         let mut base_opaque = true;
         let enc = Srgb8Encoder::get();
@@ -268,14 +270,12 @@ impl Stack {
             });
             // An opaque bottom layer drawn normally covers the background exactly: source
             // over an opaque pixel is the pixel, so the layer becomes the base as it is.
-            if i == 0 && opaque && layer.blend == BlendMode::Normal && layer.opacity == 1.0 {
-                std::mem::swap(base, layer_pixmap);
-                filled = true;
-                continue;
-            }
-            if !filled {
+            if i == 0 {
+                if opaque && layer.blend == BlendMode::Normal && layer.opacity == 1.0 {
+                    std::mem::swap(base, layer_pixmap);
+                    continue;
+                }
                 base.fill(bg8);
-                filled = true;
             }
             // Opaque over opaque: tiny-skia's bytes from its table (`table`), else its pipeline.
             let (mode, opacity) = (layer.blend.skia(), layer.opacity);
@@ -294,9 +294,6 @@ impl Stack {
                     base.pixels().iter().all(|p| p.alpha() == 255)
                 }
             };
-        }
-        if !filled {
-            base.fill(bg8);
         }
     }
 }
