@@ -4,66 +4,31 @@
 //! Channels map back by name: `N` (u32), `NF`, `T`, `DEX`, `DEY` (f32), and our trap
 //! channels `trapK.D` (geometric trap distance), `trapK.STRIPE` (stripe average) and
 //! `trapK.R/G/B/A` (bitmap trap colour). The planes are cut into strips of whole rows so
-//! colouring can run on all cores, and handed on strip by strip as the blocks decode
-//! ([`ExrStrips`]), so that a recolour overlaps reading with colouring.
+//! colouring can run on all cores, and handed on strip by strip as they are read
+//! ([`ExrStrips`]), so that a recolour overlaps reading with colouring. This module chooses
+//! the reader; the readers themselves, how a line maps onto planes and the types they hand
+//! on live beside it (`exr_plain`, `exr_blocks`, `exr_lines`, `exr_raw`).
 
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Mutex, PoisonError};
 
-use ::exr::block::UncompressedBlock;
-use ::exr::block::chunk::Chunk;
-use ::exr::block::reader::{AllChunksReader, ChunksReader};
+use ::exr::block::reader::AllChunksReader;
 use ::exr::math::Vec2;
 use ::exr::meta::BlockDescription;
 use ::exr::meta::MetaData;
 use ::exr::meta::attribute::SampleType;
-use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers, f16, read};
+use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers, read};
 use rayon::prelude::*;
 
 use super::IoError;
 use super::exr::SCENE_ATTRIBUTE;
+use super::exr_blocks::decode_blocks;
+use super::exr_lines::{Layout, Slot, lock, slot_of};
+use super::exr_plain::PlainBlocks;
+pub use super::exr_raw::{RawData, RawHeader, TrapKind};
 use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
-
-/// What a raw-data EXR's header says: enough to check that a scene fits the data before
-/// any block is read.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RawHeader {
-    /// Samples per row.
-    pub width: usize,
-    /// Sample rows.
-    pub height: usize,
-    /// The scene stored in the header, if the file has one.
-    pub scene: Option<String>,
-    /// Which of N, NF, T, DEX, DEY the file holds (N always: files without it are refused).
-    pub channels: ChannelSet,
-    /// The kind of each trap plane, in trap order.
-    pub traps: Vec<TrapKind>,
-}
-
-/// The raw data of an EXR file.
-#[derive(Debug, Clone)]
-pub struct RawData {
-    /// What the header says.
-    pub header: RawHeader,
-    /// The planes, in strips of whole rows, top to bottom.
-    pub strips: Vec<Planes>,
-}
-
-/// What one trap's channels hold.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TrapKind {
-    /// `trapK.D`.
-    Distance,
-    /// `trapK.STRIPE`.
-    Stripe,
-    /// `trapK.R/G/B/A`.
-    Color,
-    /// `trapK.IFS`.
-    Density,
-}
 
 /// The most a compressed EXR can expand: deflate (ZIP) reaches ~1032:1, the other
 /// compressions less, so a file claiming more decoded bytes than this many times its size
@@ -99,12 +64,14 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
 
 /// An EXR opened for reading strip by strip: its header read, its pixel data not yet.
 ///
-/// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is decoded
-/// block by block straight into the strips, each block decompressed and converted by a
-/// task on the current rayon pool, and each strip handed on as soon as its last row is in
-/// ([`ExrStrips::for_each_strip`]): a recolour colours the first strips while later blocks
-/// are still being decompressed, and holds only the strips in flight. Anything else (tiles,
-/// mip levels, several parts) goes through the exr crate's whole-image reader first.
+/// A single-part scan-line file (what deepfield and Kalles Fraktaler write) is read straight
+/// into the strips on the current rayon pool, and each strip handed on as soon as its last
+/// row is in ([`ExrStrips::for_each_strip`]): a recolour colours the first strips while later
+/// ones are still being read, and holds only the strips in flight. An uncompressed file (what
+/// deepfield writes) is read in place, each worker reading its strip's lines from the file
+/// (`exr_plain`); a compressed one is decompressed block by block (`exr_blocks`). Anything
+/// else (tiles, mip levels, several parts) goes through the exr crate's whole-image reader
+/// first.
 pub struct ExrStrips {
     path: PathBuf,
     header: RawHeader,
@@ -116,6 +83,8 @@ pub struct ExrStrips {
 enum Source {
     /// The blocks still in the file, and how their lines map to planes.
     Blocks { chunks: Box<AllChunksReader<BufReader<File>>>, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
+    /// An uncompressed file's lines, read in place, and how they map to planes.
+    Plain { blocks: PlainBlocks, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
     /// Strips already read by the whole-image reader.
     Whole(Vec<Planes>),
 }
@@ -127,7 +96,7 @@ impl ExrStrips {
         let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::new(path, e))?;
         check_decoded_size(path, reader.meta_data())?;
         let rows_per = strip_rows.max(1);
-        if let Some(strips) = open_scanlines(path, reader, rows_per)? {
+        if let Some(strips) = open_scanlines(path, reader, rows_per, true)? {
             return Ok(strips);
         }
         let raw = read_whole_image(path, rows_per)?;
@@ -172,6 +141,10 @@ impl ExrStrips {
                 let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
                 decode_blocks(*chunks, &layout, done).map_err(|e| IoError::new(&self.path, e))
             }
+            Source::Plain { blocks, slots, line_bytes } => {
+                let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
+                blocks.read_strips(&layout, done).map_err(|e| IoError::new(&self.path, e))
+            }
         }
     }
 
@@ -184,27 +157,6 @@ impl ExrStrips {
         let strips = slots.into_iter().filter_map(|m| m.into_inner().unwrap_or_else(PoisonError::into_inner)).collect();
         Ok(RawData { header, strips })
     }
-}
-
-/// A mutex's guard, whether or not another thread panicked while holding it (the data is
-/// plain samples, valid either way).
-fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(PoisonError::into_inner)
-}
-
-/// Where one channel's samples go.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Slot {
-    /// `N` (must be uint32).
-    N,
-    /// NF, T, DEX, DEY.
-    Plane(Channel),
-    /// A single-plane trap's channel (trap index).
-    Trap(usize),
-    /// Component `c` of a bitmap trap's colour (trap index, component).
-    Color(usize, usize),
-    /// A channel deepfield does not read.
-    Skip,
 }
 
 /// The trap kinds present in a list of channel names: trap0, trap1, ... until one is
@@ -252,59 +204,18 @@ fn scene_text(attributes: &::exr::meta::header::LayerAttributes) -> Option<Strin
 /// Why a file without an `N` channel is refused.
 const NO_N: &str = "no N channel: this is not a raw-data EXR (render with --exr)";
 
-/// The slot of channel `name` given the trap layout.
-fn slot_of(name: &str, traps: &[TrapKind]) -> Slot {
-    match name {
-        "N" => return Slot::N,
-        "NF" => return Slot::Plane(Channel::NF),
-        "T" => return Slot::Plane(Channel::T),
-        "DEX" => return Slot::Plane(Channel::DEX),
-        "DEY" => return Slot::Plane(Channel::DEY),
-        _ => {}
-    }
-    let Some((k, what)) = name.strip_prefix("trap").and_then(|r| r.split_once('.')) else { return Slot::Skip };
-    let Ok(k) = k.parse::<usize>() else { return Slot::Skip };
-    match (traps.get(k), what) {
-        (Some(TrapKind::Distance), "D") | (Some(TrapKind::Stripe), "STRIPE") | (Some(TrapKind::Density), "IFS") => {
-            Slot::Trap(k)
-        }
-        (Some(TrapKind::Color), c) => {
-            ["R", "G", "B", "A"].iter().position(|x| *x == c).map_or(Slot::Skip, |i| Slot::Color(k, i))
-        }
-        _ => Slot::Skip,
-    }
-}
-
-/// One sample (`bytes`, little-endian, of `kind`) as f32.
-#[inline(always)]
-fn float_of(b: &[u8], kind: SampleType) -> f32 {
-    match kind {
-        SampleType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-        SampleType::F16 => f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32(),
-        SampleType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
-    }
-}
-
-/// Converts one line of samples (`bytes`, little-endian, of `kind`) to f32.
-fn floats_into(dst: &mut [f32], bytes: &[u8], kind: SampleType) {
-    let size = kind.bytes_per_sample();
-    let pairs = dst.iter_mut().zip(bytes.chunks_exact(size));
-    // One loop per kind, each a plain conversion loop (float_of inlines with its kind fixed).
-    match kind {
-        SampleType::F32 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::F32)),
-        SampleType::F16 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::F16)),
-        SampleType::U32 => pairs.for_each(|(d, b)| *d = float_of(b, SampleType::U32)),
-    }
-}
-
-/// Opens the fast path of [`ExrStrips`]: `None` when the file is not a single-part,
-/// single-level scan-line image with full-resolution channels.
+/// Opens the fast paths of [`ExrStrips`]: `None` when the file is not a single-part,
+/// single-level scan-line image with full-resolution channels. An uncompressed file is read
+/// in place where `in_place` allows and [`PlainBlocks`] serves it; other files go through
+/// the block decoder.
 fn open_scanlines(
     path: &Path,
     reader: ::exr::block::reader::Reader<BufReader<File>>,
     rows_per: usize,
+    in_place: bool,
 ) -> Result<Option<ExrStrips>, IoError> {
     let err = |e: ::exr::error::Error| IoError::new(path, e);
+    let err_io = |e: std::io::Error| IoError::new(path, e);
     let header = match reader.headers() {
         [h] => h.clone(),
         _ => return Ok(None),
@@ -330,6 +241,11 @@ fn open_scanlines(
     let line_bytes: usize = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() * width).sum();
     let raw =
         RawHeader { width, height, scene: scene_text(&header.own_attributes), channels: plane_channels(&has), traps };
+    let plain = if in_place { PlainBlocks::locate(path, &header, line_bytes).map_err(err_io)? } else { None };
+    if let Some(blocks) = plain {
+        let source = Source::Plain { blocks, slots, line_bytes };
+        return Ok(Some(ExrStrips { path: path.to_path_buf(), header: raw, rows_per, source }));
+    }
     let chunks = reader.all_chunks(false).map_err(err)?;
     Ok(Some(ExrStrips {
         path: path.to_path_buf(),
@@ -337,233 +253,6 @@ fn open_scanlines(
         rows_per,
         source: Source::Blocks { chunks: Box::new(chunks), slots, line_bytes },
     }))
-}
-
-/// How the lines of a scan-line file's blocks map to strips and planes.
-struct Layout<'a> {
-    header: &'a RawHeader,
-    rows_per: usize,
-    slots: Vec<(Slot, SampleType)>,
-    line_bytes: usize,
-}
-
-impl Layout<'_> {
-    /// Planes for a strip of `rows` rows: handed-back planes of that size where `spare` holds
-    /// some (every plane is overwritten line by line, but for a bitmap trap's colour plane,
-    /// whose RGBA channels the file may hold only some of: that is zeroed), else new ones.
-    fn planes_from(&self, rows: usize, spare: &Mutex<Vec<Planes>>) -> Planes {
-        let reused = {
-            let mut spare = lock(spare);
-            let i = spare.iter().position(|p| p.rows == rows);
-            i.map(|i| spare.swap_remove(i))
-        };
-        let Some(mut planes) = reused else { return self.planes(rows) };
-        for t in &mut planes.traps {
-            if let TrapPlane::Color(v) = t {
-                v.fill([0.0; 4]);
-            }
-        }
-        planes
-    }
-
-    /// Empty planes for a strip of `rows` rows (zeroed allocations: the pages are touched
-    /// only as the lines arrive).
-    fn planes(&self, rows: usize) -> Planes {
-        let (width, channels) = (self.header.width, self.header.channels);
-        let len = rows * width;
-        let plane = |c: Channel| if channels.contains(c) { vec![0.0f32; len] } else { Vec::new() };
-        Planes {
-            width,
-            rows,
-            n: vec![0; len],
-            nf: plane(Channel::NF),
-            t: plane(Channel::T),
-            dex: plane(Channel::DEX),
-            dey: plane(Channel::DEY),
-            traps: self
-                .header
-                .traps
-                .iter()
-                .map(|k| match k {
-                    TrapKind::Distance => TrapPlane::Distance(vec![0.0; len]),
-                    TrapKind::Stripe => TrapPlane::Stripe { value: vec![0.0; len], prev: Vec::new() },
-                    TrapKind::Density => TrapPlane::Density(vec![0.0; len]),
-                    TrapKind::Color => TrapPlane::Color(vec![[0.0; 4]; len]),
-                })
-                .collect(),
-        }
-    }
-
-    /// Converts one scan line of a block into row `row` of `planes`.
-    fn insert_line(&self, planes: &mut Planes, row: usize, line: &[u8]) {
-        let width = self.header.width;
-        let at = row * width..(row + 1) * width;
-        let mut offset = 0;
-        for &(slot, kind) in &self.slots {
-            let bytes = &line[offset..offset + kind.bytes_per_sample() * width];
-            offset += bytes.len();
-            match slot {
-                Slot::N => {
-                    for (d, b) in planes.n[at.clone()].iter_mut().zip(bytes.chunks_exact(4)) {
-                        *d = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                    }
-                }
-                Slot::Plane(c) => {
-                    let dst = match c {
-                        Channel::NF => &mut planes.nf,
-                        Channel::T => &mut planes.t,
-                        Channel::DEX => &mut planes.dex,
-                        _ => &mut planes.dey,
-                    };
-                    floats_into(&mut dst[at.clone()], bytes, kind);
-                }
-                Slot::Trap(k) => match &mut planes.traps[k] {
-                    TrapPlane::Distance(v) | TrapPlane::Density(v) | TrapPlane::Stripe { value: v, .. } => {
-                        floats_into(&mut v[at.clone()], bytes, kind)
-                    }
-                    TrapPlane::Color(_) => {}
-                },
-                Slot::Color(k, i) => {
-                    if let TrapPlane::Color(v) = &mut planes.traps[k] {
-                        for (d, b) in v[at.clone()].iter_mut().zip(bytes.chunks_exact(kind.bytes_per_sample())) {
-                            d[i] = float_of(b, kind);
-                        }
-                    }
-                }
-                Slot::Skip => {}
-            }
-        }
-    }
-}
-
-/// A strip whose rows are arriving.
-#[derive(Default)]
-struct Pending {
-    /// Its planes, allocated when its first row arrives; taken when its last one has.
-    planes: Option<Planes>,
-    /// Which of its rows have arrived.
-    seen: Vec<bool>,
-    /// How many have.
-    count: usize,
-}
-
-/// A damaged file's first fault, kept while the other tasks wind down.
-type Fault = Mutex<Option<String>>;
-
-/// Decompresses the blocks of a scan-line file on the current rayon pool, converts their
-/// lines into strips and hands each complete strip to `done`. The thread reading the file
-/// keeps at most a few blocks per worker in flight (it helps decompress while it waits), so
-/// memory holds the strips being filled, not the file.
-fn decode_blocks(
-    chunks: AllChunksReader<BufReader<File>>,
-    layout: &Layout<'_>,
-    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-) -> Result<(), String> {
-    let (height, rows_per) = (layout.header.height, layout.rows_per);
-    let meta = chunks.meta_data().clone();
-    let spare = Mutex::new(Vec::new());
-    let pending: Vec<Mutex<Pending>> = (0..height.div_ceil(rows_per)).map(|_| Mutex::new(Pending::default())).collect();
-    let fault: Fault = Mutex::new(None);
-    let failed = AtomicBool::new(false);
-    let in_flight = AtomicUsize::new(0);
-    let limit = 4 * rayon::current_num_threads();
-    let fail = |message: String| {
-        failed.store(true, Ordering::Relaxed);
-        lock(&fault).get_or_insert(message);
-    };
-    let (meta, pending, fail, in_flight, spare) = (&meta, &pending, &fail, &in_flight, &spare);
-    rayon::scope(|s| {
-        for chunk in chunks {
-            if failed.load(Ordering::Relaxed) {
-                break;
-            }
-            let chunk = match chunk {
-                Ok(c) => c,
-                Err(e) => {
-                    fail(e.to_string());
-                    break;
-                }
-            };
-            while in_flight.load(Ordering::Acquire) >= limit {
-                if !matches!(rayon::yield_now(), Some(rayon::Yield::Executed)) {
-                    std::thread::yield_now();
-                }
-            }
-            in_flight.fetch_add(1, Ordering::AcqRel);
-            s.spawn(move |_| {
-                let _counted = Leaving(in_flight);
-                if let Err(e) = decode_block(chunk, meta, layout, pending, spare, done) {
-                    fail(e);
-                }
-            });
-        }
-    });
-    if let Some(message) = fault.into_inner().unwrap_or_else(PoisonError::into_inner) {
-        return Err(message);
-    }
-    let lines: usize = pending.iter().map(|p| lock(p).count).sum();
-    if lines != height {
-        return Err(format!("the file holds {lines} of its {height} scan lines: it is damaged"));
-    }
-    Ok(())
-}
-
-/// Takes a block off the count in flight when its task ends, even by a panic (which the
-/// scope then passes on): the reading loop must not wait for a task that is gone.
-struct Leaving<'a>(&'a AtomicUsize);
-
-impl Drop for Leaving<'_> {
-    fn drop(&mut self) {
-        self.0.fetch_sub(1, Ordering::AcqRel);
-    }
-}
-
-/// Decompresses one block, puts its lines into their strips and hands on the strips it
-/// completes.
-fn decode_block(
-    chunk: Chunk,
-    meta: &MetaData,
-    layout: &Layout<'_>,
-    pending: &[Mutex<Pending>],
-    spare: &Mutex<Vec<Planes>>,
-    done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-) -> Result<(), String> {
-    let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
-    let index = block.index;
-    let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
-    if index.layer != 0 || index.level != Vec2(0, 0) {
-        return Ok(());
-    }
-    let lines = index.pixel_size.1;
-    if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * layout.line_bytes {
-        return Err("a scan-line block of the wrong size".into());
-    }
-    for (l, line) in block.data.chunks_exact(layout.line_bytes).enumerate() {
-        let y = index.pixel_position.1 + l;
-        if y >= height {
-            return Err("a scan line outside the data window".into());
-        }
-        let (k, row) = (y / rows_per, y % rows_per);
-        let rows = rows_per.min(height - k * rows_per);
-        let complete = {
-            let mut p = lock(&pending[k]);
-            if p.seen.is_empty() {
-                p.seen = vec![false; rows];
-                p.planes = Some(layout.planes_from(rows, spare));
-            }
-            if std::mem::replace(&mut p.seen[row], true) {
-                return Err(format!("scan line {y} appears twice"));
-            }
-            let Some(planes) = p.planes.as_mut() else { return Err(format!("scan line {y} appears twice")) };
-            layout.insert_line(planes, row, line);
-            p.count += 1;
-            if p.count == rows { p.planes.take() } else { None }
-        };
-        if let Some(back) = complete.and_then(|planes| done(k, planes)) {
-            lock(spare).push(back);
-        }
-    }
-    Ok(())
 }
 
 /// Every plane through the exr crate's whole-image reader (tiled and multi-level files).
@@ -694,25 +383,33 @@ mod tests {
         layer.attributes.other.insert(Text::from(SCENE_ATTRIBUTE), AttributeValue::Text(Text::from("version = 1")));
         let path = std::env::temp_dir().join(format!("deepfield-exr-read-{}-{compression:?}.exr", std::process::id()));
         Image::from_layer(layer).write().to_file(&path).unwrap();
-        let open = |rows: usize| {
+        let open = |rows: usize, in_place: bool| {
             let reader = ::exr::block::read(BufReader::new(File::open(&path).unwrap()), false).unwrap();
-            open_scanlines(&path, reader, rows).unwrap().expect("a scan-line file")
+            open_scanlines(&path, reader, rows, in_place).unwrap().expect("a scan-line file")
         };
+        // Uncompressed files are read in place on Unix (and by the block decoder when told to).
+        let paths: &[bool] =
+            if compression == Compression::Uncompressed && cfg!(unix) { &[true, false] } else { &[true] };
         for rows in [1, 5, 32] {
-            let strips = open(rows);
-            assert!(matches!(strips.source, Source::Blocks { .. }));
-            let fast = strips.collect().unwrap();
             let whole = read_whole_image(&path, rows).unwrap();
-            assert_eq!(fast.strips, whole.strips, "{rows} rows per strip");
-            assert_eq!(fast.header, whole.header);
-            // Lent strips, whose planes are refilled for later strips, read the same.
-            let lent: Vec<Mutex<Option<Planes>>> = whole.strips.iter().map(|_| Mutex::new(None)).collect();
-            open(rows).for_each_strip_lent(|k, p| *lock(&lent[k]) = Some(p.clone())).unwrap();
-            let lent: Vec<Planes> = lent.into_iter().map(|m| m.into_inner().unwrap().expect("every strip")).collect();
-            assert_eq!(lent, whole.strips, "{rows} rows per strip, lent");
-            let h0 = &fast.header;
-            assert_eq!((h0.width, h0.height, &h0.scene), (w, h, &Some("version = 1".to_string())));
-            assert_eq!(h0.traps, [TrapKind::Color, TrapKind::Distance]);
+            for &in_place in paths {
+                let strips = open(rows, in_place);
+                let plain = matches!(strips.source, Source::Plain { .. });
+                assert_eq!(plain, in_place && paths.len() == 2, "{compression:?}, in place {in_place}");
+                assert!(plain || matches!(strips.source, Source::Blocks { .. }));
+                let fast = strips.collect().unwrap();
+                assert_eq!(fast.strips, whole.strips, "{rows} rows per strip, in place {in_place}");
+                assert_eq!(fast.header, whole.header);
+                // Lent strips, whose planes are refilled for later strips, read the same.
+                let lent: Vec<Mutex<Option<Planes>>> = whole.strips.iter().map(|_| Mutex::new(None)).collect();
+                open(rows, in_place).for_each_strip_lent(|k, p| *lock(&lent[k]) = Some(p.clone())).unwrap();
+                let lent: Vec<Planes> =
+                    lent.into_iter().map(|m| m.into_inner().unwrap().expect("every strip")).collect();
+                assert_eq!(lent, whole.strips, "{rows} rows per strip, lent, in place {in_place}");
+                let h0 = &fast.header;
+                assert_eq!((h0.width, h0.height, &h0.scene), (w, h, &Some("version = 1".to_string())));
+                assert_eq!(h0.traps, [TrapKind::Color, TrapKind::Distance]);
+            }
         }
         let raw = read_exr_planes(&path, 5).unwrap();
         // Strip 6 holds rows 30..35: its row 2 is row 32.
@@ -721,9 +418,16 @@ mod tests {
     }
 
     /// A file cut short is refused with the file named, whichever block the cut falls in,
-    /// and never hands on a strip twice.
+    /// and never hands on a strip twice: compressed, and uncompressed (whose offset table
+    /// then points past the end, so the block decoder reads it).
     #[test]
     fn truncated_files_are_refused() {
+        for compression in [Compression::RLE, Compression::Uncompressed] {
+            truncated_file_is_refused(compression);
+        }
+    }
+
+    fn truncated_file_is_refused(compression: Compression) {
         let (w, h) = (19usize, 70usize);
         let channels = SpecificChannels::build()
             .with_channel("N")
@@ -732,10 +436,10 @@ mod tests {
         let layer = Layer::new(
             (w, h),
             LayerAttributes::named("deepfield"),
-            Encoding { compression: Compression::RLE, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
+            Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
             channels,
         );
-        let dir = std::env::temp_dir().join(format!("deepfield-exr-cut-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("deepfield-exr-cut-{}-{compression:?}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let whole = dir.join("whole.exr");
         Image::from_layer(layer).write().to_file(&whole).unwrap();

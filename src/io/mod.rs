@@ -8,6 +8,10 @@
 mod atomic;
 mod bitmap;
 mod exr;
+mod exr_blocks;
+mod exr_lines;
+mod exr_plain;
+mod exr_raw;
 mod exr_read;
 pub mod output;
 mod png;

@@ -1,0 +1,46 @@
+//! What a raw-data EXR holds, as the readers hand it on: the header's facts and the planes
+//! in strips of whole rows.
+//!
+//! Kept apart from the readers so that each of them (the block decoder, the in-place reader
+//! of uncompressed files, the whole-image fallback) depends on these types and none on
+//! another.
+
+use crate::field::{ChannelSet, Planes};
+
+/// What a raw-data EXR's header says: enough to check that a scene fits the data before
+/// any block is read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawHeader {
+    /// Samples per row.
+    pub width: usize,
+    /// Sample rows.
+    pub height: usize,
+    /// The scene stored in the header, if the file has one.
+    pub scene: Option<String>,
+    /// Which of N, NF, T, DEX, DEY the file holds (N always: files without it are refused).
+    pub channels: ChannelSet,
+    /// The kind of each trap plane, in trap order.
+    pub traps: Vec<TrapKind>,
+}
+
+/// The raw data of an EXR file.
+#[derive(Debug, Clone)]
+pub struct RawData {
+    /// What the header says.
+    pub header: RawHeader,
+    /// The planes, in strips of whole rows, top to bottom.
+    pub strips: Vec<Planes>,
+}
+
+/// What one trap's channels hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrapKind {
+    /// `trapK.D`.
+    Distance,
+    /// `trapK.STRIPE`.
+    Stripe,
+    /// `trapK.R/G/B/A`.
+    Color,
+    /// `trapK.IFS`.
+    Density,
+}
