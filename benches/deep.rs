@@ -14,6 +14,8 @@ use deepfield::scene::Scene;
 use divan::counter::ItemsCount;
 use rayon::prelude::*;
 
+mod common;
+
 fn main() {
     divan::main();
 }
@@ -37,7 +39,8 @@ fn run(scene: &Scene) -> u64 {
 }
 
 fn bench_scene(bencher: divan::Bencher<'_, '_>, name: &str) {
-    let s = scene(name);
+    let mut s = scene(name);
+    (s.width, s.height) = (common::side(s.width), common::side(s.height));
     let iterations = run(&s);
     bencher.counter(ItemsCount::new(iterations)).bench(|| run(&s));
 }

@@ -14,6 +14,8 @@ use deepfield::trap::{Shape, Trap};
 use divan::counter::ItemsCount;
 use rayon::prelude::*;
 
+mod common;
+
 fn main() {
     divan::main();
 }
@@ -24,8 +26,9 @@ fn params(needs: Needs) -> FieldParams {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
     let text = std::fs::read_to_string(&path).expect("scene");
     let file = Scene::parse_file(SCENE, &text).expect("parses");
-    let scene =
+    let mut scene =
         Scene::validate(file, SCENE, &text, path.parent().unwrap(), &deepfield::io::load_bitmap).expect("valid");
+    (scene.width, scene.height) = (common::side(scene.width), common::side(scene.height));
     let mut p = deepfield::render::field_params(&scene, Default::default());
     p.needs = needs;
     p.orbit.derivative = p.needs.de;

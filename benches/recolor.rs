@@ -18,14 +18,22 @@ use deepfield::scene::Scene;
 use divan::counter::ItemsCount;
 use rayon::prelude::*;
 
+mod common;
+
 fn main() {
     divan::main();
 }
 
-const VIEW: &str = "version = 1\n[view]\ncenter = [\"-0.74515\", \"0.11255\"]\nzoom = \"3600\"\nwidth = 3840\nheight = 2160\n[iteration]\nmax = 1000\n";
+/// Seahorse valley at 3840x2160 when measuring.
+fn view() -> String {
+    let (w, h) = (common::side(3840), common::side(2160));
+    format!(
+        "version = 1\n[view]\ncenter = [\"-0.74515\", \"0.11255\"]\nzoom = \"3600\"\nwidth = {w}\nheight = {h}\n[iteration]\nmax = 1000\n"
+    )
+}
 
 fn scene(layers: &str) -> Scene {
-    let text = format!("{VIEW}{layers}");
+    let text = format!("{}{layers}", view());
     let file = Scene::parse_file("bench", &text).expect("parses");
     Scene::validate(file, "bench", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).expect("valid")
 }
