@@ -195,22 +195,8 @@ mod tests {
 
     /// An uncompressed file of `h` rows whose N is its sample index, written to `name`.
     fn write(name: &str, w: usize, h: usize) -> std::path::PathBuf {
-        let channels = SpecificChannels::build()
-            .with_channel("N")
-            .with_channel("NF")
-            .with_pixel_fn(|p: Vec2<usize>| ((p.1 * w + p.0) as u32, p.0 as f32 * 0.25));
-        let layer = Layer::new(
-            (w, h),
-            LayerAttributes::named("deepfield"),
-            Encoding {
-                compression: Compression::Uncompressed,
-                blocks: Blocks::ScanLines,
-                line_order: LineOrder::Increasing,
-            },
-            channels,
-        );
         let path = std::env::temp_dir().join(format!("deepfield-exr-plain-{}-{name}.exr", std::process::id()));
-        Image::from_layer(layer).write().to_file(&path).unwrap();
+        crate::io::exr_test_file::write_n_nf(&path, w, h, Compression::Uncompressed);
         path
     }
 

@@ -429,20 +429,10 @@ mod tests {
 
     fn truncated_file_is_refused(compression: Compression) {
         let (w, h) = (19usize, 70usize);
-        let channels = SpecificChannels::build()
-            .with_channel("N")
-            .with_channel("NF")
-            .with_pixel_fn(|p: Vec2<usize>| ((p.1 * w + p.0) as u32, p.0 as f32 * 0.5));
-        let layer = Layer::new(
-            (w, h),
-            LayerAttributes::named("deepfield"),
-            Encoding { compression, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
-            channels,
-        );
         let dir = std::env::temp_dir().join(format!("deepfield-exr-cut-{}-{compression:?}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let whole = dir.join("whole.exr");
-        Image::from_layer(layer).write().to_file(&whole).unwrap();
+        crate::io::exr_test_file::write_n_nf(&whole, w, h, compression);
         let bytes = std::fs::read(&whole).unwrap();
         let full = read_exr_planes(&whole, 8).unwrap();
         assert_eq!(full.strips.len(), 9);

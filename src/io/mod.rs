@@ -13,6 +13,8 @@ mod exr_lines;
 mod exr_plain;
 mod exr_raw;
 mod exr_read;
+#[cfg(test)]
+mod exr_test_file;
 pub mod output;
 mod png;
 mod scene_source;
