@@ -1,4 +1,5 @@
-//! Decoding the blocks of a compressed scan-line EXR in parallel, straight into strips.
+//! Decoding the blocks of a scan-line EXR in parallel, straight into strips: compressed
+//! files, and uncompressed ones the in-place reader (`exr_plain`) does not serve.
 //!
 //! The file is read block by block in file order by one thread, which hands each block to a
 //! task on the current rayon pool: the task decompresses it (through the exr crate), puts its

@@ -18,7 +18,8 @@
 //! blocks in file order without the table; a block that fails the second is a damaged file.
 //!
 //! Positioned reads are Unix's (`pread`); elsewhere, and on big-endian machines, the block
-//! decoder reads these files too.
+//! decoder reads these files too, as it does files flagged multi-part (whose blocks carry a
+//! part number).
 
 use std::fs::File;
 use std::io::{BufReader, Read};
@@ -79,17 +80,20 @@ impl PlainBlocks {
         let file_len = file.metadata()?.len();
         // Parse the header again, counting the bytes it spans: the offset table follows it.
         let mut counting = Counting { inner: BufReader::new(&file), count: 0 };
+        // A file flagged multi-part (even with one part) prefixes each block with its part
+        // number: the block decoder reads those.
         match MetaData::read_from_buffered(&mut counting, false) {
-            Ok(meta) if meta.headers.len() == 1 => {}
+            Ok(meta) if meta.headers.len() == 1 && !meta.requirements.is_multilayer() => {}
             _ => return Ok(None),
         }
         let table_at = counting.count;
         // The table's size is checked against the file before it is allocated.
-        let table_end = table_at.saturating_add((lines as u64).saturating_mul(8));
+        let Some(table_len) = lines.checked_mul(8) else { return Ok(None) };
+        let table_end = table_at.saturating_add(table_len as u64);
         if table_end > file_len {
             return Ok(None);
         }
-        let mut table = vec![0u8; lines * 8];
+        let mut table = vec![0u8; table_len];
         read_exact_at(&file, &mut table, table_at)?;
         let block = (BLOCK_HEAD + line_bytes) as u64;
         let offsets: Vec<u64> = table
@@ -196,7 +200,7 @@ mod tests {
     /// An uncompressed file of `h` rows whose N is its sample index, written to `name`.
     fn write(name: &str, w: usize, h: usize) -> std::path::PathBuf {
         let path = std::env::temp_dir().join(format!("deepfield-exr-plain-{}-{name}.exr", std::process::id()));
-        crate::io::exr_test_file::write_n_nf(&path, w, h, Compression::Uncompressed);
+        crate::io::exr_test_file::write_n_nf(&path, (w, h), (0, 0), Compression::Uncompressed);
         path
     }
 
@@ -245,6 +249,22 @@ mod tests {
         let meta = MetaData::read_from_file(&path, false).unwrap();
         assert!(PlainBlocks::locate(&path, &meta.headers[0], w * 8).unwrap().is_none());
         assert_eq!(crate::io::read_exr_planes(&path, 8).unwrap().strips, good.strips);
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    /// A data window whose top is not at y = 0: its blocks carry absolute y coordinates,
+    /// which the reader checks from the window's top, and the planes hold the window's rows.
+    #[test]
+    fn data_windows_off_the_origin() {
+        let (w, h) = (9, 20);
+        let path = std::env::temp_dir().join(format!("deepfield-exr-plain-{}-window.exr", std::process::id()));
+        crate::io::exr_test_file::write_n_nf(&path, (w, h), (-3, 7), Compression::Uncompressed);
+        let meta = MetaData::read_from_file(&path, false).unwrap();
+        let blocks = PlainBlocks::locate(&path, &meta.headers[0], w * 8).unwrap().expect("read in place");
+        assert_eq!(blocks.y0, 7);
+        let raw = crate::io::read_exr_planes(&path, 6).unwrap();
+        let n: Vec<u32> = raw.strips.iter().flat_map(|s| s.n.iter().copied()).collect();
+        assert_eq!(n, (0..(w * h) as u32).collect::<Vec<_>>());
         std::fs::remove_file(&path).unwrap();
     }
 }

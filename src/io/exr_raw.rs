@@ -1,9 +1,9 @@
 //! What a raw-data EXR holds, as the readers hand it on: the header's facts and the planes
 //! in strips of whole rows.
 //!
-//! Kept apart from the readers so that each of them (the block decoder, the in-place reader
-//! of uncompressed files, the whole-image fallback) depends on these types and none on
-//! another.
+//! Kept apart from the readers so that the block decoder and the in-place reader of
+//! uncompressed files depend on these types, not on the module that chooses between them
+//! (`exr_read`, which also holds the whole-image fallback).
 
 use crate::field::{ChannelSet, Planes};
 

@@ -68,8 +68,9 @@ pub fn read_exr_planes(path: &Path, strip_rows: usize) -> Result<RawData, IoErro
 /// into the strips on the current rayon pool, and each strip handed on as soon as its last
 /// row is in ([`ExrStrips::for_each_strip`]): a recolour colours the first strips while later
 /// ones are still being read, and holds only the strips in flight. An uncompressed file (what
-/// deepfield writes) is read in place, each worker reading its strip's lines from the file
-/// (`exr_plain`); a compressed one is decompressed block by block (`exr_blocks`). Anything
+/// deepfield writes) is read in place on little-endian Unix machines when its offset table
+/// checks out, each worker reading its strip's lines from the file (`exr_plain`); other
+/// scan-line files are decompressed block by block (`exr_blocks`). Anything
 /// else (tiles, mip levels, several parts) goes through the exr crate's whole-image reader
 /// first.
 pub struct ExrStrips {
@@ -432,7 +433,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("deepfield-exr-cut-{}-{compression:?}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let whole = dir.join("whole.exr");
-        crate::io::exr_test_file::write_n_nf(&whole, w, h, compression);
+        crate::io::exr_test_file::write_n_nf(&whole, (w, h), (0, 0), compression);
         let bytes = std::fs::read(&whole).unwrap();
         let full = read_exr_planes(&whole, 8).unwrap();
         assert_eq!(full.strips.len(), 9);
