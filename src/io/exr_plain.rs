@@ -69,7 +69,7 @@ impl PlainBlocks {
     /// bytes; `None` where this reader does not serve the file (compressed, or an offset
     /// table that does not check out, or a machine without positioned little-endian reads).
     pub(super) fn locate(path: &Path, header: &Header, line_bytes: usize) -> std::io::Result<Option<Self>> {
-        if !POSITIONED || header.compression != Compression::Uncompressed || header.deep {
+        if !POSITIONED || header.compression != Compression::Uncompressed {
             return Ok(None);
         }
         let lines = header.layer_size.1;

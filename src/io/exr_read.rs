@@ -82,12 +82,18 @@ pub struct ExrStrips {
 
 /// Where an [`ExrStrips`] takes its strips from.
 enum Source {
-    /// The blocks still in the file, and how their lines map to planes.
-    Blocks { chunks: Box<AllChunksReader<BufReader<File>>>, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
-    /// An uncompressed file's lines, read in place, and how they map to planes.
-    Plain { blocks: PlainBlocks, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
+    /// A scan-line file's lines, still in the file, and how they map to planes.
+    Lines { reader: LineReader, slots: Vec<(Slot, SampleType)>, line_bytes: usize },
     /// Strips already read by the whole-image reader.
     Whole(Vec<Planes>),
+}
+
+/// Which reader takes a scan-line file's lines out of it.
+enum LineReader {
+    /// The block decoder (`exr_blocks`), with the blocks still to be read.
+    Blocks(Box<AllChunksReader<BufReader<File>>>),
+    /// The in-place reader of an uncompressed file (`exr_plain`).
+    InPlace(PlainBlocks),
 }
 
 impl ExrStrips {
@@ -138,13 +144,13 @@ impl ExrStrips {
                 strips.into_par_iter().enumerate().for_each(|(k, p)| drop(done(k, p)));
                 Ok(())
             }
-            Source::Blocks { chunks, slots, line_bytes } => {
+            Source::Lines { reader, slots, line_bytes } => {
                 let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
-                decode_blocks(*chunks, &layout, done).map_err(|e| IoError::new(&self.path, e))
-            }
-            Source::Plain { blocks, slots, line_bytes } => {
-                let layout = Layout { header: &self.header, rows_per: self.rows_per, slots, line_bytes };
-                blocks.read_strips(&layout, done).map_err(|e| IoError::new(&self.path, e))
+                match reader {
+                    LineReader::Blocks(chunks) => decode_blocks(*chunks, &layout, done),
+                    LineReader::InPlace(blocks) => blocks.read_strips(&layout, done),
+                }
+                .map_err(|e| IoError::new(&self.path, e))
             }
         }
     }
@@ -243,17 +249,12 @@ fn open_scanlines(
     let raw =
         RawHeader { width, height, scene: scene_text(&header.own_attributes), channels: plane_channels(&has), traps };
     let plain = if in_place { PlainBlocks::locate(path, &header, line_bytes).map_err(err_io)? } else { None };
-    if let Some(blocks) = plain {
-        let source = Source::Plain { blocks, slots, line_bytes };
-        return Ok(Some(ExrStrips { path: path.to_path_buf(), header: raw, rows_per, source }));
-    }
-    let chunks = reader.all_chunks(false).map_err(err)?;
-    Ok(Some(ExrStrips {
-        path: path.to_path_buf(),
-        header: raw,
-        rows_per,
-        source: Source::Blocks { chunks: Box::new(chunks), slots, line_bytes },
-    }))
+    let reader = match plain {
+        Some(blocks) => LineReader::InPlace(blocks),
+        None => LineReader::Blocks(Box::new(reader.all_chunks(false).map_err(err)?)),
+    };
+    let source = Source::Lines { reader, slots, line_bytes };
+    Ok(Some(ExrStrips { path: path.to_path_buf(), header: raw, rows_per, source }))
 }
 
 /// Every plane through the exr crate's whole-image reader (tiled and multi-level files).
@@ -395,9 +396,9 @@ mod tests {
             let whole = read_whole_image(&path, rows).unwrap();
             for &in_place in paths {
                 let strips = open(rows, in_place);
-                let plain = matches!(strips.source, Source::Plain { .. });
+                let Source::Lines { reader, .. } = &strips.source else { panic!("not read by lines") };
+                let plain = matches!(reader, LineReader::InPlace(_));
                 assert_eq!(plain, in_place && paths.len() == 2, "{compression:?}, in place {in_place}");
-                assert!(plain || matches!(strips.source, Source::Blocks { .. }));
                 let fast = strips.collect().unwrap();
                 assert_eq!(fast.strips, whole.strips, "{rows} rows per strip, in place {in_place}");
                 assert_eq!(fast.header, whole.header);
