@@ -174,7 +174,7 @@ fn report(
         );
         if let Some(d) = &stats.deep {
             text.push_str(&format!(
-                "reference   {} iterations{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                "reference   {} iterations{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages)\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
                 d.reference_iterations,
                 match (d.reference_escaped, d.reference_period) {
                     (true, _) => " (escaped)".to_string(),
@@ -187,6 +187,8 @@ fn report(
                 d.tables_seconds,
                 d.reference_bytes as f64 / 1e6,
                 d.bla_bytes as f64 / 1e6,
+                d.aligned_steps.0,
+                d.aligned_steps.1,
                 d.steps,
                 d.floatexp_steps,
                 d.bla_steps,

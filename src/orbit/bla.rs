@@ -25,7 +25,18 @@
 //!
 //! Merging pairs level by level gives a binary tree: level k holds steps of 2^k iterations
 //! starting at origin + i 2^k, so at any index the loop tries the longest aligned step
-//! first. Tables are built with wide exponents (radii below 1e-300 and products above 1e300
+//! first. Beside the tree, steps aligned to the reference's near-periods run from one dip of
+//! the orbit towards 0 to the next, in stages of longer near-periods ([`Stages`], after
+//! Zhuoran's "LA v2"): a sample that rebases at every dip crosses from dip to dip in one
+//! step where the tree needs as many as the distance has binary digits.
+//!
+//! The loop tests a sample for rebase and escape at the index it looks up a step from, so a
+//! step's own first index needs neither guard: every step keeps a second radius without
+//! them (the start radius), which [`BlaTable::lookup`] tests. At a dip the first step is
+//! then valid for deltas as large as the reference there (the sample passes the dip without
+//! rebasing), where the guarded radius, |Z_m| / 2, would leave it to single steps.
+//!
+//! Tables are built with wide exponents (radii below 1e-300 and products above 1e300
 //! are normal at depth): radii in `FloatExp`, and coefficients, while merging, as complex
 //! numbers sharing one exponent ([`Scaled`]: a third less time for the e1086 benchmark's
 //! tables than `FloatExp` parts, the same image). They are converted to f64 for the f64
@@ -35,7 +46,7 @@
 use rayon::prelude::*;
 
 use super::reference::Reference;
-use crate::num::real::{cadd, cmul};
+use crate::num::real::{cadd, cmul, norm2};
 use crate::num::{FloatExp, Real, Scaled};
 
 /// The first-order part of a step over 2^level iterations, z -> a z + b c, which is valid on
@@ -52,7 +63,8 @@ pub struct Bla<T> {
 }
 
 /// The second-order part of the same step: z -> ... + a2 z^2 + ab z c + b2 c^2, valid with
-/// the first-order part while |z|^2 < r2.
+/// the first-order part while |z|^2 < r2 (for a delta tested at the step's first index, up
+/// to the larger start radius kept beside the table: [`BlaTable::lookup`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Second<T> {
     /// Multiplier of the delta squared.
@@ -117,10 +129,83 @@ pub struct BlaTable<T> {
     levels: Vec<Vec<Bla<T>>>,
     /// Their second-order parts, alike.
     seconds: Vec<Vec<Second<T>>>,
-    /// The squared radii again, by start index: for index i (from the origin) the radii of
-    /// its steps of every level, shortest first, side by side (see [`column`]). A lookup then
-    /// reads one cache line instead of one per level.
+    /// The squared start radii (for a delta tested at the step's first index, see
+    /// [`BlaTable::lookup`]; at least `r2`), by start index: for index i (from the origin)
+    /// the radii of its steps of every level, shortest first, side by side (see [`column`]).
+    /// A lookup then reads one cache line instead of one per level.
     radii: Vec<T>,
+    /// Steps aligned to the reference's near-periods (see [`Stages`]).
+    stages: Stages<T>,
+}
+
+/// Steps that end where the reference dips towards 0, in stages (after Zhuoran's "LA v2").
+///
+/// A sample rebases where the reference passes near 0 (|Z_m + δ| < |δ|), and a run of
+/// steps that crosses such a dip is valid only for deltas below the dip's |Z_m| / 2, so the
+/// binary tree's aligned steps reach a dip in as many steps as its distance has binary
+/// digits, and after every rebase (back to index 1) a sample climbs the tree again. Steps
+/// that start at one dip and end at the next cross no dip: they keep the large radius of
+/// the orbit between, and take a sample from one dip to the next in one step.
+///
+/// Stage 0's marks are the indices where |Z_m| falls below [`DIP`] times the least |Z| since
+/// the previous mark (the origin is always a mark): the reference's near-periods. Stage k + 1
+/// keeps those of stage k's marks where the same holds among stage k's marks: the deeper
+/// returns of a longer near-period. The stages end when a stage keeps every mark of the one
+/// before.
+///
+/// Steps start at every stage-0 mark, and at the index after it (a sample that passes a dip
+/// with a delta too large for a step from there takes one exact single step and goes on
+/// from the next index). From each, a step runs to the next mark of every stage whose next
+/// mark lies further on: to stage 0's next mark, then on to stage 1's, and so on, shortest
+/// first. A sample that left the stage-k marks (its delta grew) still reaches the next
+/// stage-(k+1) mark in one step, rather than going from mark to mark of stage k. Each is
+/// composed from the binary tree's steps and the stages' own by the same merge, so its
+/// radii are computed as theirs are, and each longer step from an index is the shorter one
+/// merged with more, so its radii are no larger: a lookup climbs them as it climbs the
+/// levels. Built in one pass per stage (each stage-k mark's step on to the next stage-(k+1)
+/// mark is folded from the right), and stored for a few indices only (`--stats` prints how
+/// many: bench-e1086 has 36920, in 10 stages, beside 538506 reference iterations).
+#[derive(Debug, Clone)]
+struct Stages<T> {
+    /// One bit per index from the origin: set where steps start.
+    marked: Vec<u64>,
+    /// For each index from the origin (and one past the last), where its steps start in the
+    /// arrays below: index i's are `at[i]..at[i + 1]`, shortest (stage 0) first.
+    at: Vec<u32>,
+    /// First-order parts.
+    first: Vec<Bla<T>>,
+    /// Second-order parts.
+    second: Vec<Second<T>>,
+    /// Squared start radii (see [`BlaTable::lookup`]).
+    start2: Vec<T>,
+    /// Lengths in iterations.
+    len: Vec<u32>,
+    /// How many stages there are.
+    count: usize,
+}
+
+/// How far below the least |Z| since the previous mark the reference must dip for a new
+/// mark (stage 0), or a mark below the least of its stage's marks since the previous one of
+/// the next stage.
+const DIP: f64 = 1.0 / 64.0;
+
+/// The positions in `at` (ascending) kept as marks: the first, and each whose squared
+/// magnitude `mag2` is below DIP^2 times the least since the last kept one (not counting
+/// that one itself).
+fn dips(at: &[u32], mag2: impl Fn(u32) -> FloatExp) -> Vec<u32> {
+    let mut keep: Vec<u32> = at.first().copied().into_iter().collect();
+    let mut low: Option<FloatExp> = None;
+    for &i in at.iter().skip(1) {
+        let v = mag2(i);
+        match low {
+            Some(l) if v < l.mul_f64(DIP * DIP) => {
+                keep.push(i);
+                low = None;
+            }
+            _ => low = Some(low.map_or(v, |l| l.min(v))),
+        }
+    }
+    keep
 }
 
 /// Where index i's radii start in `radii` and how many there are, for `top` levels. Index
@@ -136,15 +221,15 @@ fn column(i: u32, top: usize) -> (usize, usize) {
     }
 }
 
-/// The column layout of `levels`' radii; `never` marks a step past a level's end.
-fn columns<T: Real>(levels: &[Vec<Second<T>>], never: T) -> Vec<T> {
-    let top = levels.len();
-    let count = levels.first().map_or(0, |l| 2 * l.len() as u32);
+/// The column layout of the radii `radius(k, j)` of `top` levels whose first holds
+/// `shortest` steps; `never` marks a step past a level's end (None).
+fn columns<T: Real>(top: usize, shortest: usize, radius: impl Fn(usize, usize) -> Option<T>, never: T) -> Vec<T> {
+    let count = 2 * shortest as u32;
     let mut radii = Vec::with_capacity(count as usize + top);
     for i in 0..count {
         let (start, n) = column(i, top);
         debug_assert_eq!(start, radii.len());
-        radii.extend((0..n).map(|k| levels[k].get((i >> (k + 1)) as usize).map_or(never, |e| e.r2)));
+        radii.extend((0..n).map(|k| radius(k, (i >> (k + 1)) as usize).unwrap_or(never)));
     }
     radii
 }
@@ -162,8 +247,40 @@ struct Node {
     ab: Scaled,
     b2: Scaled,
     r: FloatExp,
+    /// The radius without the first index's own guards (see [`BlaTable::lookup`]).
+    r0: FloatExp,
     /// Radius of the first-order step (Zhuoran's BLA).
     lin: FloatExp,
+}
+
+impl Node {
+    /// The single step at Z = `z`: exact, with the radius of the module docs.
+    fn single(z: [FloatExp; 2], one: Scaled, epsilon: f64, escape: FloatExp) -> Node {
+        let z = Scaled::from_fe(z);
+        let size = z.abs();
+        let lin = size.mul_f64(epsilon);
+        let r = size.ldexp(-1).min((escape - size).max(lin));
+        // The step itself is exact: with rebase and escape ruled out at its index, only
+        // the size of a delta that has not escaped (|δ| <= |Z + δ| + |Z| <= 2 R) bounds it.
+        let r0 = escape.ldexp(2);
+        let a2 = Scaled::from_f64([1.0, 0.0]);
+        Node { a: z.ldexp(1), b: one, a2, ab: Scaled::ZERO, b2: Scaled::ZERO, r, r0, lin }
+    }
+
+    /// A stored step (with its squared start radius `r02`), back in the form merges take.
+    fn stored(f: &Bla<FloatExp>, q: &Second<FloatExp>, r02: FloatExp) -> Node {
+        let s = Scaled::from_fe;
+        let (r, r0, lin) = (q.r2.sqrt(), r02.sqrt(), f.lin2.sqrt());
+        Node { a: s(f.a), b: s(f.b), a2: s(q.a2), ab: s(q.ab), b2: s(q.b2), r, r0, lin }
+    }
+
+    /// The parts a table stores.
+    fn parts(&self) -> (Bla<FloatExp>, Second<FloatExp>) {
+        (
+            Bla { a: self.a.to_fe(), b: self.b.to_fe(), lin2: self.lin * self.lin },
+            Second { a2: self.a2.to_fe(), ab: self.ab.to_fe(), b2: self.b2.to_fe(), r2: self.r * self.r },
+        )
+    }
 }
 
 /// The largest ρ >= 0 such that p ρ^2 + q ρ + s <= 0 holds on all of [0, ρ], for p >= 0;
@@ -206,10 +323,11 @@ fn merge(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
         if a2y.is_zero() { None } else { largest_root(qp, qq, qs - quarter * ay / a2y) },
     ];
     let r = bounds.into_iter().flatten().fold(x.r, FloatExp::min);
+    let r0 = bounds.into_iter().flatten().fold(x.r0, FloatExp::min);
     // First order: z valid for x and A_x z + B_x c valid for y.
     let through = (y.lin - bx * g).max(FloatExp::ZERO);
     let lin = x.lin.min(if ax.is_zero() { y.lin.max(FloatExp::ZERO) } else { through / ax });
-    Node { a, b, a2, ab, b2, r, lin }
+    Node { a, b, a2, ab, b2, r, r0, lin }
 }
 
 impl BlaTable<FloatExp> {
@@ -226,78 +344,256 @@ impl BlaTable<FloatExp> {
     ) -> Self {
         let one = Scaled::from_f64([if mandelbrot { 1.0 } else { 0.0 }, 0.0]);
         let escape = FloatExp::from(escape);
-        let mut level: Vec<Node> = (origin..orbit.last())
-            .into_par_iter()
-            .map(|m| {
-                let z = Scaled::from_fe(orbit.get_fe(m));
-                let size = z.abs();
-                let lin = size.mul_f64(epsilon);
-                let r = size.ldexp(-1).min((escape - size).max(lin));
-                let a2 = Scaled::from_f64([1.0, 0.0]);
-                Node { a: z.ldexp(1), b: one, a2, ab: Scaled::ZERO, b2: Scaled::ZERO, r, lin }
-            })
-            .collect();
-        let (mut levels, mut seconds) = (Vec::new(), Vec::new());
+        let single = |i: u32| Node::single(orbit.get_fe(origin + i), one, epsilon, escape);
+        let mut level: Vec<Node> = (0..orbit.last().saturating_sub(origin)).into_par_iter().map(single).collect();
+        let count = level.len() as u32;
+        let (mut levels, mut seconds, mut starts) = (Vec::new(), Vec::new(), Vec::new());
         while level.len() >= 2 {
             level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], dc_max, epsilon)).collect();
-            levels
-                .push(level.par_iter().map(|n| Bla { a: n.a.to_fe(), b: n.b.to_fe(), lin2: n.lin * n.lin }).collect());
-            seconds.push(
-                level
-                    .par_iter()
-                    .map(|n| Second { a2: n.a2.to_fe(), ab: n.ab.to_fe(), b2: n.b2.to_fe(), r2: n.r * n.r })
-                    .collect(),
-            );
+            let (l, q): (Vec<_>, Vec<_>) = level.par_iter().map(Node::parts).unzip();
+            levels.push(l);
+            seconds.push(q);
+            starts.push(level.par_iter().map(|n| n.r0 * n.r0).collect::<Vec<FloatExp>>());
         }
-        let radii = columns(&seconds, FloatExp::ZERO);
-        BlaTable { origin, levels, seconds, radii }
+        let (top, shortest) = (levels.len(), levels.first().map_or(0, Vec::len));
+        let radii = columns(top, shortest, |k, j| starts[k].get(j).copied(), FloatExp::ZERO);
+        // Index i's step of 2^k iterations (k = 0: the single step).
+        let tree = |i: u32, k: usize| {
+            if k == 0 {
+                single(i)
+            } else {
+                let j = (i >> k) as usize;
+                Node::stored(&levels[k - 1][j], &seconds[k - 1][j], starts[k - 1][j])
+            }
+        };
+        let mag2 = |i| norm2(orbit.get_fe(origin + i));
+        let stages = Stages::build(count, top, mag2, tree, |x, y| merge(x, y, dc_max, epsilon));
+        BlaTable { origin, levels, seconds, radii, stages }
     }
 
     /// The same table for the f64 loop; entries f64 cannot hold are never valid.
     pub fn to_f64(&self) -> BlaTable<f64> {
-        let f = |v: [FloatExp; 2]| [v[0].to_f64(), v[1].to_f64()];
-        let finite = |vs: &[[f64; 2]]| vs.iter().flatten().all(|v| v.is_finite());
         let mut levels = Vec::new();
         let mut seconds = Vec::new();
         for (l, q) in self.levels.iter().zip(&self.seconds) {
-            let pairs = l.par_iter().zip(q.par_iter()).map(|(e, q)| {
-                let (a, b, a2, ab, b2) = (f(e.a), f(e.b), f(q.a2), f(q.ab), f(q.b2));
-                let lin2 = if finite(&[a, b]) { e.lin2.to_f64() } else { -1.0 };
-                let r2 = if finite(&[a, b, a2, ab, b2]) { q.r2.to_f64() } else { -1.0 };
-                (Bla { a, b, lin2 }, Second { a2, ab, b2, r2 })
-            });
-            let (l, q): (Vec<_>, Vec<_>) = pairs.unzip();
+            let (l, q): (Vec<_>, Vec<_>) = l.par_iter().zip(q.par_iter()).map(|(e, q)| entry_to_f64(e, q)).unzip();
             levels.push(l);
             seconds.push(q);
         }
-        let radii = columns(&seconds, -1.0);
-        BlaTable { origin: self.origin, levels, seconds, radii }
+        // A start radius where the step's parts are finite in f64 (r2 is negative where not).
+        let (top, shortest) = (levels.len(), levels.first().map_or(0, Vec::len));
+        let start2 = |k: usize, j: usize| {
+            let q: &Second<f64> = seconds[k].get(j)?;
+            let i = (j as u32) << (k + 1);
+            Some(if q.r2 < 0.0 { -1.0 } else { self.radii[column(i, top).0 + k].to_f64() })
+        };
+        let radii = columns(top, shortest, start2, -1.0);
+        let s = &self.stages;
+        let (first, second): (Vec<_>, Vec<_>) =
+            s.first.par_iter().zip(s.second.par_iter()).map(|(e, q)| entry_to_f64(e, q)).unzip();
+        let start2: Vec<f64> =
+            second.iter().zip(&s.start2).map(|(q, r)| if q.r2 < 0.0 { -1.0 } else { r.to_f64() }).collect();
+        let (marked, at, len, count) = (s.marked.clone(), s.at.clone(), s.len.clone(), s.count);
+        let stages = Stages { marked, at, first, second, start2, len, count };
+        BlaTable { origin: self.origin, levels, seconds, radii, stages }
+    }
+}
+
+/// One step for the f64 loop; parts f64 cannot hold make it never valid.
+fn entry_to_f64(e: &Bla<FloatExp>, q: &Second<FloatExp>) -> (Bla<f64>, Second<f64>) {
+    let f = |v: [FloatExp; 2]| [v[0].to_f64(), v[1].to_f64()];
+    let finite = |vs: &[[f64; 2]]| vs.iter().flatten().all(|v| v.is_finite());
+    let (a, b, a2, ab, b2) = (f(e.a), f(e.b), f(q.a2), f(q.ab), f(q.b2));
+    let lin2 = if finite(&[a, b]) { e.lin2.to_f64() } else { -1.0 };
+    let r2 = if finite(&[a, b, a2, ab, b2]) { q.r2.to_f64() } else { -1.0 };
+    (Bla { a, b, lin2 }, Second { a2, ab, b2, r2 })
+}
+
+impl Stages<FloatExp> {
+    /// The stages for `count` indices from the origin, given each index's |Z|^2 (`mag2`),
+    /// the binary tree's step of 2^k iterations at an index (`tree`, k = 0 the single step,
+    /// up to `top`) and the merge.
+    fn build(
+        count: u32,
+        top: usize,
+        mag2: impl Fn(u32) -> FloatExp,
+        tree: impl Fn(u32, usize) -> Node + Sync,
+        merge: impl Fn(&Node, &Node) -> Node + Sync,
+    ) -> Stages<FloatExp> {
+        // From a to b (a < b), through the longest aligned steps of the tree.
+        let span = |a: u32, b: u32| {
+            let mut acc: Option<Node> = None;
+            let mut i = a;
+            while i < b {
+                let mut k = 0;
+                while k < top && i.trailing_zeros() > k as u32 && i + (2 << k) <= b {
+                    k += 1;
+                }
+                let step = tree(i, k);
+                acc = Some(acc.map_or(step, |x| merge(&x, &step)));
+                i += 1 << k;
+            }
+            acc
+        };
+        let all: Vec<u32> = (0..count).collect();
+        let mut marks = vec![dips(&all, &mag2)];
+        loop {
+            let last = &marks[marks.len() - 1];
+            let next = dips(last, &mag2);
+            if next.len() == last.len() {
+                break;
+            }
+            marks.push(next);
+        }
+        let end = |k: usize, j: usize| marks[k].get(j + 1).copied().unwrap_or(count);
+        // tails[k][j]: from stage k's mark j to the next mark of stage k + 1 (or the end),
+        // folded from the right through stage k's steps; steps[k][j], stage k's step from its
+        // mark j, is tails[k - 1] at that mark.
+        let first: Vec<Node> =
+            (0..marks[0].len()).into_par_iter().filter_map(|j| span(marks[0][j], end(0, j))).collect();
+        let mut steps = vec![first];
+        let mut tails: Vec<Vec<Node>> = Vec::new();
+        for k in 0..marks.len() - 1 {
+            let (below, above) = (&marks[k], &marks[k + 1]);
+            // Stage k's marks cut at stage k + 1's: each run folds from its right end.
+            let mut cuts: Vec<usize> = Vec::with_capacity(above.len() + 1);
+            let mut j = 0;
+            for &m in above {
+                while below[j] != m {
+                    j += 1;
+                }
+                cuts.push(j);
+            }
+            cuts.push(below.len());
+            let own = &steps[k];
+            let runs: Vec<Vec<Node>> = cuts
+                .par_windows(2)
+                .map(|w| {
+                    let mut run: Vec<Node> = Vec::with_capacity(w[1] - w[0]);
+                    for j in (w[0]..w[1]).rev() {
+                        let t = run.last().map_or(own[j], |after| merge(&own[j], after));
+                        run.push(t);
+                    }
+                    run.reverse();
+                    run
+                })
+                .collect();
+            let tail: Vec<Node> = runs.into_iter().flatten().collect();
+            steps.push(cuts[..cuts.len() - 1].iter().map(|&j| tail[j]).collect());
+            tails.push(tail);
+        }
+        // The indices with steps: every stage-0 mark and the index after it (never a mark).
+        // Each gets a step to the next mark of every stage whose next mark lies further on,
+        // shortest first: to stage 0's next mark, then on through the tails.
+        let starts: Vec<u32> = marks[0].iter().flat_map(|&b| [b, b + 1]).filter(|&i| i < count).collect();
+        let chains: Vec<Vec<(Node, u32)>> = starts
+            .par_iter()
+            .map(|&i| {
+                let mut chain: Vec<(Node, u32)> = Vec::new();
+                // Stage 0's next mark after i.
+                let mut at = marks[0].partition_point(|&m| m <= i);
+                let mut to = marks[0].get(at).copied().unwrap_or(count);
+                let Some(mut step) = span(i, to) else {
+                    return chain;
+                };
+                chain.push((step, to - i));
+                for k in 0..marks.len() - 1 {
+                    // `to` is stage k's mark `at` (or the end); on to stage k + 1's next one.
+                    if to == count {
+                        break;
+                    }
+                    let next = marks[k + 1].partition_point(|&m| m <= i);
+                    let goal = marks[k + 1].get(next).copied().unwrap_or(count);
+                    if goal > to {
+                        step = merge(&step, &tails[k][at]);
+                        to = goal;
+                        chain.push((step, to - i));
+                    }
+                    at = next;
+                }
+                chain
+            })
+            .collect();
+        // Side by side by start index, shortest first. Steps of one iteration (a last mark
+        // just before the end) are left out: the loop's single step is the same.
+        let mut s = Stages {
+            marked: vec![0; (count as usize).div_ceil(64)],
+            at: vec![0; count as usize + 1],
+            first: Vec::new(),
+            second: Vec::new(),
+            start2: Vec::new(),
+            len: Vec::new(),
+            count: marks.len(),
+        };
+        for (&i, chain) in starts.iter().zip(&chains) {
+            for (node, len) in chain.iter().filter(|(_, len)| *len >= 2) {
+                let (f, q) = node.parts();
+                s.first.push(f);
+                s.second.push(q);
+                s.start2.push(node.r0 * node.r0);
+                s.len.push(*len);
+                s.at[i as usize + 1] += 1;
+                s.marked[i as usize / 64] |= 1 << (i % 64);
+            }
+        }
+        for i in 0..count as usize {
+            s.at[i + 1] += s.at[i];
+        }
+        s
     }
 }
 
 impl<T: Real> BlaTable<T> {
     /// The longest valid step at index `m` for a delta with |z|^2 = `z2`, at most `budget`
-    /// iterations long; returns the step and its length. A longer step starting at the same
-    /// index is valid on a subset of where a shorter one is (its radius is a minimum over
-    /// more steps), so the search climbs from the shortest step and stops at the first that
-    /// fails: one probe where nothing is valid, which is the common case.
+    /// iterations long; returns the step and its length. The caller must have tested the
+    /// delta at `m` itself, as the loop does before it looks for a step: no rebase
+    /// (|Z_m + z| >= |z|) and no escape. The step's radius then leaves out what guards its
+    /// first index (|z| <= |Z_m| / 2 and the escape circle): from a dip of the reference
+    /// that a sample passes without rebasing, the first step is exact and the rest must hold
+    /// its image, so steps are valid there for deltas up to the dip's size and beyond.
+    ///
+    /// A longer step starting at the same index is valid on a subset of where a shorter one
+    /// is (its radius is a minimum over more steps), so the search climbs from the shortest
+    /// step and stops at the first that fails: one probe where nothing is valid, which is
+    /// the common case.
     #[inline(always)]
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32)> {
         let i = m.checked_sub(self.origin)?;
         let (start, n) = column(i, self.levels.len());
-        let radii = self.radii.get(start..start + n)?;
-        let mut k = 0;
-        while k < n && z2 < radii[k] && (2u32 << k) <= budget {
-            k += 1;
+        let mut best = None;
+        if let Some(radii) = self.radii.get(start..start + n) {
+            let mut k = 0;
+            while k < n && z2 < radii[k] && (2u32 << k) <= budget {
+                k += 1;
+            }
+            // Steps past a level's end have radius "never", so levels[k - 1] holds this one.
+            // An `if`, not `bool::then` with a closure: the closure was compiled out of
+            // line, a call per lookup on the loop's hottest path.
+            if k > 0 {
+                let j = (i >> k) as usize;
+                best = Some((Step { first: &self.levels[k - 1][j], second: &self.seconds[k - 1][j] }, 1u32 << k));
+            }
         }
-        // Steps past a level's end have radius "never", so levels[k - 1] holds this one.
-        let j = (i >> k) as usize;
-        // An `if`, not `bool::then` with a closure: the closure was compiled out of line, a
-        // call per lookup on the loop's hottest path.
-        if k == 0 {
-            return None;
+        if self.stages.marked(i) { self.stages.climb(i, z2, budget, best, |s| self.stages.start2[s]) } else { best }
+    }
+
+    /// [`BlaTable::lookup`] for a delta not tested at `m` (steps composed for every sample
+    /// at once): the radii with every guard.
+    pub fn lookup_untested(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32)> {
+        let i = m.checked_sub(self.origin)?;
+        let mut best = None;
+        for (k, level) in self.seconds.iter().enumerate() {
+            let len = 2u32 << k;
+            if i % len != 0 || len > budget {
+                break;
+            }
+            let j = (i / len) as usize;
+            match level.get(j) {
+                Some(q) if z2 < q.r2 => best = Some((Step { first: &self.levels[k][j], second: q }, len)),
+                _ => break,
+            }
         }
-        Some((Step { first: &self.levels[k - 1][j], second: &self.seconds[k - 1][j] }, 1u32 << k))
+        if self.stages.marked(i) { self.stages.climb(i, z2, budget, best, |s| self.stages.second[s].r2) } else { best }
     }
 
     /// The squared radii of the steps of `level` (2^(level+1) iterations), or of the
@@ -309,9 +605,60 @@ impl<T: Real> BlaTable<T> {
 
     /// Bytes of memory the table uses.
     pub fn bytes(&self) -> usize {
+        let s = &self.stages;
         self.levels.iter().map(|l| l.capacity() * std::mem::size_of::<Bla<T>>()).sum::<usize>()
             + self.seconds.iter().map(|l| l.capacity() * std::mem::size_of::<Second<T>>()).sum::<usize>()
             + self.radii.capacity() * std::mem::size_of::<T>()
+            + s.first.capacity() * std::mem::size_of::<Bla<T>>()
+            + s.second.capacity() * std::mem::size_of::<Second<T>>()
+            + s.start2.capacity() * std::mem::size_of::<T>()
+            + (s.len.capacity() + s.at.capacity()) * 4
+            + s.marked.capacity() * 8
+    }
+
+    /// How many period-aligned steps the table holds.
+    pub fn aligned_steps(&self) -> usize {
+        self.stages.len.len()
+    }
+
+    /// How many stages of near-periods they reach.
+    pub fn stage_count(&self) -> usize {
+        self.stages.count
+    }
+}
+
+impl<T: Real> Stages<T> {
+    /// True when steps start at index `i` (from the origin).
+    #[inline(always)]
+    fn marked(&self, i: u32) -> bool {
+        self.marked.get(i as usize / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+
+    /// The longest valid step at marked index `i` for |z|^2 = `z2` within `budget`, or
+    /// `best` (the tree's) when that is longer. Climbs from stage 0 and stops at the first
+    /// step that is not valid (a longer step from the same index is valid on a subset).
+    #[inline(always)]
+    fn climb<'a>(
+        &'a self,
+        i: u32,
+        z2: T,
+        budget: u32,
+        best: Option<(Step<'a, T>, u32)>,
+        radius2: impl Fn(usize) -> T,
+    ) -> Option<(Step<'a, T>, u32)> {
+        let mut best = best;
+        let from = self.at[i as usize] as usize;
+        let to = self.at[i as usize + 1] as usize;
+        for s in from..to {
+            let len = self.len[s];
+            if len > budget || !(z2 < radius2(s)) {
+                break;
+            }
+            if best.as_ref().is_none_or(|b| b.1 < len) {
+                best = Some((Step { first: &self.first[s], second: &self.second[s] }, len));
+            }
+        }
+        best
     }
 }
 
@@ -362,5 +709,110 @@ mod tests {
         assert!(t.lookup(1, FloatExp::from(1.0), 64).is_none());
         assert_eq!(t.lookup(3, FloatExp::from(1e-24), 64).map(|x| x.1), Some(2));
         assert!(t.lookup(2, FloatExp::from(1e-24), 64).is_none());
+    }
+
+    /// Exact perturbed steps from index `m`: `len` of them from delta `z` at offset `dc`.
+    fn iterate(r: &Reference, m: u32, len: u32, start: [FloatExp; 2], dc: [FloatExp; 2]) -> [FloatExp; 2] {
+        let mut z = start;
+        for k in m..m + len {
+            let zm = r.get_fe(k);
+            z = cadd(cmul(cadd([zm[0].ldexp(1), zm[1].ldexp(1)], z), z), dc);
+        }
+        z
+    }
+
+    fn rel_err(v: [FloatExp; 2], w: [FloatExp; 2]) -> f64 {
+        cabs(cadd(v, [-w[0], -w[1]])).to_f64() / cabs(w).to_f64()
+    }
+
+    /// A reference next to the period-3 nucleus c = -1.7548776662466927...: its orbit comes
+    /// back near 0 every 3 iterations, closer at the multiples of 3 of later near-periods.
+    fn airship() -> Reference {
+        let c = [Float::from(-1.754877666246), Float::from(1e-9)];
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        Reference::compute(&z0, &c, 4000, 2.0, 128, Default::default(), &|_| {}, &AtomicBool::new(false)).unwrap()
+    }
+
+    #[test]
+    fn dips_keep_the_first_and_each_new_low() {
+        let mag2 = [1.0, 1.0, 1e-5, 1.0, 1.0, 1e-5, 1.0, 1e-12];
+        let f = |i: u32| FloatExp::from(mag2[i as usize]);
+        let stage0 = dips(&(0..8).collect::<Vec<u32>>(), f);
+        assert_eq!(stage0, [0, 2, 5, 7]);
+        // Among the marks, 5 dips no deeper than 2: only 7 is a longer near-period's return.
+        assert_eq!(dips(&stage0, f), [0, 7]);
+        assert_eq!(dips(&[0, 7], f), [0]);
+        assert!(dips(&[], f).is_empty());
+    }
+
+    #[test]
+    fn steps_run_from_dip_to_dip_and_match_iterated_steps() {
+        let r = airship();
+        let eps = 1e-8;
+        let dc = [FloatExp::from(1e-14), FloatExp::from(2e-14)];
+        let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
+        let s = &t.stages;
+        assert!(s.len.len() > 10, "the orbit's near-periods give period-aligned steps");
+        // Stage 0's first step ends at the first dip: where the reference comes nearer to 0
+        // than a 64th of anywhere on the way.
+        let end = 1 + s.len[s.at[0] as usize];
+        let dip = cabs(r.get_fe(end)).mul_f64(64.0);
+        for m in 2..end {
+            assert!(cabs(r.get_fe(m)) > dip, "Z_{m} is not far above the step's end Z_{end}");
+        }
+        // A tiny delta from the origin: the longest step is a period-aligned one (the
+        // reference's dips lie at multiples of 3), and it agrees with iterating.
+        let start = [FloatExp::from(1e-13), FloatExp::from(-1e-13)];
+        let (e, len) = t.lookup(1, norm2(start), u32::MAX).expect("a step");
+        assert!(!len.is_power_of_two(), "length {len}");
+        let err = rel_err(e.apply(start, dc), iterate(&r, 1, len, start, dc));
+        assert!(err <= 100.0 * eps, "over {len} iterations: relative error {err}");
+        // Every stored step agrees with iterating, for a delta at a tenth of its radius.
+        let mut checked = 0;
+        for i in 0..t.levels[0].len() as u32 * 2 {
+            if !s.marked(i) {
+                continue;
+            }
+            for k in s.at[i as usize] as usize..s.at[i as usize + 1] as usize {
+                let radius = s.start2[k].sqrt().to_f64();
+                if !(radius > 1e-30) {
+                    continue;
+                }
+                let z = [FloatExp::from(0.06 * radius), FloatExp::from(-0.08 * radius)];
+                let step = Step { first: &s.first[k], second: &s.second[k] };
+                let m = i + 1;
+                // Only where the loop would step from here: no rebase, no escape at m.
+                let full = cadd(r.get_fe(m), z);
+                if norm2(full) < norm2(z) || norm2(full).to_f64() > 4.0 {
+                    continue;
+                }
+                let err = rel_err(step.apply(z, dc), iterate(&r, m, s.len[k], z, dc));
+                assert!(err <= 100.0 * eps, "step {k} from {m} over {}: relative error {err}", s.len[k]);
+                checked += 1;
+            }
+        }
+        assert!(checked > 10, "{checked} steps checked");
+    }
+
+    #[test]
+    fn a_delta_tested_at_a_dip_steps_on_where_an_untested_one_may_not() {
+        let r = airship();
+        let eps = 1e-8;
+        let dc = [FloatExp::from(1e-14), FloatExp::from(2e-14)];
+        let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
+        // A dip deep inside the orbit, and a delta as large as the reference there, in the
+        // same direction: |Z + δ| = 2 |δ|, so the loop does not rebase, but the delta is
+        // beyond |Z_m| / 2, where a run may not start untested.
+        let i = (1..t.levels[0].len() as u32 * 2).rev().find(|&i| t.stages.marked(i) && i % 3 == 2).expect("a dip");
+        let m = i + 1;
+        let zm = r.get_fe(m);
+        let z = zm;
+        assert!(norm2(cadd(zm, z)) >= norm2(z));
+        let (e, len) = t.lookup(m, norm2(z), u32::MAX).expect("a step from a tested delta");
+        assert!(len > 1);
+        let untested = t.lookup_untested(m, norm2(z), u32::MAX).map_or(0, |x| x.1);
+        assert!(untested < len, "untested {untested}, tested {len}");
+        let err = rel_err(e.apply(z, dc), iterate(&r, m, len, z, dc));
+        assert!(err <= 100.0 * eps, "over {len} iterations from the dip at {m}: relative error {err}");
     }
 }

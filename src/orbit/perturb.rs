@@ -308,7 +308,7 @@ impl Skip {
         let abs = |v: [FloatExp; 2]| norm2(v).sqrt();
         let (u, u2, u3) = (u_max, u_max * u_max, u_max * u_max * u_max);
         let limit = eps / 4.0;
-        while let Some((e, len)) = table.lookup(m, bound * bound, max_iter - m) {
+        while let Some((e, len)) = table.lookup_untested(m, bound * bound, max_iter - m) {
             // δ = K1 u + K2 u^2 and c = u (Julia: B = AB = B2 = 0, so c drops out):
             // A δ + B u + A2 δ^2 + AB δ u + B2 u^2 to second order in u.
             let (f, q) = (e.first, e.second);
