@@ -651,7 +651,9 @@ impl<T: Real> Stages<T> {
         let to = self.at[i as usize + 1] as usize;
         for s in from..to {
             let len = self.len[s];
-            if len > budget || !(z2 < radius2(s)) {
+            // Written so that a NaN radius fails as "not valid", as the tree's test does.
+            let valid = z2 < radius2(s);
+            if len > budget || !valid {
                 break;
             }
             if best.as_ref().is_none_or(|b| b.1 < len) {
@@ -775,7 +777,7 @@ mod tests {
             }
             for k in s.at[i as usize] as usize..s.at[i as usize + 1] as usize {
                 let radius = s.start2[k].sqrt().to_f64();
-                if !(radius > 1e-30) {
+                if radius.is_nan() || radius <= 1e-30 {
                     continue;
                 }
                 let z = [FloatExp::from(0.06 * radius), FloatExp::from(-0.08 * radius)];
