@@ -152,9 +152,10 @@ pub struct DeepStats {
     pub reference_bytes: usize,
     /// Bytes of the BLA tables.
     pub bla_bytes: usize,
-    /// Period-aligned steps in the primary reference's table, and its stages of
-    /// near-periods (0, 0 without BLA).
-    pub aligned_steps: (usize, usize),
+    /// Period-aligned BLA steps in the primary reference's table (0 without BLA).
+    pub aligned_steps: usize,
+    /// The stages of near-periods they reach.
+    pub aligned_stages: usize,
     /// Perturbation steps performed one at a time.
     pub steps: u64,
     /// Of those, steps in FloatExp.
@@ -513,7 +514,8 @@ pub fn render<P: Send>(
             tables_seconds: d.tables_seconds,
             reference_bytes,
             bla_bytes,
-            aligned_steps: d.bla_f64[0].as_ref().map_or((0, 0), |t| (t.aligned_steps(), t.stage_count())),
+            aligned_steps: d.bla_f64[0].as_ref().map_or(0, |t| t.aligned_steps()),
+            aligned_stages: d.bla_f64[0].as_ref().map_or(0, |t| t.stage_count()),
             steps: c.steps,
             floatexp_steps: c.floatexp_steps,
             bla_steps: c.bla_steps,

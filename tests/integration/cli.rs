@@ -477,6 +477,24 @@ fn stats_json_has_the_documented_keys() {
     assert!(v["iterations"].as_u64().unwrap() > 0);
 }
 
+/// The deep engine's keys: a view past 1e300 reports its reference and its BLA tables,
+/// period-aligned steps included (the shipped liiiines view at a small size).
+#[test]
+fn stats_json_reports_the_deep_engine() {
+    let dir = scratch("cli-stats-deep");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/liiiines.toml");
+    let o = deepfield(&["render", scene, "--size", "40x30", "-o", "a.png", "--stats-json", "s.json"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    let d = &v["deep"];
+    for k in ["reference_bits", "reference_iterations", "orbit_seconds", "tables_seconds", "bla_bytes", "rebases"] {
+        assert!(d.get(k).is_some(), "missing deep.{k} in {v}");
+    }
+    assert!(d["aligned_steps"].as_u64().unwrap() > 0, "{v}");
+    assert!(d["aligned_stages"].as_u64().unwrap() >= 1, "{v}");
+    assert!(d["bla_steps"].as_u64().unwrap() > 0, "{v}");
+}
+
 #[test]
 fn flags_alone_describe_a_julia_scene() {
     let dir = scratch("cli-flags");
