@@ -735,6 +735,15 @@ mod tests {
         Reference::compute(&z0, &c, 4000, 2.0, 128, Default::default(), &|_| {}, &AtomicBool::new(false)).unwrap()
     }
 
+    /// [`airship`] with its table: tolerance 1e-8, offsets up to |(1 + 2i) 1e-14|, and that
+    /// offset.
+    fn airship_table() -> (Reference, BlaTable<FloatExp>, f64, [FloatExp; 2]) {
+        let r = airship();
+        let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
+        let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
+        (r, t, eps, dc)
+    }
+
     #[test]
     fn dips_keep_the_first_and_each_new_low() {
         let mag2 = [1.0, 1.0, 1e-5, 1.0, 1.0, 1e-5, 1.0, 1e-12];
@@ -749,10 +758,7 @@ mod tests {
 
     #[test]
     fn steps_run_from_dip_to_dip_and_match_iterated_steps() {
-        let r = airship();
-        let eps = 1e-8;
-        let dc = [FloatExp::from(1e-14), FloatExp::from(2e-14)];
-        let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
+        let (r, t, eps, dc) = airship_table();
         let s = &t.stages;
         assert!(s.len.len() > 10, "the orbit's near-periods give period-aligned steps");
         // Stage 0's first step ends at the first dip: where the reference comes nearer to 0
@@ -798,10 +804,7 @@ mod tests {
 
     #[test]
     fn a_delta_tested_at_a_dip_steps_on_where_an_untested_one_may_not() {
-        let r = airship();
-        let eps = 1e-8;
-        let dc = [FloatExp::from(1e-14), FloatExp::from(2e-14)];
-        let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
+        let (r, t, eps, dc) = airship_table();
         // A dip deep inside the orbit, and a delta as large as the reference there, in the
         // same direction: |Z + δ| = 2 |δ|, so the loop does not rebase, but the delta is
         // beyond |Z_m| / 2, where a run may not start untested.
