@@ -189,13 +189,14 @@ struct Stages<T> {
 /// the next stage.
 const DIP: f64 = 1.0 / 64.0;
 
-/// The positions in `at` (ascending) kept as marks: the first, and each whose squared
+/// The positions of `at` (ascending) kept as marks: the first, and each whose squared
 /// magnitude `mag2` is below DIP^2 times the least since the last kept one (not counting
 /// that one itself).
-fn dips(at: &[u32], mag2: impl Fn(u32) -> FloatExp) -> Vec<u32> {
-    let mut keep: Vec<u32> = at.first().copied().into_iter().collect();
+fn dips(at: impl IntoIterator<Item = u32>, mag2: impl Fn(u32) -> FloatExp) -> Vec<u32> {
+    let mut at = at.into_iter();
+    let mut keep: Vec<u32> = at.next().into_iter().collect();
     let mut low: Option<FloatExp> = None;
-    for &i in at.iter().skip(1) {
+    for i in at {
         let v = mag2(i);
         match low {
             Some(l) if v < l.mul_f64(DIP * DIP) => {
@@ -420,26 +421,29 @@ impl Stages<FloatExp> {
         tree: impl Fn(u32, usize) -> Node + Sync,
         merge: impl Fn(&Node, &Node) -> Node + Sync,
     ) -> Stages<FloatExp> {
-        // From a to b (a < b), through the longest aligned steps of the tree.
+        // The longest aligned step of the tree from i that ends by b (i < b), and its length.
+        let aligned = |i: u32, b: u32| {
+            let mut k = 0;
+            while k < top && i.trailing_zeros() > k as u32 && i + (2 << k) <= b {
+                k += 1;
+            }
+            (tree(i, k), 1u32 << k)
+        };
+        // From a to b (a < b), through those steps.
         let span = |a: u32, b: u32| {
-            let mut acc: Option<Node> = None;
-            let mut i = a;
+            let (mut acc, n) = aligned(a, b);
+            let mut i = a + n;
             while i < b {
-                let mut k = 0;
-                while k < top && i.trailing_zeros() > k as u32 && i + (2 << k) <= b {
-                    k += 1;
-                }
-                let step = tree(i, k);
-                acc = Some(acc.map_or(step, |x| merge(&x, &step)));
-                i += 1 << k;
+                let (step, n) = aligned(i, b);
+                acc = merge(&acc, &step);
+                i += n;
             }
             acc
         };
-        let all: Vec<u32> = (0..count).collect();
-        let mut marks = vec![dips(&all, &mag2)];
+        let mut marks = vec![dips(0..count, &mag2)];
         loop {
             let last = &marks[marks.len() - 1];
-            let next = dips(last, &mag2);
+            let next = dips(last.iter().copied(), &mag2);
             if next.len() == last.len() {
                 break;
             }
@@ -449,8 +453,7 @@ impl Stages<FloatExp> {
         // tails[k][j]: from stage k's mark j to the next mark of stage k + 1 (or the end),
         // folded from the right through stage k's steps; steps[k][j], stage k's step from its
         // mark j, is tails[k - 1] at that mark.
-        let first: Vec<Node> =
-            (0..marks[0].len()).into_par_iter().filter_map(|j| span(marks[0][j], end(0, j))).collect();
+        let first: Vec<Node> = (0..marks[0].len()).into_par_iter().map(|j| span(marks[0][j], end(0, j))).collect();
         let mut steps = vec![first];
         let mut tails: Vec<Vec<Node>> = Vec::new();
         for k in 0..marks.len() - 1 {
@@ -489,14 +492,11 @@ impl Stages<FloatExp> {
         let chains: Vec<Vec<(Node, u32)>> = starts
             .par_iter()
             .map(|&i| {
-                let mut chain: Vec<(Node, u32)> = Vec::new();
-                // Stage 0's next mark after i.
+                // Stage 0's next mark after i (i is below count, so it lies further on).
                 let mut at = marks[0].partition_point(|&m| m <= i);
                 let mut to = marks[0].get(at).copied().unwrap_or(count);
-                let Some(mut step) = span(i, to) else {
-                    return chain;
-                };
-                chain.push((step, to - i));
+                let mut step = span(i, to);
+                let mut chain = vec![(step, to - i)];
                 for k in 0..marks.len() - 1 {
                     // `to` is stage k's mark `at` (or the end); on to stage k + 1's next one.
                     if to == count {
@@ -748,12 +748,12 @@ mod tests {
     fn dips_keep_the_first_and_each_new_low() {
         let mag2 = [1.0, 1.0, 1e-5, 1.0, 1.0, 1e-5, 1.0, 1e-12];
         let f = |i: u32| FloatExp::from(mag2[i as usize]);
-        let stage0 = dips(&(0..8).collect::<Vec<u32>>(), f);
+        let stage0 = dips(0..8, f);
         assert_eq!(stage0, [0, 2, 5, 7]);
         // Among the marks, 5 dips no deeper than 2: only 7 is a longer near-period's return.
-        assert_eq!(dips(&stage0, f), [0, 7]);
-        assert_eq!(dips(&[0, 7], f), [0]);
-        assert!(dips(&[], f).is_empty());
+        assert_eq!(dips(stage0.iter().copied(), f), [0, 7]);
+        assert_eq!(dips([0, 7], f), [0]);
+        assert!(dips([], f).is_empty());
     }
 
     #[test]
