@@ -21,6 +21,11 @@
 //! kept per lane in scalars (`at0[i] + t16`), and the iteration limit and the reference's
 //! end are a per-lane stop on the same clock, tested once per step for the whole vector.
 //!
+//! While every lane of every vector holds a sample and none is near its stop, the loop runs
+//! in bursts ([`burst`]): the deltas (and derivatives) stay in registers, each lane reads its
+//! Z_m at its start address plus the bytes stepped, and the only test per step is for an
+//! event, before which the burst ends and hands the vectors to the general step.
+//!
 //! The loop is written once, generic over pulp's [`Simd`] (the vector width and the
 //! arithmetic). What differs between instruction sets is only how every lane's Z_m is
 //! brought into two vectors (re, im) and how a comparison becomes a bit mask: the
@@ -532,6 +537,9 @@ fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Co
     };
     let full = Lanes::<U>::FULL;
     while lanes.iter().any(|l| l.act != 0) {
+        if !INT {
+            burst::<U, DER>(unit, &mut lanes, &k, &refs);
+        }
         for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
             if l.act == 0 {
                 continue;
@@ -574,7 +582,7 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     counters: &mut Counters,
 ) -> bool {
     let (zr, zi) = z;
-    let (add, sub, mul) = (|a, b| u.add_f64s(a, b), |a, b| u.sub_f64s(a, b), |a, b| u.mul_f64s(a, b));
+    let (add, mul) = (|a, b| u.add_f64s(a, b), |a, b| u.mul_f64s(a, b));
     // The end tests of `op`: escape; rebase (|Z_m + δ| < |δ|); and, by the scalar clock, the
     // iteration limit and the reference's end. Pauldelbrot's glitch test needs no test of
     // its own: |Z_m + δ| < 10^-3 |Z_m| implies |δ| > 0.999 |Z_m| > |Z_m + δ|, a rebase (by a
@@ -621,31 +629,17 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
         return false;
     }
     if DER {
-        let (a, b) = (l.der_r, l.der_i);
-        let re = sub(mul(fr, a), mul(fi, b));
-        let im = add(mul(fr, b), mul(fi, a));
-        l.der_r = add(mul(k.two, re), l.add);
-        l.der_i = mul(k.two, im);
+        (l.der_r, l.der_i) = der_step(u, k, (fr, fi), (l.der_r, l.der_i), l.add);
     }
     if INT {
         // `Contraction::step`: the mantissa times 4 |z|^2.
         l.shrink = mul(l.shrink, mul(f2, k.four));
     }
-    // δ <- (2 Z_m + δ) δ + δc.
-    let ar = add(mul(zr, k.two), l.dzr);
-    let ai = add(mul(zi, k.two), l.dzi);
-    let nr = sub(mul(ar, l.dzr), mul(ai, l.dzi));
-    let ni = add(mul(ar, l.dzi), mul(ai, l.dzr));
-    l.dzr = add(nr, l.dcr);
-    l.dzi = add(ni, l.dci);
+    (l.dzr, l.dzi) = plain(u, k, (zr, zi), (l.dzr, l.dzi), (l.dcr, l.dci));
     l.t16 += 16;
     let mut renorm = 0;
     if DER {
-        // `Der::renormalise`'s test: the larger part outside [DER_LO, DER_HI], not 0.
-        let big = u.max_f64s(u.abs_f64s(l.der_r), u.abs_f64s(l.der_i));
-        let inside = u.bits(u.greater_than_or_equal_f64s(big, k.lo)) & u.bits(u.less_than_or_equal_f64s(big, k.hi));
-        let nonzero = !u.bits(u.equal_f64s(big, k.zero));
-        renorm = nonzero & !inside & l.act;
+        renorm = renorm_bits(u, k, (l.der_r, l.der_i)) & l.act;
     }
 
     let mut calm = true;
@@ -672,4 +666,114 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
         calm = false;
     }
     calm
+}
+
+/// Plain steps of every vector while nothing can happen but a step: every lane active,
+/// none just rebased, none within reach of its stop, and (tested before each step) no lane
+/// at an event. The deltas stay in registers for the whole run and each lane's Z_m is read
+/// at its start address plus the bytes stepped, so a step is the arithmetic and the loads
+/// alone. Returns before the first step at which any lane of any vector has an event,
+/// leaving it to [`step`]: every vector has then taken the same number of steps, each
+/// exactly as [`step`] takes it.
+///
+/// Rebases stay with [`step`]: handling them here as well (the lane going on from Z_0 and
+/// tested after its next step) made bench-e50 and bench-e14 slower, not faster.
+#[inline(always)]
+fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U>, refs: &Refs) {
+    let full = Lanes::<U>::FULL;
+    if lanes.iter().any(|l| l.act != full || l.fresh != 0) {
+        return;
+    }
+    // Pairs of steps while every vector has two steps before any stop.
+    let room = lanes.iter().map(|l| (l.next_stop - l.t16) / 32).min().unwrap_or(0);
+    if room < 2 {
+        return;
+    }
+    let at: [[usize; MAX_W]; G] = std::array::from_fn(|g| lanes[g].addresses(refs));
+    let mut d: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].dzr, lanes[g].dzi));
+    let c: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].dcr, lanes[g].dci));
+    let mut der: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].der_r, lanes[g].der_i));
+    let add: [U::f64s; G] = std::array::from_fn(|g| lanes[g].add);
+    let mut off = 0usize;
+    let end = room as usize * 32;
+    'pairs: while off < end {
+        // SAFETY: every lane is active and at least two steps from its stop (`room`), so
+        // Z_m and Z_m+1 lie inside its reference.
+        let z: [(Z<U>, Z<U>); G] = std::array::from_fn(|g| unsafe { u.load_pair(&at[g].map(|x| x.wrapping_add(off))) });
+        for second in [false, true] {
+            let zs: [Z<U>; G] = std::array::from_fn(|g| if second { z[g].1 } else { z[g].0 });
+            let mut ev = event::<U, DER>(u, k, zs[0], d[0]);
+            for g in 1..G {
+                ev = u.or_m64s(ev, event::<U, DER>(u, k, zs[g], d[g]));
+            }
+            if u.bits(ev) != 0 {
+                break 'pairs;
+            }
+            if DER {
+                // A step after which a derivative must be renormalised is left to `step`,
+                // which hands the sample back for it.
+                let next: [Z<U>; G] = std::array::from_fn(|g| {
+                    let f = (u.add_f64s(zs[g].0, d[g].0), u.add_f64s(zs[g].1, d[g].1));
+                    der_step(u, k, f, der[g], add[g])
+                });
+                if next.iter().any(|&n| renorm_bits(u, k, n) != 0) {
+                    break 'pairs;
+                }
+                der = next;
+            }
+            for g in 0..G {
+                d[g] = plain(u, k, zs[g], d[g], c[g]);
+            }
+            off += 16;
+        }
+    }
+    for (g, l) in lanes.iter_mut().enumerate() {
+        (l.dzr, l.dzi) = d[g];
+        if DER {
+            (l.der_r, l.der_i) = der[g];
+        }
+        l.t16 += off as i64;
+    }
+}
+
+/// Whether a step from Z_m = `z` with delta `d` would be anything but a plain step: [`step`]'s
+/// events without interior detection (escape, rebase, and with the derivative a step from a
+/// tiny |z|).
+#[inline(always)]
+fn event<U: Unit, const DER: bool>(u: U, k: &Consts<U>, z: Z<U>, d: Z<U>) -> U::m64s {
+    let fr = u.add_f64s(z.0, d.0);
+    let fi = u.add_f64s(z.1, d.1);
+    let f2 = u.add_f64s(u.mul_f64s(fr, fr), u.mul_f64s(fi, fi));
+    let d2 = u.add_f64s(u.mul_f64s(d.0, d.0), u.mul_f64s(d.1, d.1));
+    let low = if DER { u.max_f64s(d2, k.tiny) } else { d2 };
+    u.or_m64s(u.greater_than_f64s(f2, k.esc2), u.less_than_f64s(f2, low))
+}
+
+/// The derivative's mantissa after a step from z = `f` (Z_m + δ): 2 z der + add.
+#[inline(always)]
+fn der_step<U: Unit>(u: U, k: &Consts<U>, f: Z<U>, der: Z<U>, add: U::f64s) -> Z<U> {
+    let (a, b) = der;
+    let re = u.sub_f64s(u.mul_f64s(f.0, a), u.mul_f64s(f.1, b));
+    let im = u.add_f64s(u.mul_f64s(f.0, b), u.mul_f64s(f.1, a));
+    (u.add_f64s(u.mul_f64s(k.two, re), add), u.mul_f64s(k.two, im))
+}
+
+/// `Der::renormalise`'s test of every lane: the larger part outside [DER_LO, DER_HI], not 0
+/// (lane i at bit i; no bits beyond the lanes).
+#[inline(always)]
+fn renorm_bits<U: Unit>(u: U, k: &Consts<U>, der: Z<U>) -> u32 {
+    let big = u.max_f64s(u.abs_f64s(der.0), u.abs_f64s(der.1));
+    let inside = u.bits(u.greater_than_or_equal_f64s(big, k.lo)) & u.bits(u.less_than_or_equal_f64s(big, k.hi));
+    let nonzero = !u.bits(u.equal_f64s(big, k.zero));
+    nonzero & !inside & Lanes::<U>::FULL
+}
+
+/// δ <- (2 Z_m + δ) δ + δc, as [`step`] computes it.
+#[inline(always)]
+fn plain<U: Unit>(u: U, k: &Consts<U>, z: Z<U>, d: Z<U>, c: Z<U>) -> Z<U> {
+    let xr = u.add_f64s(u.mul_f64s(z.0, k.two), d.0);
+    let xi = u.add_f64s(u.mul_f64s(z.1, k.two), d.1);
+    let nr = u.sub_f64s(u.mul_f64s(xr, d.0), u.mul_f64s(xi, d.1));
+    let ni = u.add_f64s(u.mul_f64s(xr, d.1), u.mul_f64s(xi, d.0));
+    (u.add_f64s(nr, c.0), u.add_f64s(ni, c.1))
 }
