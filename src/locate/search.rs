@@ -3,8 +3,9 @@
 //!
 //! Minibrot: the ball method gives the lowest period p of a nucleus in the view's disc,
 //! Newton's method from the view's centre finds that nucleus, and the size estimate frames
-//! it. Misiurewicz point: one pass over the centre's orbit (with its derivative in c)
-//! gives, for every period p in range, the first preperiod k >= 2 whose Newton step length
+//! it. Misiurewicz point: the centre's orbit (with its derivative in c), computed once,
+//! gives, for every period p in range (the periods shared between the cores), the first
+//! preperiod k >= 2 whose Newton step length
 //! |z_(k+p) - z_k| / |z'_(k+p) - z'_k| — a first-order distance from the centre to a root
 //! of z_(k+p) = z_k — is inside the view, leaving out the roots that belong to a lower
 //! preperiod (nuclei among them). The candidates are tried in order of k + p (the simplest
@@ -12,6 +13,8 @@
 //! derivative amplifies rounding by, and the first whose root lies in the view and whose
 //! orbit really has preperiod k and period p wins. At depth that extra precision is what
 //! makes the root and its check possible: bench-e1086's centre at 1e60 needs ~200 more bits.
+
+use rayon::prelude::*;
 
 use crate::num::{Decimal, FloatExp};
 
@@ -154,25 +157,21 @@ struct Candidate {
 /// Newton's method from them reaches the same point.
 fn candidates(c: &BigC, radius: FloatExp, max_preperiod: u32, max_period: u32) -> Vec<Candidate> {
     let orbit = misiurewicz::Orbit::of(c, (max_preperiod + max_period) as usize, Some(FloatExp::from(2.0)));
-    let mut out = Vec::new();
-    for p in 1..=max_period as usize {
-        for k in 2..=max_preperiod as usize {
-            if k + p >= orbit.len() {
-                break;
-            }
+    // Each period on its own (on every core), in order.
+    let first = |p: usize| {
+        (2..=max_preperiod as usize).take_while(|&k| k + p < orbit.len()).find_map(|k| {
             let df = orbit.slope(k + p, k);
             if df.is_zero() || orbit.gap(k + p, k) / df >= radius {
-                continue;
+                return None;
             }
             let (a, b) = (orbit.point(k + p - 1), orbit.point(k - 1));
             if misiurewicz::norm(a[0] - b[0], a[1] - b[1]) < misiurewicz::norm(a[0] + b[0], a[1] + b[1]) {
-                continue;
+                return None;
             }
-            out.push(Candidate { preperiod: k as u32, period: p as u32, log2_derivative: df.log2() });
-            break;
-        }
-    }
-    out
+            Some(Candidate { preperiod: k as u32, period: p as u32, log2_derivative: df.log2() })
+        })
+    };
+    (1..=max_period as usize).into_par_iter().filter_map(first).collect()
 }
 
 #[cfg(test)]
