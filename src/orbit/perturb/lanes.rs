@@ -582,15 +582,13 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     counters: &mut Counters,
 ) -> bool {
     let (zr, zi) = z;
-    let (add, mul) = (|a, b| u.add_f64s(a, b), |a, b| u.mul_f64s(a, b));
     // The end tests of `op`: escape; rebase (|Z_m + δ| < |δ|); and, by the scalar clock, the
     // iteration limit and the reference's end. Pauldelbrot's glitch test needs no test of
     // its own: |Z_m + δ| < 10^-3 |Z_m| implies |δ| > 0.999 |Z_m| > |Z_m + δ|, a rebase (by a
     // margin no rounding can undo).
-    let fr = add(zr, l.dzr);
-    let fi = add(zi, l.dzi);
-    let f2 = add(mul(fr, fr), mul(fi, fi));
-    let d2 = add(mul(l.dzr, l.dzr), mul(l.dzi, l.dzi));
+    let (fr, fi) = plus(u, (zr, zi), (l.dzr, l.dzi));
+    let f2 = norm(u, (fr, fi));
+    let d2 = norm(u, (l.dzr, l.dzi));
     let esc_m = u.greater_than_f64s(f2, k.esc2);
     let reb_m = u.less_than_f64s(f2, d2);
     // With the derivative or interior detection, a step from |z|^2 below DER_TINY_Z2 (the
@@ -633,7 +631,7 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     }
     if INT {
         // `Contraction::step`: the mantissa times 4 |z|^2.
-        l.shrink = mul(l.shrink, mul(f2, k.four));
+        l.shrink = u.mul_f64s(l.shrink, u.mul_f64s(f2, k.four));
     }
     (l.dzr, l.dzi) = plain(u, k, (zr, zi), (l.dzr, l.dzi), (l.dcr, l.dci));
     l.t16 += 16;
@@ -646,7 +644,7 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     if l.fresh != 0 {
         // After a rebase `op` takes a single step only if |δ|^2 > single_d2 (else it looks
         // for a BLA step): lanes below go back to the scalar loop.
-        let d2 = add(mul(l.dzr, l.dzr), mul(l.dzi, l.dzi));
+        let d2 = norm(u, (l.dzr, l.dzi));
         let leave = !u.bits(u.greater_than_f64s(d2, k.single_d2)) & l.fresh;
         for (i, slot) in m.iter_mut().enumerate().take(U::F64_LANES) {
             if let Some(h) = slot
@@ -712,10 +710,7 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
             if DER {
                 // A step after which a derivative must be renormalised is left to `step`,
                 // which hands the sample back for it.
-                let next: [Z<U>; G] = std::array::from_fn(|g| {
-                    let f = (u.add_f64s(zs[g].0, d[g].0), u.add_f64s(zs[g].1, d[g].1));
-                    der_step(u, k, f, der[g], add[g])
-                });
+                let next: [Z<U>; G] = std::array::from_fn(|g| der_step(u, k, plus(u, zs[g], d[g]), der[g], add[g]));
                 if next.iter().any(|&n| renorm_bits(u, k, n) != 0) {
                     break 'pairs;
                 }
@@ -741,12 +736,22 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
 /// tiny |z|).
 #[inline(always)]
 fn event<U: Unit, const DER: bool>(u: U, k: &Consts<U>, z: Z<U>, d: Z<U>) -> U::m64s {
-    let fr = u.add_f64s(z.0, d.0);
-    let fi = u.add_f64s(z.1, d.1);
-    let f2 = u.add_f64s(u.mul_f64s(fr, fr), u.mul_f64s(fi, fi));
-    let d2 = u.add_f64s(u.mul_f64s(d.0, d.0), u.mul_f64s(d.1, d.1));
+    let f2 = norm(u, plus(u, z, d));
+    let d2 = norm(u, d);
     let low = if DER { u.max_f64s(d2, k.tiny) } else { d2 };
     u.or_m64s(u.greater_than_f64s(f2, k.esc2), u.less_than_f64s(f2, low))
+}
+
+/// Z_m + δ (the full value) from Z_m = `z` and δ = `d`.
+#[inline(always)]
+fn plus<U: Unit>(u: U, z: Z<U>, d: Z<U>) -> Z<U> {
+    (u.add_f64s(z.0, d.0), u.add_f64s(z.1, d.1))
+}
+
+/// |v|^2, re^2 + im^2 in that order (the scalar loop's `norm2`).
+#[inline(always)]
+fn norm<U: Unit>(u: U, v: Z<U>) -> U::f64s {
+    u.add_f64s(u.mul_f64s(v.0, v.0), u.mul_f64s(v.1, v.1))
 }
 
 /// The derivative's mantissa after a step from z = `f` (Z_m + δ): 2 z der + add.
