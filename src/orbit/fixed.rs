@@ -208,8 +208,8 @@ impl Work {
 }
 
 /// |x|, |y| and x + y (mod 2^(64 n)) of two's complement numbers, in one pass: three
-/// independent carry chains per limb rather than a pass each (the passes of a step's
-/// bookkeeping cost a tenth of a 60-limb step's time when each ran alone).
+/// independent carry chains per limb rather than a pass each (as nine passes, a step's
+/// bookkeeping took about a tenth of a 60-limb step in a profile: docs/engine-notes.md).
 fn magnitudes_and_sum(x: &[u64], y: &[u64], ax: &mut [u64], ay: &mut [u64], sum: &mut [u64]) {
     let negative = |a: &[u64]| a.last().is_some_and(|&t| t >> 63 == 1);
     // Negation is the complement plus one: xor with the mask, and the mask's 1 as carry in.
