@@ -700,9 +700,11 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
         let z: [(Z<U>, Z<U>); G] = std::array::from_fn(|g| unsafe { u.load_pair(&at[g].map(|x| x.wrapping_add(off))) });
         for second in [false, true] {
             let zs: [Z<U>; G] = std::array::from_fn(|g| if second { z[g].1 } else { z[g].0 });
-            let mut ev = event::<U, DER>(u, k, zs[0], d[0]);
+            // Z_m + δ of every vector, which the event test and the derivative's step share.
+            let f: [Z<U>; G] = std::array::from_fn(|g| plus(u, zs[g], d[g]));
+            let mut ev = event::<U, DER>(u, k, f[0], d[0]);
             for g in 1..G {
-                ev = u.or_m64s(ev, event::<U, DER>(u, k, zs[g], d[g]));
+                ev = u.or_m64s(ev, event::<U, DER>(u, k, f[g], d[g]));
             }
             if u.bits(ev) != 0 {
                 break 'pairs;
@@ -710,7 +712,7 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
             if DER {
                 // A step after which a derivative must be renormalised is left to `step`,
                 // which hands the sample back for it.
-                let next: [Z<U>; G] = std::array::from_fn(|g| der_step(u, k, plus(u, zs[g], d[g]), der[g], add[g]));
+                let next: [Z<U>; G] = std::array::from_fn(|g| der_step(u, k, f[g], der[g], add[g]));
                 if next.iter().any(|&n| renorm_bits(u, k, n) != 0) {
                     break 'pairs;
                 }
@@ -731,12 +733,12 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
     }
 }
 
-/// Whether a step from Z_m = `z` with delta `d` would be anything but a plain step: [`step`]'s
-/// events without interior detection (escape, rebase, and with the derivative a step from a
-/// tiny |z|).
+/// Whether a step with delta `d` and full value `f` = Z_m + δ would be anything but a plain
+/// step: [`step`]'s events without interior detection (escape, rebase, and with the
+/// derivative a step from a tiny |z|).
 #[inline(always)]
-fn event<U: Unit, const DER: bool>(u: U, k: &Consts<U>, z: Z<U>, d: Z<U>) -> U::m64s {
-    let f2 = norm(u, plus(u, z, d));
+fn event<U: Unit, const DER: bool>(u: U, k: &Consts<U>, f: Z<U>, d: Z<U>) -> U::m64s {
+    let f2 = norm(u, f);
     let d2 = norm(u, d);
     let low = if DER { u.max_f64s(d2, k.tiny) } else { d2 };
     u.or_m64s(u.greater_than_f64s(f2, k.esc2), u.less_than_f64s(f2, low))
