@@ -237,8 +237,8 @@ pub struct Turn {
 /// |f^p'(w)| + 2 |step| L < 1; false as soon as it bounds it above 1. The residual is
 /// counted with [`NEWTON_NOISE`] of |w| added (the rounding and BLA steps, relative accuracy
 /// 1e-14, that f^p is computed with). The bound is used only on a ball below
-/// [`NEWTON_BALL`] of |w| and where F' moved from the previous iterate by at most half what
-/// L allows: the first Newton steps from a far start can land where F'' is a thousand
+/// [`NEWTON_BALL`] of |w| and where F' moved from the previous iterate (or from the first
+/// iterate whose ball was that small) by at most half what L allows: the first Newton steps from a far start can land where F'' is a thousand
 /// times smaller than a little way off (before these conditions, a sample that escapes
 /// after 268 periods, within 1e-9 of a spacing of a minibrot's edge, was taken for interior
 /// at its second step of a 7-turn Newton, 0.8 |w| from the first).
@@ -252,8 +252,10 @@ pub struct Turn {
 /// doubling it for L is ample. With the noise floor at 1e-12 |w|, multipliers up to about
 /// 1 - 1e-5 can be certified; those nearer 1 are left to the contraction criterion.
 pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) -> Option<Turn>) -> bool {
-    // The previous iterate and its f^p' (to check the Lipschitz bound against).
+    // The previous iterate and its f^p' (to check the Lipschitz bound against), and the
+    // first iterate whose ball was small (the same check over a longer stretch).
     let mut before: Option<([f64; 2], [FloatExp; 2])> = None;
+    let mut first_small: Option<([f64; 2], [FloatExp; 2])> = None;
     let mut near = false;
     for _ in 0..NEWTON_STEPS {
         let Some(t) = map(w, near) else { return false };
@@ -279,14 +281,22 @@ pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) ->
         };
         let lip = norm2(d2).sqrt().ldexp(1);
         // The bound needs F'' steady over the ball: a ball small beside |w| (f^p's features
-        // near 0 are on the scale of w), and F' changing from the previous iterate by no more
-        // than half the bound says.
+        // near 0 are on the scale of w), and F' changing from an earlier iterate by no more
+        // than half the bound says. That iterate is the previous one, or the first whose
+        // ball was small: once Newton has converged, consecutive iterates are a rounding
+        // apart and the change of F' between them is the noise of f^p's derivative, which
+        // no bound can be held to; for a multiplier near 1 (|F'| small) the certificate's
+        // ball is only small enough there, so without the longer stretch it never passes.
         let small = reach <= size.mul_f64(NEWTON_BALL);
-        let steady = before.is_some_and(|(v, d)| {
+        let steady_since = |(v, d): ([f64; 2], [FloatExp; 2])| {
             let dw = norm2(cconv::<f64, FloatExp>([w[0] - v[0], w[1] - v[1]])).sqrt();
             norm2([t.d1[0] - d[0], t.d1[1] - d[1]]).sqrt().ldexp(1) <= lip * dw
-        });
+        };
+        let steady = before.is_some_and(steady_since) || first_small.is_some_and(steady_since);
         before = Some((w, t.d1));
+        if small && first_small.is_none() {
+            first_small = before;
+        }
         if small && steady && reach * lip <= s2.sqrt().mul_f64(0.1) {
             // A fixed point is certified: attracting, repelling, or not yet told apart.
             let (lambda, spread) = (norm2(t.d1).sqrt(), (reach * lip).ldexp(1));

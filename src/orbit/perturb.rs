@@ -45,14 +45,16 @@ use crate::trap::{Trap, TrapState};
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
 const MAX_CYCLE_PERIODS: u32 = 8;
-/// The longest cycle the quadratic model's orbit is searched for, in periods (bulbs of the
-/// minibrot whose samples the anchor test above would reach only after many turns).
-const MODEL_MAX_PERIODS: u32 = 64;
-/// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]), and how
-/// often it is tested for a cycle.
-const MODEL_ITERATIONS: u32 = 512;
-/// See [`MODEL_ITERATIONS`].
-const MODEL_CHECK: u32 = 64;
+/// The longest cycle the quadratic model's orbit is searched for, in periods: bulbs of the
+/// minibrot, and the minibrots embedded near its edge, whose samples the anchor test above
+/// would reach only after many turns and the contraction criterion only after thousands
+/// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
+/// iteration limit holds [`MODEL_TURNS_SPARE`] such tests.
+const MODEL_MAX_PERIODS: u32 = 1024;
+/// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]).
+const MODEL_ITERATIONS: u32 = 8192;
+/// See [`MODEL_MAX_PERIODS`].
+const MODEL_TURNS_SPARE: u64 = 16;
 /// A model orbit back within this squared distance after k steps is on a k-cycle, to the
 /// accuracy Newton's method needs for a start.
 const MODEL_SETTLED2: f64 = 1e-12;
@@ -73,22 +75,27 @@ fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
 
 /// A point of the attracting cycle of z -> z^2 + c, of period 2 to [`MODEL_MAX_PERIODS`], that
 /// the orbit of 0 settles on within [`MODEL_ITERATIONS`], and its period.
+///
+/// Brent's cycle detection: the orbit is compared with an anchor that moves to the current
+/// point whenever the steps since it reach a power of two, so a settled cycle of period k is
+/// seen within about 2 k steps of settling, at one comparison per step (testing every
+/// candidate period from fixed checkpoints costs k steps per checkpoint).
 fn model_settled_cycle(c: [f64; 2]) -> Option<([f64; 2], u32)> {
     let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-    let mut z = [0.0, 0.0];
-    for _ in 0..MODEL_ITERATIONS / MODEL_CHECK {
-        for _ in 0..MODEL_CHECK {
-            z = step(z);
-            if z[0] * z[0] + z[1] * z[1] > 4.0 {
-                return None;
-            }
+    let (mut z, mut anchor) = ([0.0, 0.0], [0.0, 0.0]);
+    let (mut since, mut span) = (0u32, 1u32);
+    for _ in 0..MODEL_ITERATIONS {
+        z = step(z);
+        if z[0] * z[0] + z[1] * z[1] > 4.0 {
+            return None;
         }
-        let mut y = step(z);
-        for k in 2..=MODEL_MAX_PERIODS {
-            y = step(y);
-            if (y[0] - z[0]) * (y[0] - z[0]) + (y[1] - z[1]) * (y[1] - z[1]) < MODEL_SETTLED2 {
-                return Some((z, k));
-            }
+        since += 1;
+        let back2 = (z[0] - anchor[0]) * (z[0] - anchor[0]) + (z[1] - anchor[1]) * (z[1] - anchor[1]);
+        if back2 < MODEL_SETTLED2 && since >= 2 {
+            return (since <= MODEL_MAX_PERIODS).then_some((anchor, since));
+        }
+        if since == span {
+            (anchor, since, span) = (z, 0, span.saturating_mul(2));
         }
     }
     None
@@ -627,7 +634,7 @@ impl Perturbation {
     fn start(&self, offset: [f64; 2], skip: bool, counters: &mut Counters) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
         let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
-        let (d, moved) = if self.interior.is_none() && self.start_in_f64(offset) {
+        let (d, moved) = if self.start_in_f64(offset) {
             start_arithmetic::<f64>(self.spacing, self.origin, offset, common)
         } else {
             start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common)
@@ -719,6 +726,7 @@ impl Perturbation {
         // model has one: no need to wait for the orbit to settle.
         if pr.anchor_n == 0
             && let Some((w0, turns)) = self.model_cycle(w)
+            && u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
             && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))
         {
             return true;
@@ -1263,6 +1271,59 @@ mod tests {
         "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
         "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
     ];
+
+    /// The model's cycle finder on parameters of known period: the period-2 bulb, the
+    /// airplane and the rabbit (3), and nuclei of the 1/q bulbs of the main cardioid for q
+    /// up to past 64 (the limit before Brent's detection), each found here by Newton's method
+    /// on f_c^q(0) = 0 from the bulb's estimated centre. The point returned must lie on a
+    /// cycle of exactly the period returned. Outside the set (beside the cusp, past the tip)
+    /// there is no cycle.
+    #[test]
+    fn model_settled_cycle_finds_cycles_of_every_period_to_its_limit() {
+        let step = |z: [f64; 2], c: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        let far2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+        let check = |c: [f64; 2], want: u32| {
+            let (z, k) = model_settled_cycle(c).unwrap_or_else(|| panic!("{c:?}: no cycle found"));
+            assert_eq!(k, want, "{c:?}");
+            let mut y = z;
+            for j in 1..=k {
+                y = step(y, c);
+                if j < k {
+                    assert!(far2(y, z) > MODEL_SETTLED2, "{c:?}: back after {j} of {k}");
+                }
+            }
+            assert!(far2(y, z) < 1e-10, "{c:?}: not a {k}-cycle");
+        };
+        check([-1.0, 0.0], 2);
+        check([-1.754877666246693, 0.0], 3);
+        check([-0.12256116687665362, 0.7448617666197442], 3);
+        // The 1/q bulb touches the cardioid c = μ/2 - μ^2/4 at μ = e^(2πi/q); its centre lies
+        // outward, about sin(π/q)/q^2 from there.
+        let nucleus = |q: u32| {
+            let t = std::f64::consts::TAU / q as f64;
+            let mu = [t.cos(), t.sin()];
+            let mu2 = [mu[0] * mu[0] - mu[1] * mu[1], 2.0 * mu[0] * mu[1]];
+            let root = [mu[0] / 2.0 - mu2[0] / 4.0, mu[1] / 2.0 - mu2[1] / 4.0];
+            let out = [mu[0] - mu2[0], mu[1] - mu2[1]];
+            let (n, r) = (out[0].hypot(out[1]), (std::f64::consts::PI / q as f64).sin() / (q * q) as f64);
+            let mut c = [root[0] + out[0] / n * r, root[1] + out[1] / n * r];
+            for _ in 0..60 {
+                let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
+                for _ in 0..q {
+                    dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
+                    z = step(z, c);
+                }
+                let d2 = dz[0] * dz[0] + dz[1] * dz[1];
+                c = [c[0] - (z[0] * dz[0] + z[1] * dz[1]) / d2, c[1] - (z[1] * dz[0] - z[0] * dz[1]) / d2];
+            }
+            c
+        };
+        for q in [5, 17, 65, 100, 200, MODEL_MAX_PERIODS] {
+            check(nucleus(q), q);
+        }
+        assert!(model_settled_cycle([0.26, 0.0]).is_none());
+        assert!(model_settled_cycle([-2.01, 0.0]).is_none());
+    }
 
     /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
     /// (dz -> 2 z dz + 1): a single step from a tiny z, or a BLA step with a tiny multiplier,
