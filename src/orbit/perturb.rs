@@ -419,6 +419,9 @@ struct Der {
 }
 
 impl Der {
+    /// The derivative of a sample whose loop carries none.
+    const UNUSED: Der = Der { mant: [0.0; 2], exp: 0, add: 0.0 };
+
     fn to_fe(self) -> [FloatExp; 2] {
         [FloatExp::new(self.mant[0], self.exp), FloatExp::new(self.mant[1], self.exp)]
     }
@@ -662,7 +665,9 @@ impl Perturbation {
                 start.shrink = Contraction::new(norm2(cadd(d1, cmul(d2, d))), c);
             }
         }
-        (start, Der::from_fe(der, add_fe), add_fe)
+        // Without a derivative the loop never reads it (its DER parameter is false).
+        let der = if self.derivative { Der::from_fe(der, add_fe) } else { Der::UNUSED };
+        (start, der, add_fe)
     }
 
     /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`]):
