@@ -238,10 +238,11 @@ pub struct Turn {
 /// counted with [`NEWTON_NOISE`] of |w| added (the rounding and BLA steps, relative accuracy
 /// 1e-14, that f^p is computed with). The bound is used only on a ball below
 /// [`NEWTON_BALL`] of |w| and where F' moved from the previous iterate (or from the first
-/// iterate whose ball was that small) by at most half what L allows: the first Newton steps from a far start can land where F'' is a thousand
-/// times smaller than a little way off (before these conditions, a sample that escapes
-/// after 268 periods, within 1e-9 of a spacing of a minibrot's edge, was taken for interior
-/// at its second step of a 7-turn Newton, 0.8 |w| from the first).
+/// iterate whose ball was that small) by at most half what L allows: the first Newton
+/// steps from a far start can land where F'' is a thousand times smaller than a little way
+/// off (before these conditions, a sample that escapes after 268 periods, within 1e-9 of a
+/// spacing of a minibrot's edge, was taken for interior at its second step of a 7-turn
+/// Newton, 0.8 |w| from the first).
 ///
 /// This is the test behind interior distance estimation (Claude Heiland-Allen's
 /// mandelbrot-numerics, `m_d_interior_de`: the periodic point by Newton's method, then
