@@ -712,8 +712,38 @@ impl Perturbation {
     /// finds most interior samples within a few periods, where the contraction criterion
     /// needs log(threshold) / log|λ| of them (hundreds, and more than the limit allows near
     /// a component's edge); the contraction criterion still decides everywhere else.
+    ///
+    /// Called at every turn's end, and at most ends it only waits for the anchor's next
+    /// turns: that case is decided here, inline in the loop; the rest, out of line, in
+    /// [`Perturbation::newton_probe_at`] (a call per end cost an exterior sample a tenth of
+    /// its time on the 1e102 minibrot view).
+    #[inline(always)]
     fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
         let Some(p) = self.newton_period() else { return false };
+        let pr = &mut s.probe;
+        let since = s.n.wrapping_sub(pr.anchor_n);
+        if pr.anchor_n != 0 && since >= p && since < p.saturating_mul(MAX_CYCLE_PERIODS) {
+            // Turns 1 to MAX_CYCLE_PERIODS - 1 after the anchor: as below, but for a sample
+            // that does not try Newton's test now, which keeps its anchor.
+            let w = cto_f64(s.dz);
+            let away2 = (w[0] - pr.anchor[0]) * (w[0] - pr.anchor[0]) + (w[1] - pr.anchor[1]) * (w[1] - pr.anchor[1]);
+            let candidate = if since < p.saturating_mul(2) {
+                pr.first2 = away2;
+                true
+            } else {
+                away2 * 16.0 < pr.first2
+            };
+            if !(candidate && s.n >= pr.at && s.shrink.value().exponent() < pr.anchor_exp) {
+                return false;
+            }
+        }
+        self.newton_probe_at(s, p)
+    }
+
+    /// [`Perturbation::newton_probe`] where the sample has no anchor, has gone past its
+    /// reach, or tries Newton's test: `p` is the reference's period.
+    #[inline(never)]
+    fn newton_probe_at<D: Real>(&self, s: &mut Sample<D>, p: u32) -> bool {
         let exp = s.shrink.value().exponent();
         let (w, dc) = (cto_f64(s.dz), cto_f64(s.dc));
         let pr = &mut s.probe;
