@@ -403,6 +403,25 @@ struct Probe {
     first2: f64,
 }
 
+impl Probe {
+    /// Whether a sample at full value `w`, `turns` turns after its anchor, may try Newton's
+    /// test: one turn after it always (and the distance it went away is kept), later where
+    /// it has come back four times closer than that; never without an anchor (0 turns).
+    #[inline(always)]
+    fn candidate(&mut self, turns: u32, w: [f64; 2]) -> bool {
+        let a = self.anchor;
+        let away2 = (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
+        match turns {
+            0 => false,
+            1 => {
+                self.first2 = away2;
+                true
+            }
+            _ => away2 * 16.0 < self.first2,
+        }
+    }
+}
+
 impl<D: Real> Sample<D> {
     fn convert<E: Real>(&self) -> Sample<E> {
         let (m, which, n, single, shrink, probe) = (self.m, self.which, self.n, self.single, self.shrink, self.probe);
@@ -724,15 +743,10 @@ impl Perturbation {
         let since = s.n.wrapping_sub(pr.anchor_n);
         if pr.anchor_n != 0 && since >= p && since < p.saturating_mul(MAX_CYCLE_PERIODS) {
             // Turns 1 to MAX_CYCLE_PERIODS - 1 after the anchor: as below, but for a sample
-            // that does not try Newton's test now, which keeps its anchor.
-            let w = cto_f64(s.dz);
-            let away2 = (w[0] - pr.anchor[0]) * (w[0] - pr.anchor[0]) + (w[1] - pr.anchor[1]) * (w[1] - pr.anchor[1]);
-            let candidate = if since < p.saturating_mul(2) {
-                pr.first2 = away2;
-                true
-            } else {
-                away2 * 16.0 < pr.first2
-            };
+            // that does not try Newton's test now, which keeps its anchor. (Only whether it
+            // is one turn or more matters to the candidate test.)
+            let turns = if since < p.saturating_mul(2) { 1 } else { 2 };
+            let candidate = pr.candidate(turns, cto_f64(s.dz));
             if !(candidate && s.n >= pr.at && s.shrink.value().exponent() < pr.anchor_exp) {
                 return false;
             }
@@ -747,16 +761,8 @@ impl Perturbation {
         let exp = s.shrink.value().exponent();
         let (w, dc) = (cto_f64(s.dz), cto_f64(s.dc));
         let pr = &mut s.probe;
-        let away2 = |a: [f64; 2]| (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
         let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
-        let candidate = match k {
-            0 => false,
-            1 => {
-                pr.first2 = away2(pr.anchor);
-                true
-            }
-            _ => away2(pr.anchor) * 16.0 < pr.first2,
-        };
+        let candidate = pr.candidate(k, w);
         // At the first end, a start from the quadratic model's attracting cycle, where the
         // model has one: no need to wait for the orbit to settle.
         if pr.anchor_n == 0
