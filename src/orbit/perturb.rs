@@ -86,12 +86,11 @@ fn model_settled_cycle(c: [f64; 2]) -> Option<([f64; 2], u32)> {
     let (mut since, mut span) = (0u32, 1u32);
     for _ in 0..MODEL_ITERATIONS {
         z = step(z);
-        if z[0] * z[0] + z[1] * z[1] > 4.0 {
+        if norm2(z) > 4.0 {
             return None;
         }
         since += 1;
-        let back2 = (z[0] - anchor[0]) * (z[0] - anchor[0]) + (z[1] - anchor[1]) * (z[1] - anchor[1]);
-        if back2 < MODEL_SETTLED2 && since >= 2 {
+        if norm2([z[0] - anchor[0], z[1] - anchor[1]]) < MODEL_SETTLED2 && since >= 2 {
             return (since <= MODEL_MAX_PERIODS).then_some((anchor, since));
         }
         if since == span {
@@ -409,8 +408,7 @@ impl Probe {
     /// it has come back four times closer than that; never without an anchor (0 turns).
     #[inline(always)]
     fn candidate(&mut self, turns: u32, w: [f64; 2]) -> bool {
-        let a = self.anchor;
-        let away2 = (w[0] - a[0]) * (w[0] - a[0]) + (w[1] - a[1]) * (w[1] - a[1]);
+        let away2 = norm2([w[0] - self.anchor[0], w[1] - self.anchor[1]]);
         match turns {
             0 => false,
             1 => {
@@ -617,15 +615,16 @@ struct Lane {
 
 /// A sample's delta at the start, u = origin + spacing × offset, and, when the view's
 /// common BLA steps are taken (`common` = their K1, K2), δ_m = K1 u + K2 u² with the scaled
-/// derivative (K1 + 2 K2 u) × spacing: computed in `T` (f64 where
-/// [`Perturbation::start_in_f64`] allows, which gives FloatExp's bits sooner), returned in
-/// FloatExp.
+/// derivative (K1 + 2 K2 u) × spacing where `derivative` asks for it (else zero): computed
+/// in `T` (f64 where [`Perturbation::start_in_f64`] allows, which gives FloatExp's bits
+/// sooner), returned in FloatExp.
 #[allow(clippy::type_complexity)] // three complex values, named in the doc
 fn start_arithmetic<T: Real>(
     spacing: FloatExp,
     origin: [FloatExp; 2],
     offset: [f64; 2],
     common: Option<[[FloatExp; 2]; 2]>,
+    derivative: bool,
 ) -> ([FloatExp; 2], Option<([FloatExp; 2], [FloatExp; 2])>) {
     let fe = |v: [FloatExp; 2]| -> [T; 2] { cconv(v) };
     let sp = T::from_fe(spacing);
@@ -635,9 +634,13 @@ fn start_arithmetic<T: Real>(
     let moved = common.map(|[k1, k2]| {
         let (k1, k2) = (fe(k1), fe(k2));
         let dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
-        let k2d = cmul(k2, d);
-        let der = cmul(cadd(k1, [k2d[0].mul_f64(2.0), k2d[1].mul_f64(2.0)]), [sp, T::from_f64(0.0)]);
-        (cconv(dz), cconv(der))
+        let der = if derivative {
+            let k2d = cmul(k2, d);
+            cconv(cmul(cadd(k1, [k2d[0].mul_f64(2.0), k2d[1].mul_f64(2.0)]), [sp, T::from_f64(0.0)]))
+        } else {
+            [FloatExp::ZERO; 2]
+        };
+        (cconv(dz), der)
     });
     (cconv(d), moved)
 }
@@ -657,9 +660,9 @@ impl Perturbation {
         let zero = FloatExp::ZERO;
         let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
         let (d, moved) = if self.start_in_f64(offset) {
-            start_arithmetic::<f64>(self.spacing, self.origin, offset, common)
+            start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
         } else {
-            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common)
+            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
         };
         let shrink = self.interior.map_or(Contraction::IDLE, |c| Contraction::new(FloatExp::ONE, c));
         // The first Newton test at the end of the second period, if the first contracted.
@@ -1322,7 +1325,7 @@ mod tests {
     #[test]
     fn model_settled_cycle_finds_cycles_of_every_period_to_its_limit() {
         let step = |z: [f64; 2], c: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-        let far2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+        let far2 = |a: [f64; 2], b: [f64; 2]| norm2([a[0] - b[0], a[1] - b[1]]);
         let check = |c: [f64; 2], want: u32| {
             let (z, k) = model_settled_cycle(c).unwrap_or_else(|| panic!("{c:?}: no cycle found"));
             assert_eq!(k, want, "{c:?}");
