@@ -353,6 +353,11 @@ pub struct RenderArgs {
     /// avx2, avx512 or neon; refused where the CPU lacks it. Output does not depend on it.
     #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
     pub simd: Option<String>,
+    /// Store at most N reference iterations densely (16 bytes each, with BLA tables) and
+    /// the rest packed (about 2 bytes each, single steps). Default: all of them up to 2^25,
+    /// else 2^20. The values are the same either way.
+    #[arg(long, value_name = "N")]
+    pub dense_orbit: Option<u32>,
     /// Print engine, precision, pixels, iterations, time and speed when done.
     #[arg(long)]
     pub stats: bool,

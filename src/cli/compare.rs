@@ -25,11 +25,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Runtime(e.into()))?;
     let mut variants = compare::variants(&scene);
     if variants.is_empty() {
-        return Err(Failure::Input(anyhow!(
-            "no engine can address this view: it is too deep for direct iteration, and iteration.max = {} is above the perturbation engines' limit of {}",
-            scene.max_iter,
-            deepfield::scene::MAX_PERTURB_ITER
-        )));
+        return Err(Failure::Input(anyhow!("no engine can address this view")));
     }
     if !args.only.is_empty() {
         variants.retain(|v| args.only.iter().any(|o| v.name.contains(o.as_str())));

@@ -32,10 +32,7 @@ pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
             b.set_position(done);
         }
     };
-    let refs = deepfield::orbit::references(&spec, &progress, &cancel).map_err(|e| match e {
-        deepfield::orbit::PrepareError::Cancelled => Failure::Cancelled,
-        e => Failure::Input(anyhow!(e)),
-    })?;
+    let refs = deepfield::orbit::references(&spec, &progress, &cancel).map_err(|_| Failure::Cancelled)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }

@@ -67,6 +67,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             simd,
             rows,
             references: references.clone(),
+            dense_orbit: args.dense_orbit,
             ..Options::default()
         };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, encoded| {
@@ -174,12 +175,21 @@ fn report(
         );
         if let Some(d) = &stats.deep {
             text.push_str(&format!(
-                "reference   {} iterations{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages)\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                "reference   {} iterations{}{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages)\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
                 d.reference_iterations,
                 match (d.reference_escaped, d.reference_period) {
                     (true, _) => " (escaped)".to_string(),
                     (_, Some(p)) => format!(" (one period: the centre is a nucleus of period {p}; stored once, samples rebase through it)"),
                     _ => String::new(),
+                },
+                if d.reference_dense < d.reference_iterations {
+                    format!(
+                        ", {} stored densely and {} packed",
+                        d.reference_dense,
+                        d.reference_iterations - d.reference_dense
+                    )
+                } else {
+                    String::new()
                 },
                 d.reference_bits,
                 d.reference_seconds,

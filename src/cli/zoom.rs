@@ -98,10 +98,7 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     let references = match (&args.reference, render::deep_spec(finest, &plan, &options).1) {
         (Some(path), _) => Some(Arc::new(super::reference::read(path)?)),
         (None, Some(spec)) => {
-            let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).map_err(|e| match e {
-                deepfield::orbit::PrepareError::Cancelled => Failure::Cancelled,
-                e => Failure::Input(anyhow!(e)),
-            })?;
+            let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).map_err(|_| Failure::Cancelled)?;
             Some(Arc::new(SavedReferences { key: key_of(&spec), refs: Arc::new(refs) }))
         }
         (None, None) => None,

@@ -18,7 +18,7 @@ use super::{
     Measured, Row, RunError, Variant, VariantKind, mark_ill_conditioned, run, sample_pixels, score, suspects, truths,
 };
 use crate::field::INTERIOR;
-use crate::scene::Scene;
+use crate::scene::{EngineKind, Scene};
 use crate::simd_level::SimdLevel;
 
 /// The accuracy bar every configuration must meet.
@@ -48,24 +48,37 @@ pub struct Verdict {
 
 /// The configurations checked on `scene`: `compare`'s variants without the loose BLA
 /// tolerance (a speed setting shown beside the default, not held to the bar), the f32 and
-/// GPU kernels (not exact engines).
+/// GPU kernels (not exact engines), and with one more: the first perturbation
+/// configuration with BLA, its reference packed after [`PACKED_AFTER`] iterations.
 pub fn configurations(scene: &Scene) -> Vec<Variant> {
-    super::variants(scene)
+    let mut out: Vec<Variant> = super::variants(scene)
         .into_iter()
         .filter(|v| match v.kind {
-            VariantKind::Engine(crate::scene::EngineKind::Perturb { bla: Some(eps), .. }) => {
+            VariantKind::Engine(EngineKind::Perturb { bla: Some(eps), .. }) => {
                 eps != super::LOOSE_BLA_TOLERANCE || scene.bla == Some(super::LOOSE_BLA_TOLERANCE)
             }
             // Direct f64 only where `auto` chooses it: deeper, a forced f64 is a speed
             // setting (`compare` shows what it costs in accuracy), not an exact engine.
-            VariantKind::Engine(crate::scene::EngineKind::Direct) => scene
+            VariantKind::Engine(EngineKind::Direct) => scene
                 .engine_for(crate::scene::EngineChoice::Auto)
-                .is_ok_and(|plan| matches!(plan.kind, crate::scene::EngineKind::Direct)),
+                .is_ok_and(|plan| matches!(plan.kind, EngineKind::Direct)),
             VariantKind::Engine(_) => true,
             VariantKind::F32 | VariantKind::Gpu(_) => false,
         })
-        .collect()
+        .collect();
+    // The first perturbation configuration with BLA again, its reference stored densely
+    // for PACKED_AFTER iterations and packed after (as limits past 2^25 store it).
+    let packed = out.iter().find(|v| matches!(v.kind, VariantKind::Engine(EngineKind::Perturb { bla: Some(_), .. })));
+    if let Some(v) = packed.filter(|_| scene.max_iter > PACKED_AFTER) {
+        let name = format!("{} packed after {PACKED_AFTER}", v.name);
+        out.push(Variant { name, dense_orbit: Some(PACKED_AFTER), ..v.clone() });
+    }
+    out
 }
+
+/// Where the packed configuration's dense reference ends: early, so that most of the
+/// samples' iterations run through the packed tail.
+pub const PACKED_AFTER: u32 = 256;
 
 /// Checks every configuration of `scene` on `pixels` sampled pixels, each with every
 /// instruction set in `levels`, against the truth and `bar`.

@@ -42,6 +42,9 @@ pub struct Variant {
     pub name: String,
     /// What runs.
     pub kind: VariantKind,
+    /// Reference iterations stored densely, the rest packed (None: the engine's rule; see
+    /// `orbit::dense_limit`).
+    pub dense_orbit: Option<u32>,
 }
 
 /// The kernels a variant runs.
@@ -132,21 +135,15 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
     let mut out = Vec::new();
     let ulps64 = scene.ulps_per_sample();
     if ulps64 * 2f64.powi(-29) >= DIRECT_MIN_ULPS {
-        out.push(Variant { name: "f32".into(), kind: VariantKind::F32 });
+        out.push(Variant { name: "f32".into(), kind: VariantKind::F32, dense_orbit: None });
     }
     if ulps64 >= DIRECT_MIN_ULPS {
-        out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct) });
+        out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct), dense_orbit: None });
     }
     for (choice, precision) in [(EngineChoice::Gpu, Precision::F32), (EngineChoice::GpuDf, Precision::DoubleFloat)] {
         if scene.engine_for(choice).is_ok() {
-            out.push(Variant { name: precision.name().into(), kind: VariantKind::Gpu(precision) });
+            out.push(Variant { name: precision.name().into(), kind: VariantKind::Gpu(precision), dense_orbit: None });
         }
-    }
-    if scene.max_iter > crate::scene::MAX_PERTURB_ITER && !matches!(scene.family, crate::scene::FamilySpec::Mandelbrot)
-    {
-        // The perturbation engines refuse such limits for Julia sets (their references
-        // are stored whole); Mandelbrot views run if their reference is periodic.
-        return out;
     }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
     let mut numbers = vec![];
@@ -159,11 +156,16 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
         out.push(Variant {
             name: label.into(),
             kind: VariantKind::Engine(EngineKind::Perturb { numbers: n, bla: None }),
+            dense_orbit: None,
         });
         if bla_ok {
             for eps in [tight, LOOSE_BLA_TOLERANCE] {
                 let kind = EngineKind::Perturb { numbers: n, bla: Some(eps) };
-                out.push(Variant { name: format!("{label} bla {eps:e}"), kind: VariantKind::Engine(kind) });
+                out.push(Variant {
+                    name: format!("{label} bla {eps:e}"),
+                    kind: VariantKind::Engine(kind),
+                    dense_orbit: None,
+                });
             }
         }
     }
@@ -347,7 +349,7 @@ pub fn run(
     let (mut params, _) = render::prepare_field(
         scene,
         &plan,
-        Options { simd, ..Options::with_channels(ChannelSet::default_exr()) },
+        Options { simd, dense_orbit: variant.dense_orbit, ..Options::with_channels(ChannelSet::default_exr()) },
         cancel,
         &|_: Progress| {},
     )?;

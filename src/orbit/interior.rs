@@ -210,8 +210,7 @@ pub fn orbit_contracts(orbit: &Reference, check: Check) -> bool {
         return false;
     }
     let mut c = Contraction::new(FloatExp::ONE, check);
-    (1..=orbit.last()).any(|k| {
-        let z = orbit.get_fe(k);
+    orbit.values_fe(1, orbit.end()).any(|z| {
         c.step(z, norm2(z), check);
         c.interior(check)
     })
@@ -445,7 +444,7 @@ pub fn decide(
     }
     let centre = &refs[0];
     match centre.period() {
-        Some(p) if norm2(size_estimate((1..p).map(|k| centre.get_fe(k)))) < spacing * spacing => {
+        Some(p) if norm2(size_estimate(centre.values_fe(1, p - 1))) < spacing * spacing => {
             Decision::AutoMinibrotBelowSample
         }
         Some(p) if (max_iter as u64) < AUTO_MIN_PERIODS * p as u64 => Decision::AutoFewPeriods,

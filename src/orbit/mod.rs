@@ -12,6 +12,7 @@ pub mod fixed;
 pub mod interior;
 #[cfg(feature = "mpfr")]
 pub mod mpfr;
+pub mod packed;
 pub mod perturb;
 pub mod reference;
 pub mod saved;
@@ -98,32 +99,26 @@ pub struct DeepSpec {
     /// Reference orbits computed earlier for this view (a reference file, see [`saved`]);
     /// None computes them.
     pub references: Option<std::sync::Arc<Vec<Reference>>>,
+    /// Reference iterations stored densely, the rest packed (see [`dense_limit`]).
+    pub dense_limit: Option<u32>,
 }
 
-/// The most reference iterations stored (16 bytes each, plus BLA tables: 2^25 take ~2-4
-/// GB). A Mandelbrot view centred on a nucleus stores one period whatever its iteration
-/// limit; any other view's limit must be within this.
-pub const MAX_STORED_ITERATIONS: u32 = 1 << 25;
+/// Iteration limits up to this store the whole reference orbit densely: 16 bytes per
+/// iteration, plus BLA tables of about 100 (f64) or 450 (FloatExp) bytes per iteration.
+pub const MAX_DENSE_ITERATIONS: u32 = 1 << 25;
 
-/// Why the shared work stopped.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum PrepareError {
-    /// Cancelled by the user.
-    #[error("cancelled")]
-    Cancelled,
-    /// The iteration limit is past what is stored, and the reference is not periodic.
-    #[error(
-        "iteration.max = {max_iter} is more than the {MAX_STORED_ITERATIONS} reference iterations the engine stores (16 bytes each), and the reference orbit found no period within them (the view's centre is not a minibrot's nucleus); lower iteration.max, or centre the view on a nucleus (`deepfield find`)"
-    )]
-    NotPeriodic {
-        /// The scene's iteration limit.
-        max_iter: u32,
-    },
-}
+/// With a longer limit, the first this many iterations are stored densely (with BLA
+/// tables, under half a GB at any depth) and the rest packed, about two bytes per
+/// iteration ([`packed`]): 1e9 iterations in about 2 GB.
+pub const DENSE_PART: u32 = 1 << 20;
 
-impl From<Cancelled> for PrepareError {
-    fn from(_: Cancelled) -> Self {
-        PrepareError::Cancelled
+/// How much of a reference orbit is stored densely for an iteration limit: all of it up to
+/// [`MAX_DENSE_ITERATIONS`], else [`DENSE_PART`]; `forced` (`render --dense-orbit`) sets
+/// it, to test the packed tail on short orbits. None: all of it.
+pub fn dense_limit(max_iter: u32, forced: Option<u32>) -> Option<u32> {
+    match forced {
+        Some(n) => (n < max_iter).then_some(n),
+        None => (max_iter > MAX_DENSE_ITERATIONS).then_some(DENSE_PART),
     }
 }
 
@@ -143,15 +138,9 @@ pub fn periodic_below(spec: &DeepSpec) -> Option<FloatExp> {
 
 /// How the references of a view are stepped (see [`reference::Stepping`]): a Mandelbrot
 /// reference from 0 that comes back within 2^-20 of a sample spacing (first order) of 0 is
-/// one period of a nucleus's orbit; past [`MAX_STORED_ITERATIONS`] only periodic ones are
-/// kept.
+/// one period of a nucleus's orbit; past [`DeepSpec::dense_limit`] the orbit is packed.
 fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
-    reference::Stepping {
-        share,
-        simd: spec.simd,
-        periodic_below: periodic_below(spec),
-        store_limit: (spec.max_iter > MAX_STORED_ITERATIONS).then_some(MAX_STORED_ITERATIONS),
-    }
+    reference::Stepping { share, simd: spec.simd, periodic_below: periodic_below(spec), dense_limit: spec.dense_limit }
 }
 
 /// Computes the reference orbit(s) of a view: the centre's orbit (Mandelbrot), or for a
@@ -160,7 +149,7 @@ pub fn references(
     spec: &DeepSpec,
     progress: ReferenceProgress<'_>,
     cancel: &AtomicBool,
-) -> Result<Vec<Reference>, PrepareError> {
+) -> Result<Vec<Reference>, Cancelled> {
     let bits = reference_bits(spec);
     let big = |d: &[Decimal; 2]| [bigfloat::from_decimal(&d[0], bits), bigfloat::from_decimal(&d[1], bits)];
     let zero = [Float::from(0u32), Float::from(0u32)];
@@ -186,9 +175,6 @@ pub fn references(
             vec![a?, b?]
         }
     };
-    if refs.iter().any(Reference::truncated) {
-        return Err(PrepareError::NotPeriodic { max_iter: spec.max_iter });
-    }
     progress(total, total);
     Ok(refs)
 }
@@ -199,7 +185,7 @@ pub fn prepare(
     spec: &DeepSpec,
     progress: ReferenceProgress<'_>,
     cancel: &AtomicBool,
-) -> Result<Perturbation, PrepareError> {
+) -> Result<Perturbation, Cancelled> {
     let started = std::time::Instant::now();
     let refs = match &spec.references {
         Some(r) => r.clone(),
@@ -232,7 +218,7 @@ pub fn prepare(
     let check = interior::Check::new(spec.max_iter, spec.escape_radius);
     let interior_decision = interior::decide(spec.interior, &refs, mandelbrot, spec.spacing, spec.max_iter, check);
     // Λ = 2 Z_1 ⋯ 2 Z_(p-1) of a nucleus's reference (interior detection's quadratic model).
-    let renormal = refs[0].period().filter(|_| mandelbrot).map(|p| {
+    let renormal = refs[0].period().filter(|&p| mandelbrot && p <= refs[0].last()).map(|p| {
         (1..p).fold([FloatExp::ONE, FloatExp::ZERO], |l, k| {
             let z = refs[0].get_fe(k);
             crate::num::real::cmul(l, [z[0].ldexp(1), z[1].ldexp(1)])
@@ -283,6 +269,12 @@ impl Perturbation {
 
     /// Length of the primary reference (its last index).
     pub fn reference_length(&self) -> u32 {
+        self.refs[0].end()
+    }
+
+    /// Iterations of the primary reference stored densely (its last dense index; the rest,
+    /// up to [`Perturbation::reference_length`], is packed).
+    pub fn reference_dense(&self) -> u32 {
         self.refs[0].last()
     }
 }

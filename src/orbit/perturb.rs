@@ -35,6 +35,7 @@ mod lanes;
 
 use super::bla::{BlaTable, Step};
 use super::interior::{self, Check, Contraction, Decision, Detection};
+use super::packed::Packed;
 use super::reference::Reference;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
@@ -708,9 +709,9 @@ impl Perturbation {
     }
 
     /// The period of the reference when interior detection may use Newton's test: a
-    /// Mandelbrot view centred on a nucleus (its reference is one period).
+    /// Mandelbrot view centred on a nucleus (its reference is one period, stored densely).
     fn newton_period(&self) -> Option<u32> {
-        self.refs[0].period().filter(|_| self.mandelbrot && self.interior.is_some())
+        self.refs[0].period().filter(|&p| self.mandelbrot && self.interior.is_some() && p <= self.refs[0].last())
     }
 
     /// Interior detection's Newton test, at the end of a period of a nucleus's reference
@@ -1194,9 +1195,12 @@ impl Perturbation {
         if s.n >= self.max_iter {
             return Some(Exit::Done(Orbit::interior()));
         }
+        let end = s.m >= r.last();
+        if end && let Some(packed) = r.packed() {
+            return self.tail::<D, DER, INT>(s, der, ctx, (zm, full, z), traps, states, local, packed);
+        }
         let d2 = norm2(s.dz);
         let f2 = norm2(full);
-        let end = s.m >= r.last();
         let rebase = f2 < d2 || end;
         let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
         if rebase || glitch {
@@ -1245,6 +1249,88 @@ impl Perturbation {
             return Some(Exit::Switch(*s));
         }
         None
+    }
+
+    /// The loop through a reference's packed tail ([`Packed`]), entered at Z_last (the end
+    /// of the dense part) with that pass's end tests done and (Z_last, z, z in f64) in
+    /// `at`: single steps, the values read in order, until the sample rebases (and takes
+    /// the rebase's step, as [`Perturbation::op`] does), escapes, is found interior or
+    /// reaches the limit. The passes are `op`'s, in its order, so a sample steps through
+    /// the same bits as through a dense orbit one iteration at a time. It keeps its number
+    /// type and leaves the vector lanes aside until it is back in the dense part, which
+    /// is the only part they and the BLA tables read by index.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn tail<D: Real, const DER: bool, const INT: bool>(
+        &self,
+        s: &mut Sample<D>,
+        der: &mut Der,
+        ctx: Ctx<'_, D>,
+        at: ([D; 2], [D; 2], [f64; 2]),
+        traps: &[Trap],
+        states: &mut [TrapState],
+        local: &mut Counters,
+        packed: &Packed,
+    ) -> Option<Exit<D>> {
+        let full_range = D::NAME == FloatExp::NAME;
+        let two = D::from_f64(2.0);
+        let (mut zm, mut full, mut z) = at;
+        let mut cursor = packed.cursor();
+        loop {
+            let d2 = norm2(s.dz);
+            let f2 = norm2(full);
+            let end = s.m >= packed.last();
+            let rebase = f2 < d2 || end;
+            let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
+            if rebase || glitch {
+                local.glitches += glitch as u64;
+                local.rebases += 1;
+                s.dz = full;
+                s.m = 0;
+                s.which = self.refs.len() - 1;
+                s.single = false;
+                if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
+                    return Some(Exit::Switch(*s));
+                }
+                zm = [D::ZERO; 2];
+            }
+            if DER {
+                der.step(z, full, ctx.add_fe);
+            }
+            if INT {
+                s.shrink.step(full, f2, self.check());
+            }
+            s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
+            s.m += 1;
+            s.n += 1;
+            local.steps += 1;
+            if rebase || glitch {
+                return None;
+            }
+            cursor.advance(packed);
+            if INT && s.shrink.interior(self.check()) {
+                local.interior += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
+            zm = if full_range {
+                cconv(cursor.get_fe(packed))
+            } else {
+                let g = cursor.get();
+                [D::from_f64(g[0]), D::from_f64(g[1])]
+            };
+            full = cadd(zm, s.dz);
+            z = cto_f64(full);
+            for (trap, state) in traps.iter().zip(states.iter_mut()) {
+                trap.observe(state, z);
+            }
+            if z[0] * z[0] + z[1] * z[1] > self.escape2 {
+                let dz = if DER { der.to_f64() } else { [0.0; 2] };
+                return Some(Exit::Done(Orbit { n: s.n, z, dz }));
+            }
+            if s.n >= self.max_iter {
+                return Some(Exit::Done(Orbit::interior()));
+            }
+        }
     }
 
     /// δ -> A δ + B δc + A2 δ^2 + AB δ δc + B2 δc^2 (first order only where that is valid
@@ -1429,6 +1515,7 @@ mod tests {
                 numbers: Numbers::FloatExp,
                 simd: SimdLevel::detect(),
                 references: None,
+                dense_limit: None,
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let skip = p.skip.expect("the view has common steps");
@@ -1477,6 +1564,7 @@ mod tests {
         max_iter: u32,
         numbers: Numbers,
         bla: Option<f64>,
+        dense_limit: Option<u32>,
     ) -> u64 {
         let (w, h) = (32i32, 24i32);
         let mut found = 0;
@@ -1496,8 +1584,11 @@ mod tests {
                     numbers,
                     simd: SimdLevel::detect(),
                     references: None,
+                    dense_limit,
                 };
                 let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+                let packed = p.refs.iter().any(|r| r.packed().is_some());
+                assert_eq!(packed, dense_limit.is_some(), "{radius}: packed as asked");
                 let offsets: Vec<[f64; 2]> = (0..h)
                     .flat_map(|j| {
                         (0..w).map(move |i| [i as f64 - w as f64 / 2.0 + 0.5, j as f64 - h as f64 / 2.0 + 0.5])
@@ -1544,15 +1635,21 @@ mod tests {
     #[test]
     fn lanes_match_one_sample_at_a_time() {
         let eps = Some(crate::orbit::DEFAULT_BLA_TOLERANCE);
-        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, eps);
-        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, None);
-        same_both_ways(MINIBROT, None, "1e-12", 3000, Numbers::F64, eps);
-        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps);
-        same_both_ways(E50, None, "2e-50", 263010, Numbers::F64, eps);
+        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, eps, None);
+        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, None, None);
+        same_both_ways(MINIBROT, None, "1e-12", 3000, Numbers::F64, eps, None);
+        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps, None);
+        same_both_ways(E50, None, "2e-50", 263010, Numbers::F64, eps, None);
         // Without BLA, |z| lingers at 2 and the derivative leaves its window in the lanes.
-        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, None);
-        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, eps);
-        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, None);
+        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, None, None);
+        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, eps, None);
+        same_both_ways(JULIA_CENTER, Some(["-0.7436447860", "0.1318252536"]), "2e-40", 3000, Numbers::F64, None, None);
+        // References packed after a few hundred iterations: the lanes hand samples back at
+        // the dense part's end and the scalar loop takes them through the tail.
+        same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, eps, Some(400));
+        same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps, Some(900));
+        let julia = Some(["-0.7436447860", "0.1318252536"]);
+        same_both_ways(JULIA_CENTER, julia, "2e-40", 3000, Numbers::F64, eps, Some(300));
     }
 
     /// The period-1429 minibrot of the all-seeing-eye location (size 1.6e-102): its
@@ -1562,11 +1659,15 @@ mod tests {
     fn lanes_match_one_sample_at_a_time_with_interior_found() {
         let eps = Some(crate::orbit::DEFAULT_BLA_TOLERANCE);
         for (numbers, bla) in [(Numbers::F64, eps), (Numbers::FloatExp, eps), (Numbers::F64, None)] {
-            let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, numbers, bla);
+            let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, numbers, bla, None);
             assert!(found > 100, "{numbers:?} {bla:?}: {found} samples found interior");
         }
+        // A nucleus's reference packed before its period ends: no Newton test, found by
+        // the contraction alone.
+        let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, Numbers::F64, eps, Some(700));
+        assert!(found > 100, "packed after 700: {found} samples found interior");
         // The whole of a Julia set whose parameter is inside the period-3 bulb (the rabbit).
-        let found = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps);
+        let found = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps, None);
         assert!(found > 100, "rabbit: {found} samples found interior");
     }
 }

@@ -6,6 +6,10 @@
 //! below the f64 range (|Z| < 2^-1000, which happens when the orbit passes very close to 0
 //! near a deep minibrot's nucleus) are also kept, sparsely, as `FloatExp`, because deep
 //! deltas must not be stepped against a Z that f64 rounded to zero.
+//!
+//! An orbit longer than the dense store's limit ([`Stepping::dense_limit`]) keeps the rest
+//! predictively coded ([`Packed`], about two bytes per iteration, the same values exactly):
+//! the loop reads the dense part by index, with BLA, and the tail in order by single steps.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -13,6 +17,7 @@ use malachite_float::Float;
 
 use super::bigfloat::{self, BigComplex};
 use super::fixed::FixedOrbit;
+use super::packed::{Cursor, Packed};
 use crate::cancel::Cancelled;
 use crate::num::FloatExp;
 use crate::simd_level::SimdLevel;
@@ -37,23 +42,22 @@ pub struct Stepping {
     /// end of the stored period by the ordinary rebase (z = Z_n + δ becomes the delta
     /// against Z_0 = 0), so one period serves any iteration limit.
     pub periodic_below: Option<FloatExp>,
-    /// Store at most this many iterations (None: up to the limit); an orbit cut short here
-    /// is [`Reference::truncated`].
-    pub store_limit: Option<u32>,
+    /// Store Z_0 .. Z_(dense_limit) densely and the rest packed (None: all densely).
+    pub dense_limit: Option<u32>,
 }
 
 /// A stored value too small for f64: its index and value.
-pub type Tiny = (u32, [FloatExp; 2]);
+pub type Tiny = super::packed::Tiny;
 
-/// An orbit Z_0 .. Z_last of z -> z^2 + C.
+/// An orbit Z_0 .. Z_end of z -> z^2 + C: Z_0 .. Z_last densely, the rest packed.
 #[derive(Debug, Clone)]
 pub struct Reference {
     z: Vec<[f64; 2]>,
-    tiny: Vec<(u32, [FloatExp; 2])>,
+    tiny: Vec<Tiny>,
+    packed: Option<Packed>,
     escaped: bool,
     bits: u64,
     period: Option<u32>,
-    truncated: bool,
 }
 
 impl Reference {
@@ -76,8 +80,8 @@ impl Reference {
         progress: &dyn Fn(u32),
         cancel: &AtomicBool,
     ) -> Result<Reference, Cancelled> {
-        let mut out =
-            Reference { z: Vec::new(), tiny: Vec::new(), escaped: false, bits, period: None, truncated: false };
+        let mut out = Reference { z: Vec::new(), tiny: Vec::new(), packed: None, escaped: false, bits, period: None };
+        let c64 = [bigfloat::to_floatexp(&c[0]).to_f64(), bigfloat::to_floatexp(&c[1]).to_f64()];
         let r2 = escape_radius * escape_radius;
         // dZ_n/dC, in FloatExp, for the period test.
         let (mut prev, mut dz) = ([FloatExp::ZERO; 2], [FloatExp::ZERO; 2]);
@@ -94,10 +98,18 @@ impl Reference {
                 periodic = fe[0].abs().max(fe[1].abs()) < scale * dz[0].abs().max(dz[1].abs());
             }
             let f = [fe[0].to_f64(), fe[1].to_f64()];
-            if f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero()) {
-                out.tiny.push((n, fe));
+            let tiny = f[0].abs().max(f[1].abs()) < TINY && !(fe[0].is_zero() && fe[1].is_zero());
+            if let Some(p) = &mut out.packed {
+                p.push(f, tiny.then_some(fe));
+            } else {
+                if tiny {
+                    out.tiny.push((n, fe));
+                }
+                out.z.push(f);
+                if steps.dense_limit == Some(n) {
+                    out.packed = Some(Packed::new(c64, n, f));
+                }
             }
-            out.z.push(f);
             if periodic {
                 out.period = Some(n);
                 return Ok(true);
@@ -107,10 +119,6 @@ impl Reference {
                 return Ok(true);
             }
             if n >= max_iter {
-                return Ok(true);
-            }
-            if steps.store_limit.is_some_and(|l| n >= l) {
-                out.truncated = true;
                 return Ok(true);
             }
             if n.is_multiple_of(REPORT_EVERY) {
@@ -140,13 +148,55 @@ impl Reference {
             }
         }
         out.z.shrink_to_fit();
+        if let Some(p) = &mut out.packed {
+            p.shrink_to_fit();
+            if p.is_empty() {
+                out.packed = None;
+            }
+        }
         Ok(out)
     }
 
-    /// Index of the last stored value.
+    /// Index of the last value stored densely (read by index, [`Reference::get`]).
     #[inline]
     pub fn last(&self) -> u32 {
         (self.z.len() - 1) as u32
+    }
+
+    /// Index of the orbit's last value: [`Reference::last`], or the packed tail's last.
+    #[inline]
+    pub fn end(&self) -> u32 {
+        self.packed.as_ref().map_or(self.last(), Packed::last)
+    }
+
+    /// The packed tail after Z_last, if the orbit is longer than its dense part.
+    #[inline]
+    pub fn packed(&self) -> Option<&Packed> {
+        self.packed.as_ref()
+    }
+
+    /// A cursor at Z_last, from which the packed tail is read in order; None without one.
+    #[inline]
+    pub fn tail(&self) -> Option<Cursor> {
+        self.packed.as_ref().map(Packed::cursor)
+    }
+
+    /// Every value Z_k for k in `from..=to` (at most [`Reference::end`]) at full range, in
+    /// order: the dense part by index, the tail through a cursor.
+    pub fn values_fe(&self, from: u32, to: u32) -> impl Iterator<Item = [FloatExp; 2]> + '_ {
+        let to = to.min(self.end());
+        let dense = (from..=to.min(self.last())).map(|k| self.get_fe(k));
+        let mut cursor = self.tail().filter(|_| to > self.last());
+        let packed = std::iter::from_fn(move || {
+            let (c, p) = (cursor.as_mut()?, self.packed.as_ref()?);
+            while c.index() < to && c.advance(p) {
+                if c.index() >= from {
+                    return Some(c.get_fe(p));
+                }
+            }
+            None
+        });
+        dense.chain(packed)
     }
 
     /// True when the orbit escaped (at index `last`).
@@ -154,24 +204,28 @@ impl Reference {
         self.escaped
     }
 
-    /// The stored values: Z_n as f64, and those too small for f64 with their exponents.
+    /// The densely stored values: Z_n as f64, and those too small for f64 with their
+    /// exponents.
     pub fn parts(&self) -> (&[[f64; 2]], &[Tiny]) {
         (&self.z, &self.tiny)
     }
 
-    /// An orbit from stored parts (a reference file's); `z` must not be empty.
-    pub fn from_parts(z: Vec<[f64; 2]>, tiny: Vec<Tiny>, escaped: bool, bits: u64, period: Option<u32>) -> Reference {
-        Reference { z, tiny, escaped, bits, period, truncated: false }
+    /// An orbit from stored parts (a reference file's); `z` must not be empty, and a packed
+    /// tail's seed must be the last of `z`.
+    pub fn from_parts(
+        z: Vec<[f64; 2]>,
+        tiny: Vec<Tiny>,
+        packed: Option<Packed>,
+        escaped: bool,
+        bits: u64,
+        period: Option<u32>,
+    ) -> Reference {
+        Reference { z, tiny, packed, escaped, bits, period }
     }
 
     /// The period found (see [`Stepping::periodic_below`]): the orbit stored is one period.
     pub fn period(&self) -> Option<u32> {
         self.period
-    }
-
-    /// True when the orbit was cut at [`Stepping::store_limit`] before its end.
-    pub fn truncated(&self) -> bool {
-        self.truncated
     }
 
     /// Precision it was computed with, in bits.
@@ -205,7 +259,9 @@ impl Reference {
 
     /// Bytes of memory the stored orbit uses.
     pub fn bytes(&self) -> usize {
-        self.z.capacity() * 16 + self.tiny.capacity() * std::mem::size_of::<(u32, [FloatExp; 2])>()
+        self.z.capacity() * 16
+            + self.tiny.capacity() * std::mem::size_of::<Tiny>()
+            + self.packed.as_ref().map_or(0, Packed::bytes)
     }
 }
 
@@ -226,23 +282,54 @@ mod tests {
     }
 
     /// c = -1 is the period-2 nucleus (0, -1, 0, ...): with a period test the orbit stops
-    /// at Z_2 = 0; c = -1 + 1e-30 stops only with a test loose enough to let it through;
-    /// a store limit cuts an aperiodic orbit and says so.
+    /// at Z_2 = 0; c = -1 + 1e-30 stops only with a test loose enough to let it through.
     #[test]
-    fn periods_and_store_limits() {
+    fn periods() {
         let z0 = [Float::from(0.0), Float::from(0.0)];
         let run = |c: [Float; 2], steps: Stepping| {
             Reference::compute(&z0, &c, 1_000_000, 1024.0, 256, steps, &|_| {}, &AtomicBool::new(false)).unwrap()
         };
         let periodic = |t: f64| Stepping { periodic_below: Some(FloatExp::from(t)), ..Stepping::default() };
         let r = run([Float::from(-1.0), Float::from(0.0)], periodic(1e-40));
-        assert_eq!((r.period(), r.last(), r.truncated()), (Some(2), 2, false));
+        assert_eq!((r.period(), r.last(), r.end()), (Some(2), 2, 2));
         let near =
             bigfloat::from_decimal(&crate::num::Decimal::parse("-0.999999999999999999999999999999").unwrap(), 256);
         // |Z_2| = |c^2 + c| ~ 1e-30 and |dZ_2/dc| = |2c + 1| ~ 1: caught at 1e-20, not at 1e-40.
         assert_eq!(run([near.clone(), Float::from(0.0)], periodic(1e-20)).period(), Some(2));
-        let r = run([near, Float::from(0.0)], Stepping { store_limit: Some(1000), ..periodic(1e-40) });
-        assert_eq!((r.period(), r.last(), r.truncated()), (None, 1000, true));
+        assert_eq!(run([near, Float::from(0.0)], periodic(1e-40)).period(), None);
+    }
+
+    /// An orbit stored densely up to a limit and packed after it holds the same values, bit
+    /// for bit, as one stored densely throughout: a deep view's chaotic orbit (the 1e50
+    /// benchmark's centre, at that view's precision) and a slowly escaping one near the
+    /// cusp. The packed part takes about two bytes per iteration.
+    #[test]
+    fn packed_tail_holds_the_dense_values() {
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let centres = [
+            [
+                "-0.04947002906310409375169222672735363011874571248822487931810494023264219477268690",
+                "-0.67478757584467536401139205313059765633477070682240348069799979479099419834548451",
+            ],
+            ["0.25000000000000000000000000000001", "0.00000000000000000000000000000000000001"],
+        ];
+        for [re, im] in centres {
+            let c = [re, im].map(|t| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), 300));
+            let run = |dense_limit| {
+                let steps = Stepping { dense_limit, ..Stepping::default() };
+                Reference::compute(&z0, &c, 200_000, 2.0, 300, steps, &|_| {}, &AtomicBool::new(false)).unwrap()
+            };
+            let (dense, packed) = (run(None), run(Some(1000)));
+            assert!(dense.end() > 2000 && packed.packed().is_some(), "{re}: {}", dense.end());
+            assert_eq!((packed.last(), packed.end(), packed.escaped()), (1000, dense.end(), dense.escaped()));
+            let all =
+                |r: &Reference| r.values_fe(0, u32::MAX).map(|v| v.map(|x| x.to_f64().to_bits())).collect::<Vec<_>>();
+            assert_eq!(all(&packed), all(&dense), "{re}");
+            let middle = |r: &Reference| r.values_fe(1500, 1600).collect::<Vec<_>>();
+            assert_eq!(middle(&packed), middle(&dense));
+            let per = packed.packed().unwrap().bytes() as f64 / (packed.end() - 1000) as f64;
+            assert!(per < 2.5, "{re}: {per} bytes per iteration");
+        }
     }
 
     #[test]
@@ -258,5 +345,14 @@ mod tests {
         let fe = r.get_fe(0);
         assert!((fe[0].log2() / std::f64::consts::LOG2_10 + 400.0).abs() < 1e-9);
         assert_eq!(r.get_fe(1)[0].to_f64(), 0.25);
+        // Tiny values in a packed tail: c = 1e-400 from 0 stays near 1e-400.
+        let steps = Stepping { dense_limit: Some(0), ..Stepping::default() };
+        let zero = [Float::from(0.0), Float::from(0.0)];
+        let c = [bigfloat::from_decimal(&d, 1500), Float::from(0.0)];
+        let r = Reference::compute(&zero, &c, 3, 4.0, 1500, steps, &|_| {}, &AtomicBool::new(false)).unwrap();
+        assert_eq!((r.last(), r.end()), (0, 3));
+        for v in r.values_fe(1, 3) {
+            assert!((v[0].log2() / std::f64::consts::LOG2_10 + 400.0).abs() < 1e-9);
+        }
     }
 }

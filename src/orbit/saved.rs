@@ -2,18 +2,20 @@
 //! by every render that shares them (`render --reference`: the work units of one poster,
 //! the frames of one zoom), so no machine computes them again.
 //!
-//! The format (version 1, little-endian throughout):
+//! The format (version 2, little-endian throughout):
 //!
 //! ```text
 //! b"DFREFORB"                       magic, 8 bytes
-//! u32 version (1)
+//! u32 version (2; version 1 files, without the packed part, are read too)
 //! u32 key length, key (UTF-8)       what determined the orbits: `name = value` lines
 //! u32 number of orbits (1 or 2)
 //! per orbit:
 //!   u64 bits, u8 escaped, u32 period (0: none)
-//!   u64 n, n x (f64 re, f64 im)     Z_0 .. Z_(n-1) as f64
-//!   u64 m, m x (u32 index, f64 re mantissa, i32 re exponent, f64 im mantissa, i32 im exponent)
-//!                                   the values too small for f64, with their exponents
+//!   u64 n, n x (f64 re, f64 im)     Z_0 .. Z_(n-1) as f64, the part stored densely
+//!   tiny list                       its values too small for f64, with their exponents:
+//!     u64 m, m x (u32 index, f64 re mantissa, i32 re exponent, f64 im mantissa, i32 im exponent)
+//!   u8 packed (0 or 1); if 1, the packed tail after Z_(n-1) (see `orbit::packed`):
+//!     f64 c re, f64 c im, u32 values, u64 b, b bytes of codes, tiny list
 //! u32 CRC-32 (IEEE) of everything before it
 //! ```
 //!
@@ -28,11 +30,12 @@ use std::sync::Arc;
 
 use crate::num::FloatExp;
 
+use super::packed::{Packed, Tiny};
 use super::reference::Reference;
 use super::{DeepSpec, reference_bits};
 
 const MAGIC: &[u8; 8] = b"DFREFORB";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// Why a reference file cannot be used.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -41,7 +44,7 @@ pub enum SavedError {
     #[error("not a deepfield reference file: {0}")]
     Format(String),
     /// A reference file of a version this build does not read.
-    #[error("reference file version {0}; this deepfield reads version {VERSION}")]
+    #[error("reference file version {0}; this deepfield reads versions 1 to {VERSION}")]
     Version(u32),
     /// The file's orbits are not this view's.
     #[error("this reference file does not serve the scene: {0}")]
@@ -125,12 +128,18 @@ impl SavedReferences {
                 out.extend_from_slice(&p[0].to_le_bytes());
                 out.extend_from_slice(&p[1].to_le_bytes());
             }
-            out.extend_from_slice(&(tiny.len() as u64).to_le_bytes());
-            for (n, v) in tiny {
-                out.extend_from_slice(&n.to_le_bytes());
-                for x in v {
-                    out.extend_from_slice(&x.mantissa().to_le_bytes());
-                    out.extend_from_slice(&x.exponent().to_le_bytes());
+            write_tiny(&mut out, tiny);
+            match r.packed() {
+                None => out.push(0),
+                Some(p) => {
+                    let (c, codes, tiny, len) = (p.c(), p.codes(), p.tiny(), p.len());
+                    out.push(1);
+                    out.extend_from_slice(&c[0].to_le_bytes());
+                    out.extend_from_slice(&c[1].to_le_bytes());
+                    out.extend_from_slice(&len.to_le_bytes());
+                    out.extend_from_slice(&(codes.len() as u64).to_le_bytes());
+                    out.extend_from_slice(codes);
+                    write_tiny(&mut out, tiny);
                 }
             }
         }
@@ -151,7 +160,7 @@ impl SavedReferences {
         }
         let mut r = Reader { bytes: body, at: MAGIC.len() };
         let version = r.u32()?;
-        if version != VERSION {
+        if !(1..=VERSION).contains(&version) {
             return Err(SavedError::Version(version));
         }
         let key_len = r.u32()? as usize;
@@ -173,29 +182,44 @@ impl SavedReferences {
             for _ in 0..n {
                 z.push([r.f64()?, r.f64()?]);
             }
-            let m = r.len(28)?;
-            let mut tiny = Vec::with_capacity(m);
-            for _ in 0..m {
-                let n = r.u32()?;
-                let mut v = [FloatExp::ZERO; 2];
-                for x in &mut v {
-                    let (mantissa, exponent) = (r.f64()?, r.i32()?);
-                    *x = FloatExp::new(mantissa, exponent);
-                }
-                if n as usize >= z.len() || tiny.last().is_some_and(|&(prev, _)| prev >= n) {
-                    return Err(bad("its small values are out of order or beyond its orbit"));
-                }
-                tiny.push((n, v));
+            let tiny = r.tiny(0..n as u64)?;
+            if z.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(bad("an orbit holds a value that is not finite"));
             }
-            if z.iter().flatten().any(|x| !x.is_finite()) || period.is_some_and(|p| p as usize != n - 1) {
-                return Err(bad("an orbit holds a value that is not finite, or a period that is not its length"));
+            let packed = if version >= 2 && r.take(1)?[0] != 0 {
+                let c = [r.f64()?, r.f64()?];
+                let len = r.u32()?;
+                let codes = r.len(1)?;
+                let codes = r.take(codes)?.to_vec();
+                let seed_index = (n - 1) as u32;
+                let tiny = r.tiny(seed_index as u64 + 1..seed_index as u64 + 1 + len as u64)?;
+                let p = Packed::from_parts(c, seed_index, z[n - 1], codes, tiny, len);
+                Some(p.ok_or_else(|| bad("its packed orbit does not decode to the length it claims"))?)
+            } else {
+                None
+            };
+            let end = packed.as_ref().map_or(n as u64 - 1, |p| p.last() as u64);
+            if period.is_some_and(|p| p as u64 != end) {
+                return Err(bad("an orbit's period is not its length"));
             }
-            refs.push(Reference::from_parts(z, tiny, escaped, bits, period));
+            refs.push(Reference::from_parts(z, tiny, packed, escaped, bits, period));
         }
         if r.at != body.len() {
             return Err(bad("it has bytes after its last orbit"));
         }
         Ok(SavedReferences { key, refs: Arc::new(refs) })
+    }
+}
+
+/// A list of values too small for f64: count, then index and values with exponents.
+fn write_tiny(out: &mut Vec<u8>, tiny: &[Tiny]) {
+    out.extend_from_slice(&(tiny.len() as u64).to_le_bytes());
+    for (n, v) in tiny {
+        out.extend_from_slice(&n.to_le_bytes());
+        for x in v {
+            out.extend_from_slice(&x.mantissa().to_le_bytes());
+            out.extend_from_slice(&x.exponent().to_le_bytes());
+        }
     }
 }
 
@@ -231,6 +255,25 @@ impl Reader<'_> {
     fn f64(&mut self) -> Result<f64, SavedError> {
         Ok(f64::from_le_bytes(self.array()?))
     }
+    /// A list written by [`write_tiny`], its indices in order and within `range`.
+    fn tiny(&mut self, range: std::ops::Range<u64>) -> Result<Vec<Tiny>, SavedError> {
+        let m = self.len(28)?;
+        let mut tiny: Vec<Tiny> = Vec::with_capacity(m);
+        for _ in 0..m {
+            let n = self.u32()?;
+            let mut v = [FloatExp::ZERO; 2];
+            for x in &mut v {
+                let (mantissa, exponent) = (self.f64()?, self.i32()?);
+                *x = FloatExp::new(mantissa, exponent);
+            }
+            if !range.contains(&(n as u64)) || tiny.last().is_some_and(|&(prev, _)| prev >= n) {
+                return Err(SavedError::Format("its small values are out of order or beyond its orbit".into()));
+            }
+            tiny.push((n, v));
+        }
+        Ok(tiny)
+    }
+
     /// A count of items of `size` bytes each, checked against the bytes left.
     fn len(&mut self, size: usize) -> Result<usize, SavedError> {
         let n = self.u64()?;
@@ -248,7 +291,7 @@ mod tests {
 
     fn sample() -> SavedReferences {
         let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
-        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, false, 300, Some(2));
+        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, None, false, 300, Some(2));
         SavedReferences { key: "center = -1 0\n".into(), refs: Arc::new(vec![r]) }
     }
 
@@ -261,6 +304,33 @@ mod tests {
         assert_eq!(a.0, b.0);
         assert_eq!(a.1, b.1);
         assert_eq!((d.refs[0].period(), d.refs[0].bits()), (Some(2), 300));
+    }
+
+    /// An orbit with a packed tail (tiny values in both parts) reads back whole, and a
+    /// version 1 file (no packed part) is still read.
+    #[test]
+    fn packed_tails_round_trip() {
+        let mut p = Packed::new([-1.75, 0.0], 2, [-1.25, 0.5]);
+        p.push([-0.3125, -1.25], None);
+        p.push([0.0, 0.0], Some([FloatExp::new(1.25, -3000), FloatExp::ZERO]));
+        p.push([-1.75, 0.0], None);
+        let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
+        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, Some(p), false, 300, None);
+        let s = SavedReferences { key: "k\n".into(), refs: Arc::new(vec![r]) };
+        let d = SavedReferences::decode(&s.encode()).unwrap();
+        let values = |r: &Reference| r.values_fe(0, 10).collect::<Vec<_>>();
+        assert_eq!((d.refs[0].last(), d.refs[0].end()), (2, 5));
+        assert_eq!(values(&d.refs[0]), values(&s.refs[0]));
+        assert_eq!(d.refs[0].packed(), s.refs[0].packed());
+        // Version 1: the same bytes without the packed flag.
+        let v1 = sample();
+        let mut bytes = v1.encode();
+        bytes.truncate(bytes.len() - 5);
+        bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
+        let crc = crc32fast::hash(&bytes);
+        bytes.extend_from_slice(&crc.to_le_bytes());
+        let d = SavedReferences::decode(&bytes).unwrap();
+        assert_eq!(d.refs[0].parts().0, v1.refs[0].parts().0);
     }
 
     /// A file whose checksum is right but whose counts claim more than it holds (a crafted

@@ -39,10 +39,6 @@ pub enum RenderError {
     /// No engine (or not the forced one) can address the view.
     #[error(transparent)]
     Engine(#[from] EngineError),
-    /// The deep engine could not prepare the view (an aperiodic orbit past the stored
-    /// limit).
-    #[error(transparent)]
-    Prepare(orbit::PrepareError),
     /// A reference file does not serve the view.
     #[error(transparent)]
     Reference(#[from] orbit::saved::SavedError),
@@ -77,21 +73,11 @@ impl RenderError {
         matches!(
             self,
             RenderError::Engine(_)
-                | RenderError::Prepare(_)
                 | RenderError::Reference(_)
                 | RenderError::NoReferenceNeeded(_)
                 | RenderError::Rows { .. }
                 | RenderError::Gpu(_)
         )
-    }
-}
-
-impl From<orbit::PrepareError> for RenderError {
-    fn from(e: orbit::PrepareError) -> Self {
-        match e {
-            orbit::PrepareError::Cancelled => RenderError::Cancelled,
-            e => RenderError::Prepare(e),
-        }
     }
 }
 
@@ -137,6 +123,10 @@ pub struct DeepStats {
     pub reference_bits: u64,
     /// Iterations in the primary reference orbit.
     pub reference_iterations: u32,
+    /// Of those, iterations stored densely (16 bytes each, read by index, with BLA); the
+    /// rest are packed (`orbit::packed`: about two bytes each, read in order by single
+    /// steps).
+    pub reference_dense: u32,
     /// The primary reference escaped before the iteration limit.
     pub reference_escaped: bool,
     /// The period of the primary reference when it is one period of a nucleus's orbit
@@ -234,6 +224,10 @@ pub struct Options {
     /// Reference orbits read from a file (`render --reference`), used instead of computing
     /// them when they serve the view.
     pub references: Option<Arc<orbit::saved::SavedReferences>>,
+    /// Store at most this many reference iterations densely, the rest packed (None: the
+    /// engine's rule, [`orbit::dense_limit`]): `render --dense-orbit`, which reaches the
+    /// packed tail's path on short orbits.
+    pub dense_orbit: Option<u32>,
 }
 
 impl Options {
@@ -298,6 +292,7 @@ pub fn deep_spec(scene: &Scene, plan: &EnginePlan, options: &Options) -> (FieldP
         numbers,
         simd: params.orbit.simd,
         references: None,
+        dense_limit: orbit::dense_limit(scene.max_iter, options.dense_orbit),
     };
     (params, Some(spec))
 }
@@ -507,6 +502,7 @@ pub fn render<P: Send>(
         DeepStats {
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
+            reference_dense: d.reference_dense(),
             reference_escaped: d.reference_escaped(),
             reference_period: d.refs[0].period(),
             reference_seconds,

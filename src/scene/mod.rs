@@ -137,16 +137,6 @@ pub const PERTURB_F64_MIN_LOG10_SPACING: f64 = -290.0;
 /// Why no engine (or not the forced one) can address a scene's view.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EngineError {
-    /// A deep Julia view stores its whole references: its iteration limit is capped.
-    #[error(
-        "iteration.max = {max_iter} is too many for the perturbation engine this Julia view needs (zoom 1e{log10_zoom:.1}): it stores the whole reference orbit (16 bytes per iteration plus its BLA tables), so at most {MAX_PERTURB_ITER} are accepted; lower iteration.max"
-    )]
-    JuliaIterations {
-        /// The scene's limit.
-        max_iter: u32,
-        /// log10 of the zoom.
-        log10_zoom: f64,
-    },
     /// `--engine f64` on a view too deep for it.
     #[error(
         "the view is too deep for the f64 engine: at zoom 1e{log10_zoom:.1} a sample spans only {ulps:.3e} f64 ulps of the coordinates (at least {F64_MIN_ULPS_PER_PIXEL} are needed); use --engine auto, perturb-f64 or perturb-floatexp"
@@ -221,11 +211,6 @@ pub enum EngineError {
     },
 }
 
-/// Largest iteration limit the perturbation engines take for Julia sets, and for Mandelbrot
-/// views whose reference orbit turns out not to be periodic (the whole orbit is stored, 16
-/// bytes per iteration plus its BLA tables). A Mandelbrot view centred on a nucleus stores
-/// one period and takes any limit.
-pub const MAX_PERTURB_ITER: u32 = crate::orbit::MAX_STORED_ITERATIONS;
 /// The same for Julia sets, whose rebased step is δ -> δ^2 with nothing added: δ^2 must
 /// stay a normal f64 for deltas down to the sample spacing.
 pub const PERTURB_F64_MIN_LOG10_SPACING_JULIA: f64 = -150.0;
@@ -359,15 +344,6 @@ impl Scene {
             (None, _) => "; BLA off".into(),
         };
         let perturb = |numbers| EngineKind::Perturb { numbers, bla };
-        let needs_perturbation = match choice {
-            EngineChoice::Auto => !f64_exact,
-            EngineChoice::F64 | EngineChoice::Gpu | EngineChoice::GpuDf => false,
-            EngineChoice::PerturbF64 | EngineChoice::PerturbFloatExp => true,
-        };
-        let mandelbrot = matches!(self.family, FamilySpec::Mandelbrot);
-        if needs_perturbation && self.max_iter > MAX_PERTURB_ITER && !mandelbrot {
-            return Err(EngineError::JuliaIterations { max_iter: self.max_iter, log10_zoom: depth });
-        }
         match choice {
             EngineChoice::Auto if f64_exact => Ok(EnginePlan {
                 name: "f64",

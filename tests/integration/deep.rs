@@ -52,6 +52,9 @@ struct View {
     reference_radius: Option<&'static str>,
     /// `[view] rotate`, `stretch_angle`, `stretch_amount`.
     transform: Option<[f64; 3]>,
+    /// Store this many reference iterations densely and pack the rest (`render
+    /// --dense-orbit`).
+    dense_orbit: Option<u32>,
 }
 
 impl View {
@@ -68,6 +71,7 @@ impl View {
             reference_from: None,
             reference_radius: None,
             transform: None,
+            dense_orbit: None,
         }
     }
 }
@@ -113,7 +117,7 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     let s = scene(&text);
     let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
-    let mut options = Options::with_channels(ChannelSet::default_exr());
+    let mut options = Options { dense_orbit: v.dense_orbit, ..Options::with_channels(ChannelSet::default_exr()) };
     if let Some(shift) = v.reference_from {
         // The other view's scene, its engine, and that engine moved to this view.
         let radius = Decimal::parse(v.radius).unwrap().to_rational();
@@ -142,6 +146,11 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
         }));
     }
     let (params, _) = render::prepare_field(&s, &plan, options, &cancel, &|_| {}).expect("prepared");
+    if let (Some(n), Some(d)) = (v.dense_orbit, &params.deep) {
+        // (A Julia set's centre orbit may escape first; the orbit of 0 goes on.)
+        let packed = d.refs.iter().any(|r| r.last() == n && r.end() > n);
+        assert!(packed, "a reference is stored densely to {n} only and packed after");
+    }
     if let (Some(_), Some(d)) = (v.reference_from, &params.deep) {
         assert_ne!(d.origin, [FloatExp::ZERO; 2], "the moved engine served the view");
     }
@@ -305,6 +314,33 @@ fn against_the_reference_of_a_deeper_view_of_the_same_centre() {
     check("minibrot 1e20 from 1e50's reference", v, "perturb-f64");
 }
 
+/// References stored densely for a few hundred iterations and packed after
+/// (`orbit::packed`, as limits past 2^25 store them): samples run through the packed tail
+/// by single steps, in f64 and FloatExp deltas, with BLA in the dense part, for the
+/// Mandelbrot set (a reference that escapes late and one that does not escape) and a Julia
+/// set.
+#[test]
+fn through_packed_reference_tails() {
+    let v = View { dense_orbit: Some(300), ..View::mandelbrot(MINIBROT, "2e-50", 10000, 24) };
+    check("minibrot 1e50, packed after 300", v, "perturb-f64");
+    let v = View { dense_orbit: Some(1000), ..View::mandelbrot(LIIIINES, "2e-320", 12500, 16) };
+    check("liiiines 1e320, packed after 1000", v, "perturb-floatexp");
+    let v = View {
+        julia: Some(["-0.7436447860", "0.1318252536"]),
+        dense_orbit: Some(200),
+        ..View::mandelbrot(
+            [
+                "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
+                "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
+            ],
+            "2e-40",
+            3000,
+            24,
+        )
+    };
+    check("julia 1e40, packed after 200", v, "perturb-f64");
+}
+
 /// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
 /// in f64 after; the switch points are what this checks (a too-early switch to f64 once
 /// put N off by one on 5% of these pixels).
@@ -425,6 +461,7 @@ fn julia_sets_at_1e40_and_1e310() {
         reference_from: None,
         reference_radius: None,
         transform: None,
+        dense_orbit: None,
     };
     check("julia 1e40", e40, "perturb-f64");
     let e310 = View {
@@ -441,6 +478,7 @@ fn julia_sets_at_1e40_and_1e310() {
         reference_from: None,
         reference_radius: None,
         transform: None,
+        dense_orbit: None,
     };
     check("julia 1e310", e310, "perturb-floatexp");
 }
