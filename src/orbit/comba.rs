@@ -117,6 +117,12 @@ fn column(a: &[u64], k: usize) -> [u64; 3] {
 /// every column k >= n - 2 in the range, and returns the carry out of the range's last
 /// column, worth units of limb `cols.end` (and the next).
 pub fn columns(a: &[u64], cols: Range<usize>, out: &mut [u64]) -> [u64; 2] {
+    columns_inline(a, cols, out)
+}
+
+/// [`columns`], inlined where the limb count is known at compile time ([`square`]).
+#[inline(always)]
+fn columns_inline(a: &[u64], cols: Range<usize>, out: &mut [u64]) -> [u64; 2] {
     let base = a.len() - 2;
     let mut carry = [0u64; 2];
     let mut put = |k: usize, v: [u64; 3]| {
@@ -182,9 +188,34 @@ pub fn split(n: usize) -> usize {
 
 /// Limbs n - 2 .. 2n - 2 of a^2 (n + 1 of them) into `out`, for a magnitude `a` of n >= 2
 /// limbs below 2^(64 (n - 1) + 62).
+///
+/// Up to [`UNROLLED_LIMBS`] limbs (views down to about 1e-100) the limb count is a
+/// constant of the code: the loops over a column's products unroll and their bounds checks
+/// go, which at 3 to 8 limbs was most of a square's time. The same columns, the same bits.
 pub fn square(a: &[u64], out: &mut [u64]) {
-    let n = a.len();
-    columns(a, first_column(n)..end_column(n), out);
+    match a.len() {
+        2 => square_n::<2>(a, out),
+        3 => square_n::<3>(a, out),
+        4 => square_n::<4>(a, out),
+        5 => square_n::<5>(a, out),
+        6 => square_n::<6>(a, out),
+        7 => square_n::<7>(a, out),
+        8 => square_n::<8>(a, out),
+        n => {
+            columns(a, first_column(n)..end_column(n), out);
+        }
+    }
+}
+
+/// Most limbs [`square`] runs with the limb count known at compile time.
+pub const UNROLLED_LIMBS: usize = 8;
+
+/// [`square`] for N limbs.
+#[inline(never)]
+fn square_n<const N: usize>(a: &[u64], out: &mut [u64]) {
+    let a: &[u64; N] = a.try_into().expect("N limbs");
+    let out = &mut out[..N + 1];
+    columns_inline(a, first_column(N)..end_column(N), out);
 }
 
 #[cfg(test)]
@@ -198,7 +229,7 @@ mod tests {
     /// they split (odd and even columns: the columns run in pairs).
     #[test]
     fn high_limbs_of_the_square_are_exact() {
-        for n in [2usize, 3, 4, 5, 17, 59, 60, 61, 130, MAX_LIMBS] {
+        for n in [2usize, 3, 4, 5, 6, 7, 8, 9, 17, 59, 60, 61, 130, MAX_LIMBS] {
             for seed in [0x9e37_79b9_7f4a_7c15u64, u64::MAX] {
                 let mut a: Vec<u64> = (0..n).map(|i| (i as u64 + 7).wrapping_mul(seed)).collect();
                 a[n - 1] >>= 2;

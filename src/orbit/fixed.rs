@@ -48,6 +48,11 @@ pub const MAX_MAGNITUDE: f64 = (1u64 << 30) as f64;
 /// than it saves; `cargo bench --bench reference`).
 pub const THREADED_LIMBS: usize = 24;
 
+/// Values per batch a pipelined orbit's helper hands over ([`FixedOrbit::for_each_value`]),
+/// and batches it may run ahead.
+const PIPELINE_BATCH: usize = 2048;
+const PIPELINE_BATCHES: usize = 4;
+
 /// An orbit z_0, z_1, ... of z -> z^2 + c in fixed point: n 64-bit limbs per real, little
 /// endian, two's complement, value = X / 2^(64 (n - 1)).
 #[derive(Debug, Clone)]
@@ -327,6 +332,75 @@ impl FixedOrbit {
         }
     }
 
+    /// Hands Z_0, Z_1, ... to `keep` in order until it returns true (or an error), stepping
+    /// only as far as it asks; `escape2` and `max_iter` are where the orbit ends in any case
+    /// (|Z_n|^2 above it in f64, n at it), so no step runs past an escape.
+    ///
+    /// Where a step is too narrow to share ([`THREADED_LIMBS`]) but two threads are free
+    /// and `share` allows it, a helper thread steps the orbit ahead in batches while this
+    /// one keeps the values: keeping (the period test, rounding to f64, storing) costs
+    /// about half as much as a narrow step, and the two then overlap. A helper that ran
+    /// ahead of the end stops at the next batch. The values, and so the orbit kept, are the
+    /// same bits either way.
+    pub fn for_each_value<E>(
+        &mut self,
+        share: bool,
+        escape2: f64,
+        max_iter: u32,
+        mut keep: impl FnMut(u32, [FloatExp; 2]) -> Result<bool, E>,
+    ) -> Result<(), E> {
+        let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
+        if !(share && self.n < THREADED_LIMBS && cores >= 2 && rayon::current_num_threads() >= 2) {
+            return self.with_stepper(share, |s| {
+                let mut n = 0u32;
+                while !keep(n, s.get())? {
+                    s.step();
+                    n += 1;
+                }
+                Ok(())
+            });
+        }
+        let ends = |n: u32, v: [FloatExp; 2]| {
+            let f = [v[0].to_f64(), v[1].to_f64()];
+            n >= max_iter || f[0] * f[0] + f[1] * f[1] > escape2
+        };
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<[FloatExp; 2]>>(PIPELINE_BATCHES);
+        let orbit = &mut *self;
+        std::thread::scope(|scope| {
+            scope.spawn(move || {
+                let mut n = 0u32;
+                loop {
+                    let mut batch = Vec::with_capacity(PIPELINE_BATCH);
+                    let mut last = false;
+                    while batch.len() < PIPELINE_BATCH && !last {
+                        let v = orbit.get();
+                        batch.push(v);
+                        last = ends(n, v);
+                        if !last {
+                            orbit.step();
+                            n += 1;
+                        }
+                    }
+                    // A closed channel: the keeper has what it needs.
+                    if tx.send(batch).is_err() || last {
+                        return;
+                    }
+                }
+            });
+            let mut n = 0u32;
+            // Dropping the receiver when this returns (or unwinds) stops the helper.
+            for batch in rx {
+                for v in batch {
+                    if keep(n, v)? {
+                        return Ok(());
+                    }
+                    n += 1;
+                }
+            }
+            unreachable!("the helper stops at the orbit's end, which `keep` ends at")
+        })
+    }
+
     /// Runs `body` with a stepper that always shares each step with a helper thread.
     pub fn with_helper<R>(&mut self, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
         let shared = Shared::new(self.n, self.kernel);
@@ -498,6 +572,14 @@ fn to_fixed(v: &Float, n: usize) -> Option<Vec<u64>> {
     Some(limbs)
 }
 
+/// t / 2^64 rounded to the nearest f64 (ties to even), for t with its top bit set: its top
+/// 64 bits converted with the rest as a sticky bit. Bit 0 lies below the rounding position
+/// (bit 10 of the 64), so that is t's own rounding, without the slow 128-bit conversion.
+#[inline]
+fn high_to_f64(t: u128) -> f64 {
+    ((t >> 64) as u64 | (t as u64 != 0) as u64) as f64
+}
+
 /// The nearest FloatExp to a fixed-point value (to within the rounding of its top 128 bits).
 fn to_floatexp(a: &[u64]) -> FloatExp {
     let n = a.len();
@@ -524,9 +606,9 @@ fn to_floatexp(a: &[u64]) -> FloatExp {
     let top = ((mag(h) as u128) << 64) | if h >= 1 { mag(h - 1) as u128 } else { 0 };
     let low = if h >= 2 { mag(h - 2) } else { 0 };
     let t = if lz == 0 { top } else { (top << lz) | (low >> (64 - lz)) as u128 };
-    // Value = t * 2^(64 (h - 1) - lz - 64 (n - 1)).
-    let exp = 64 * (h as i64 - 1) - lz as i64 - 64 * (n as i64 - 1);
-    let f = FloatExp::new(t as f64, exp as i32);
+    // Value = t * 2^(64 (h - 1) - lz - 64 (n - 1)) = (t / 2^64) * 2^(64 h - lz - 64 (n - 1)).
+    let exp = 64 * h as i64 - lz as i64 - 64 * (n as i64 - 1);
+    let f = FloatExp::new(high_to_f64(t), exp as i32);
     if negative { -f } else { f }
 }
 
@@ -621,6 +703,25 @@ mod tests {
             })
         }));
         assert!(outcome.is_err());
+    }
+
+    #[test]
+    fn high_bits_round_as_the_whole_does() {
+        let top = 1u128 << 127;
+        // Exact, below, at and above a tie (bit 74 of t is the rounding bit), and with the
+        // tie broken only by the low 64 bits; odd and even mantissas; the carry to 2^128.
+        let ties = [0u128, 1, 1 << 63, 1 << 64, (1 << 74) - 1, 1 << 74, (1 << 74) + 1, (1 << 74) | (1 << 3)];
+        for base in [top, top | (1 << 75), u128::MAX >> 1 | top] {
+            for d in ties {
+                let t = base.wrapping_add(d).max(top);
+                assert_eq!(high_to_f64(t) * 2f64.powi(64), t as f64, "{t:#x}");
+            }
+        }
+        let mut t = 0x9e37_79b9_7f4a_7c15_f39c_c060_5ced_c834u128 | top;
+        for _ in 0..10000 {
+            t = t.wrapping_mul(0x2360_ed05_1fc6_5da4_4385_df64_9fcc_f645) | top;
+            assert_eq!(high_to_f64(t) * 2f64.powi(64), t as f64, "{t:#x}");
+        }
     }
 
     #[test]

@@ -130,14 +130,7 @@ impl Reference {
             Ok(false)
         };
         if let Some(mut orbit) = FixedOrbit::new(start, c, bits, escape_radius, steps.simd) {
-            orbit.with_stepper(steps.share, |s| -> Result<(), Cancelled> {
-                let mut n = 0u32;
-                while !keep(n, s.get())? {
-                    s.step();
-                    n += 1;
-                }
-                Ok(())
-            })?;
+            orbit.for_each_value(steps.share, r2, max_iter, &mut keep)?;
         } else {
             let mut z: BigComplex =
                 [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
@@ -300,9 +293,10 @@ mod tests {
     }
 
     /// An orbit stored densely up to a limit and packed after it holds the same values, bit
-    /// for bit, as one stored densely throughout: a deep view's chaotic orbit (the 1e50
-    /// benchmark's centre, at that view's precision) and a slowly escaping one near the
-    /// cusp. The packed part takes about two bytes per iteration.
+    /// for bit, as one stored densely throughout, and so does one stepped ahead by a helper
+    /// thread (`share`: [`FixedOrbit::for_each_value`]): a deep view's chaotic orbit (the
+    /// 1e50 benchmark's centre, at that view's precision) and a slowly escaping one near
+    /// the cusp. The packed part takes about two bytes per iteration.
     #[test]
     fn packed_tail_holds_the_dense_values() {
         let z0 = [Float::from(0.0), Float::from(0.0)];
@@ -315,11 +309,12 @@ mod tests {
         ];
         for [re, im] in centres {
             let c = [re, im].map(|t| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), 300));
-            let run = |dense_limit| {
-                let steps = Stepping { dense_limit, ..Stepping::default() };
+            let run = |dense_limit, share| {
+                let steps = Stepping { dense_limit, share, ..Stepping::default() };
                 Reference::compute(&z0, &c, 200_000, 2.0, 300, steps, &|_| {}, &AtomicBool::new(false)).unwrap()
             };
-            let (dense, packed) = (run(None), run(Some(1000)));
+            let (dense, packed) = (run(None, false), run(Some(1000), true));
+            assert_eq!(run(None, true).parts(), dense.parts(), "{re}: stepped ahead by a helper");
             assert!(dense.end() > 2000 && packed.packed().is_some(), "{re}: {}", dense.end());
             assert_eq!((packed.last(), packed.end(), packed.escaped()), (1000, dense.end(), dense.escaped()));
             let all =
