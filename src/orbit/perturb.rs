@@ -1204,12 +1204,7 @@ impl Perturbation {
         let rebase = f2 < d2 || end;
         let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
         if rebase || glitch {
-            local.glitches += glitch as u64;
-            local.rebases += 1;
-            s.dz = full;
-            s.m = 0;
-            s.which = self.refs.len() - 1;
-            s.single = false;
+            self.rebase(s, full, glitch, local);
             zm = [D::ZERO; 2];
             if INT && end && !full_range && self.newton_probe(s) {
                 local.interior += 1;
@@ -1251,6 +1246,19 @@ impl Perturbation {
         None
     }
 
+    /// A rebase (Zhuoran's: the sample is nearer 0 than the reference, or the reference
+    /// ended) or a glitch's: the sample's full value becomes its delta against the start
+    /// of the last reference (Z_0 = 0 for the Mandelbrot set and a Julia set's orbit of 0).
+    #[inline(always)]
+    fn rebase<D: Real>(&self, s: &mut Sample<D>, full: [D; 2], glitch: bool, local: &mut Counters) {
+        local.glitches += glitch as u64;
+        local.rebases += 1;
+        s.dz = full;
+        s.m = 0;
+        s.which = self.refs.len() - 1;
+        s.single = false;
+    }
+
     /// The loop through a reference's packed tail ([`Packed`]), entered at Z_last (the end
     /// of the dense part) with that pass's end tests done and (Z_last, z, z in f64) in
     /// `at`: single steps, the values read in order, until the sample rebases (and takes
@@ -1283,12 +1291,7 @@ impl Perturbation {
             let rebase = f2 < d2 || end;
             let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
             if rebase || glitch {
-                local.glitches += glitch as u64;
-                local.rebases += 1;
-                s.dz = full;
-                s.m = 0;
-                s.which = self.refs.len() - 1;
-                s.single = false;
+                self.rebase(s, full, glitch, local);
                 if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                     return Some(Exit::Switch(*s));
                 }
