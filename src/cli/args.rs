@@ -147,6 +147,10 @@ pub struct ReferenceArgs {
     /// The reference file to write.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
+    /// Store at most N iterations densely and pack the rest, as `render --dense-orbit`
+    /// does (default: all of them up to 2^25, else 2^20).
+    #[arg(long, value_name = "N")]
+    pub dense_orbit: Option<u32>,
     /// Vector instruction set (the orbit's bits do not depend on it).
     #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
     pub simd: Option<String>,

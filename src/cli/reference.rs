@@ -16,7 +16,7 @@ pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
     let scene = super::scene::load(&args.scene)?;
     let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
     let simd = super::simd_level(args.simd.as_deref())?;
-    let options = Options { simd, ..Options::default() };
+    let options = Options { simd, dense_orbit: args.dense_orbit, ..Options::default() };
     let (_, spec) = render::deep_spec(&scene, &plan, &options);
     let Some(spec) = spec else {
         return Err(Failure::Input(anyhow!(

@@ -88,18 +88,25 @@ fn incomplete_repeated_or_mixed_units_are_refused() {
 }
 
 /// Reference files: computed once, read by a render and by every work unit, the bytes are
-/// those of computing in place (Mandelbrot at 1e321 and a Julia set at 1e310, two orbits);
-/// a file for another view, a damaged file, and a file given to a shallow scene are refused.
+/// those of computing in place (Mandelbrot at 1e321, the same with its orbit packed after
+/// 1000 iterations, and a Julia set at 1e310, two orbits); a file for another view, a
+/// damaged file, and a file given to a shallow scene are refused.
 #[test]
 fn reference_files_serve_renders_and_units_byte_for_byte() {
     let mut dirs = Vec::new();
-    for (name, scene) in [("liiiines.toml", "48x36"), ("julia-deep-e310.toml", "40x30")] {
-        let dir = scratch(&format!("units-reference-{name}"));
+    let views = [
+        ("liiiines.toml", "48x36", None),
+        ("liiiines.toml", "48x36", Some("1000")),
+        ("julia-deep-e310.toml", "40x30", None),
+    ];
+    for (name, scene, dense) in views {
+        let dir = scratch(&format!("units-reference-{name}-{}", dense.unwrap_or("dense")));
         let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap();
         std::fs::write(dir.join("scene.toml"), &text).unwrap();
         let size = ["--size", scene];
-        ok(deepfield(&[&["reference", "scene.toml", "-o", "scene.dfr"][..], &size].concat(), &dir));
-        ok(deepfield(&[&["render", "scene.toml", "-o", "computed.png"][..], &size].concat(), &dir));
+        let packed: Vec<&str> = dense.map_or(vec![], |n| vec!["--dense-orbit", n]);
+        ok(deepfield(&[&["reference", "scene.toml", "-o", "scene.dfr"][..], &size, &packed].concat(), &dir));
+        ok(deepfield(&[&["render", "scene.toml", "-o", "computed.png"][..], &size, &packed].concat(), &dir));
         ok(deepfield(
             &[&["render", "scene.toml", "--reference", "scene.dfr", "-o", "read.png"][..], &size].concat(),
             &dir,
@@ -115,6 +122,8 @@ fn reference_files_serve_renders_and_units_byte_for_byte() {
         assert!(same("computed.png", "assembled.png"), "{name}: units from the file differ");
         dirs.push(dir);
     }
+    let bytes = |d: &std::path::PathBuf| std::fs::metadata(d.join("scene.dfr")).unwrap().len();
+    assert!(bytes(&dirs[1]) * 3 < bytes(&dirs[0]), "the packed orbit's file is a fraction of the dense one's");
     let dir = &dirs[0];
     let refused = |args: &[&str], needle: &str| {
         let o = deepfield(args, dir);
