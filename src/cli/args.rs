@@ -358,8 +358,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "LEVEL", value_parser = deepfield::simd_level::CHOICES)]
     pub simd: Option<String>,
     /// Store at most N reference iterations densely (16 bytes each, with BLA tables) and
-    /// the rest packed (about 2 bytes each, single steps). Default: all of them up to 2^25,
-    /// else 2^20. The values are the same either way.
+    /// the rest packed (1.0–1.4 bytes each, single steps). Default: all of them up to 2^25,
+    /// else 2^20 (at least 1). The values are the same either way. With --reference the
+    /// file's split is used.
     #[arg(long, value_name = "N")]
     pub dense_orbit: Option<u32>,
     /// Print engine, precision, pixels, iterations, time and speed when done.

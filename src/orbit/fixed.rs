@@ -25,7 +25,9 @@
 //! thread, with one hand-over each way per step, made at the same moment (a request and an
 //! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step).
 //! `cargo bench --bench reference` compares this with malachite-float (and MPFR through
-//! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits.
+//! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits. Below the widths where
+//! sharing a step pays, a helper thread instead steps the orbit ahead in batches while the
+//! caller keeps the values ([`FixedOrbit::for_each_value`]): the same values, in order.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -332,9 +334,10 @@ impl FixedOrbit {
         }
     }
 
-    /// Hands Z_0, Z_1, ... to `keep` in order until it returns true (or an error), stepping
-    /// only as far as it asks; `escape2` and `max_iter` are where the orbit ends in any case
-    /// (|Z_n|^2 above it in f64, n at it), so no step runs past an escape.
+    /// Hands Z_0, Z_1, ... to `keep` in order until it returns true (or an error);
+    /// `escape2` and `max_iter` are where the orbit ends in any case (|Z_n|^2 above it in
+    /// f64, n at it), so no step runs past an escape. On one thread it steps only as far as
+    /// `keep` asks; pipelined, up to a few batches further, which changes nothing kept.
     ///
     /// Where a step is too narrow to share ([`THREADED_LIMBS`]) but two threads are free
     /// and `share` allows it, a helper thread steps the orbit ahead in batches while this

@@ -108,8 +108,10 @@ pub struct DeepSpec {
 pub const MAX_DENSE_ITERATIONS: u32 = 1 << 25;
 
 /// With a longer limit, the first this many iterations are stored densely (with BLA
-/// tables, under half a GB at any depth) and the rest packed, about two bytes per
-/// iteration ([`packed`]): 1e9 iterations in about 2 GB.
+/// tables, under half a GB at any depth) and the rest packed (a Mandelbrot reference is
+/// held dense to [`MAX_DENSE_ITERATIONS`] first, in case it turns out to be one period of
+/// a nucleus, which then stays dense), 1.0–1.4 bytes per
+/// iteration as measured ([`packed`]): 1e9 iterations in under 2 GB.
 pub const DENSE_PART: u32 = 1 << 20;
 
 /// How much of a reference orbit is stored densely for an iteration limit: all of it up to
@@ -117,7 +119,9 @@ pub const DENSE_PART: u32 = 1 << 20;
 /// it, to test the packed tail on short orbits. None: all of it.
 pub fn dense_limit(max_iter: u32, forced: Option<u32>) -> Option<u32> {
     match forced {
-        Some(n) => (n < max_iter).then_some(n),
+        // At least Z_0 and Z_1 dense: a rebased sample takes its step from Z_0 and goes on
+        // from index 1 in the dense part.
+        Some(n) => (n < max_iter).then_some(n.max(1)),
         None => (max_iter > MAX_DENSE_ITERATIONS).then_some(DENSE_PART),
     }
 }
@@ -140,7 +144,11 @@ pub fn periodic_below(spec: &DeepSpec) -> Option<FloatExp> {
 /// reference from 0 that comes back within 2^-20 of a sample spacing (first order) of 0 is
 /// one period of a nucleus's orbit; past [`DeepSpec::dense_limit`] the orbit is packed.
 fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
-    reference::Stepping { share, simd: spec.simd, periodic_below: periodic_below(spec), dense_limit: spec.dense_limit }
+    // The engine's own split waits for a period until the dense store's limit.
+    let hold =
+        (spec.max_iter > MAX_DENSE_ITERATIONS && spec.dense_limit == Some(DENSE_PART)).then_some(MAX_DENSE_ITERATIONS);
+    let periodic_below = periodic_below(spec);
+    reference::Stepping { share, simd: spec.simd, periodic_below, dense_limit: spec.dense_limit, hold }
 }
 
 /// Computes the reference orbit(s) of a view: the centre's orbit (Mandelbrot), or for a

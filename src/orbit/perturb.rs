@@ -1155,8 +1155,10 @@ impl Perturbation {
     }
 
     /// One pass of the loop: the end tests (with `INT` first of all, whether the sample has
-    /// been found interior), then a rebase, a BLA step or a perturbation step. Returns the
-    /// exit when the sample ends or must change number type.
+    /// been found interior), then a rebase, a BLA step or a perturbation step; at the end
+    /// of a reference's dense part with a packed tail after it, the tail's loop
+    /// ([`Perturbation::tail`]). Returns the exit when the sample ends or must change number
+    /// type.
     #[inline(always)]
     fn op<D: Real, const DER: bool, const INT: bool>(
         &self,
@@ -1283,6 +1285,8 @@ impl Perturbation {
         let full_range = D::NAME == FloatExp::NAME;
         let two = D::from_f64(2.0);
         let (mut zm, mut full, mut z) = at;
+        // Entered at the seed only: the cursor starts there.
+        debug_assert_eq!(s.m, packed.seed_index());
         let mut cursor = packed.cursor();
         loop {
             let d2 = norm2(s.dz);
@@ -1308,9 +1312,12 @@ impl Perturbation {
             s.n += 1;
             local.steps += 1;
             if rebase || glitch {
-                return None;
+                // Back in the dense part, after `op`'s test after a step.
+                let up = s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP;
+                return (full_range && ctx.hybrid && up).then_some(Exit::Switch(*s));
             }
-            cursor.advance(packed);
+            let more = cursor.advance(packed);
+            debug_assert!(more, "the tail's end was tested before the step");
             if INT && s.shrink.interior(self.check()) {
                 local.interior += 1;
                 return Some(Exit::Done(Orbit::interior()));

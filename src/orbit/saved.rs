@@ -186,7 +186,11 @@ impl SavedReferences {
             if z.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(bad("an orbit holds a value that is not finite"));
             }
-            let packed = if version >= 2 && r.take(1)?[0] != 0 {
+            let flag = if version >= 2 { r.take(1)?[0] } else { 0 };
+            if flag > 1 {
+                return Err(bad("its packed-orbit flag is neither 0 nor 1"));
+            }
+            let packed = if flag == 1 {
                 let c = [r.f64()?, r.f64()?];
                 let len = r.u32()?;
                 let codes = r.len(1)?;
@@ -203,6 +207,10 @@ impl SavedReferences {
                 return Err(bad("an orbit's period is not its length"));
             }
             refs.push(Reference::from_parts(z, tiny, packed, escaped, bits, period));
+        }
+        // Samples rebase onto the last orbit and go on from its index 1.
+        if refs.last().is_some_and(|r| r.last() < 1) {
+            return Err(bad("the orbit samples rebase onto holds fewer than two values"));
         }
         if r.at != body.len() {
             return Err(bad("it has bytes after its last orbit"));
@@ -331,6 +339,14 @@ mod tests {
         bytes.extend_from_slice(&crc.to_le_bytes());
         let d = SavedReferences::decode(&bytes).unwrap();
         assert_eq!(d.refs[0].parts().0, v1.refs[0].parts().0);
+        // A packed flag other than 0 or 1 is refused.
+        let mut bytes = v1.encode();
+        bytes.truncate(bytes.len() - 4);
+        *bytes.last_mut().unwrap() = 2;
+        let crc = crc32fast::hash(&bytes);
+        bytes.extend_from_slice(&crc.to_le_bytes());
+        let e = SavedReferences::decode(&bytes).unwrap_err().to_string();
+        assert!(e.contains("neither 0 nor 1"), "{e}");
     }
 
     /// A file whose checksum is right but whose counts claim more than it holds (a crafted

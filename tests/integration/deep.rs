@@ -284,8 +284,8 @@ fn against_a_reference_computed_for_a_view_elsewhere() {
 
 /// A view centred on a period-2578 minibrot's nucleus (found by `locate` from the e1086
 /// location at zoom 1e60; size 4.3e-115), 1000 of its framing radii wide, with an iteration
-/// limit of 1e8: far past the 2^25 the engine stores, which works because the reference
-/// is one period of the nucleus's orbit and samples rebase through it.
+/// limit of 1e8: the reference is one period of the nucleus's orbit, stored densely and
+/// whole, and samples rebase through it.
 #[test]
 fn a_nucleus_centred_view_stores_one_period_for_any_iteration_limit() {
     let e1086 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bench-e1086.toml")).unwrap();
