@@ -1185,17 +1185,8 @@ impl Perturbation {
         };
         let full = cadd(zm, s.dz);
         let z = cto_f64(full);
-        if s.n >= 1 {
-            for (trap, state) in traps.iter().zip(states.iter_mut()) {
-                trap.observe(state, z);
-            }
-        }
-        if z[0] * z[0] + z[1] * z[1] > self.escape2 {
-            let dz = if DER { der.to_f64() } else { [0.0; 2] };
-            return Some(Exit::Done(Orbit { n: s.n, z, dz }));
-        }
-        if s.n >= self.max_iter {
-            return Some(Exit::Done(Orbit::interior()));
+        if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
+            return Some(exit);
         }
         let end = s.m >= r.last();
         if end && let Some(packed) = r.packed() {
@@ -1244,6 +1235,32 @@ impl Perturbation {
         local.steps += 1;
         if full_range && ctx.hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
             return Some(Exit::Switch(*s));
+        }
+        None
+    }
+
+    /// The end tests at a sample's value z, after the traps have seen it (from z_1 on): it
+    /// escaped, or it reached the iteration limit (interior).
+    #[inline(always)]
+    fn ends<D: Real, const DER: bool>(
+        &self,
+        s: &Sample<D>,
+        z: [f64; 2],
+        der: &Der,
+        traps: &[Trap],
+        states: &mut [TrapState],
+    ) -> Option<Exit<D>> {
+        if s.n >= 1 {
+            for (trap, state) in traps.iter().zip(states.iter_mut()) {
+                trap.observe(state, z);
+            }
+        }
+        if z[0] * z[0] + z[1] * z[1] > self.escape2 {
+            let dz = if DER { der.to_f64() } else { [0.0; 2] };
+            return Some(Exit::Done(Orbit { n: s.n, z, dz }));
+        }
+        if s.n >= self.max_iter {
+            return Some(Exit::Done(Orbit::interior()));
         }
         None
     }
@@ -1330,15 +1347,8 @@ impl Perturbation {
             };
             full = cadd(zm, s.dz);
             z = cto_f64(full);
-            for (trap, state) in traps.iter().zip(states.iter_mut()) {
-                trap.observe(state, z);
-            }
-            if z[0] * z[0] + z[1] * z[1] > self.escape2 {
-                let dz = if DER { der.to_f64() } else { [0.0; 2] };
-                return Some(Exit::Done(Orbit { n: s.n, z, dz }));
-            }
-            if s.n >= self.max_iter {
-                return Some(Exit::Done(Orbit::interior()));
+            if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
+                return Some(exit);
             }
         }
     }
