@@ -60,6 +60,9 @@ fn pack_after(z: &mut Vec<[f64; 2]>, tiny: &mut Vec<Tiny>, d: u32, c: [f64; 2]) 
         p.push(*v, fe);
     }
     z.truncate(d as usize + 1);
+    // The values held dense while a period might end the orbit go back now, not when it
+    // ends: the packed tail grows in their place.
+    z.shrink_to_fit();
     p
 }
 
