@@ -43,7 +43,7 @@ pub struct Variant {
     /// What runs.
     pub kind: VariantKind,
     /// Reference iterations stored densely, the rest packed (None: the engine's rule; see
-    /// `orbit::dense_limit`).
+    /// `orbit::dense_split`).
     pub dense_orbit: Option<u32>,
 }
 

@@ -324,10 +324,7 @@ impl FixedOrbit {
     /// is wide enough for that to pay ([`THREADED_LIMBS`]) and `share` allows it, else steps
     /// on this thread alone. The results are the same bits either way.
     pub fn with_stepper<R>(&mut self, share: bool, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        // Two threads only where the caller's thread pool has them (a render's `--threads`)
-        // and the machine has two cores.
-        let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
-        if share && self.n >= THREADED_LIMBS && cores >= 2 && rayon::current_num_threads() >= 2 {
+        if share && self.n >= THREADED_LIMBS && two_threads() {
             self.with_helper(body)
         } else {
             body(&mut Stepper { orbit: self, shared: None, seq: 0 })
@@ -352,8 +349,7 @@ impl FixedOrbit {
         max_iter: u32,
         mut keep: impl FnMut(u32, [FloatExp; 2]) -> Result<bool, E>,
     ) -> Result<(), E> {
-        let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
-        if !(share && self.n < THREADED_LIMBS && cores >= 2 && rayon::current_num_threads() >= 2) {
+        if !(share && self.n < THREADED_LIMBS && two_threads()) {
             return self.with_stepper(share, |s| {
                 let mut n = 0u32;
                 while !keep(n, s.get())? {
@@ -573,6 +569,13 @@ fn to_fixed(v: &Float, n: usize) -> Option<Vec<u64>> {
     let fill = if int < 0 { u64::MAX } else { 0 };
     limbs.resize(n, fill);
     Some(limbs)
+}
+
+/// True where a second thread can run beside this one: the caller's thread pool has two
+/// (a render's `--threads`) and the machine two cores.
+fn two_threads() -> bool {
+    let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
+    cores >= 2 && rayon::current_num_threads() >= 2
 }
 
 /// t / 2^64 rounded to the nearest f64 (ties to even), for t with its top bit set: its top

@@ -99,8 +99,9 @@ pub struct DeepSpec {
     /// Reference orbits computed earlier for this view (a reference file, see [`saved`]);
     /// None computes them.
     pub references: Option<std::sync::Arc<Vec<Reference>>>,
-    /// Reference iterations stored densely, the rest packed (see [`dense_limit`]).
-    pub dense_limit: Option<u32>,
+    /// Store at most this many reference iterations densely and pack the rest (`render
+    /// --dense-orbit`); None: the engine's rule ([`dense_split`]).
+    pub dense_orbit: Option<u32>,
 }
 
 /// Iteration limits up to this store the whole reference orbit densely: 16 bytes per
@@ -114,15 +115,18 @@ pub const MAX_DENSE_ITERATIONS: u32 = 1 << 25;
 /// iteration as measured ([`packed`]): 1e9 iterations in under 2 GB.
 pub const DENSE_PART: u32 = 1 << 20;
 
-/// How much of a reference orbit is stored densely for an iteration limit: all of it up to
-/// [`MAX_DENSE_ITERATIONS`], else [`DENSE_PART`]; `forced` (`render --dense-orbit`) sets
-/// it, to test the packed tail on short orbits. None: all of it.
-pub fn dense_limit(max_iter: u32, forced: Option<u32>) -> Option<u32> {
+/// How much of a reference orbit is stored densely for an iteration limit, as
+/// ([`reference::Stepping::dense_limit`], [`reference::Stepping::hold`]): all of it up to
+/// [`MAX_DENSE_ITERATIONS`]; past that [`DENSE_PART`], held dense to
+/// [`MAX_DENSE_ITERATIONS`] first. `forced` (`render --dense-orbit`) sets the limit with
+/// no hold, to test the packed tail on short orbits.
+pub fn dense_split(max_iter: u32, forced: Option<u32>) -> (Option<u32>, Option<u32>) {
     match forced {
         // At least Z_0 and Z_1 dense: a rebased sample takes its step from Z_0 and goes on
         // from index 1 in the dense part.
-        Some(n) => (n < max_iter).then_some(n.max(1)),
-        None => (max_iter > MAX_DENSE_ITERATIONS).then_some(DENSE_PART),
+        Some(n) => ((n < max_iter).then_some(n.max(1)), None),
+        None if max_iter > MAX_DENSE_ITERATIONS => (Some(DENSE_PART), Some(MAX_DENSE_ITERATIONS)),
+        None => (None, None),
     }
 }
 
@@ -142,13 +146,11 @@ pub fn periodic_below(spec: &DeepSpec) -> Option<FloatExp> {
 
 /// How the references of a view are stepped (see [`reference::Stepping`]): a Mandelbrot
 /// reference from 0 that comes back within 2^-20 of a sample spacing (first order) of 0 is
-/// one period of a nucleus's orbit; past [`DeepSpec::dense_limit`] the orbit is packed.
+/// one period of a nucleus's orbit; past the dense part ([`dense_split`]) the orbit is
+/// packed.
 fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
-    // The engine's own split waits for a period until the dense store's limit.
-    let hold =
-        (spec.max_iter > MAX_DENSE_ITERATIONS && spec.dense_limit == Some(DENSE_PART)).then_some(MAX_DENSE_ITERATIONS);
-    let periodic_below = periodic_below(spec);
-    reference::Stepping { share, simd: spec.simd, periodic_below, dense_limit: spec.dense_limit, hold }
+    let (dense_limit, hold) = dense_split(spec.max_iter, spec.dense_orbit);
+    reference::Stepping { share, simd: spec.simd, periodic_below: periodic_below(spec), dense_limit, hold }
 }
 
 /// Computes the reference orbit(s) of a view: the centre's orbit (Mandelbrot), or for a

@@ -1222,6 +1222,21 @@ impl Perturbation {
             local.bla_iterations += len as u64;
             return None;
         }
+        self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local)
+    }
+
+    /// One perturbation step from Z_m = `zm`, with the sample's full value z = Z_m + δ,
+    /// z in f64 and |z|^2 in `at`: the derivative and |dz/dz|^2 stepped, δ -> (2 Z_m + δ) δ
+    /// + δc. Returns the switch to f64 when a FloatExp delta has grown into f64's range.
+    #[inline(always)]
+    fn perturb_step<D: Real, const DER: bool, const INT: bool>(
+        &self,
+        s: &mut Sample<D>,
+        der: &mut Der,
+        ctx: Ctx<'_, D>,
+        (zm, full, z, f2): ([D; 2], [D; 2], [f64; 2], D),
+        local: &mut Counters,
+    ) -> Option<Exit<D>> {
         if DER {
             der.step(z, full, ctx.add_fe);
         }
@@ -1233,6 +1248,7 @@ impl Perturbation {
         s.m += 1;
         s.n += 1;
         local.steps += 1;
+        let full_range = D::NAME == FloatExp::NAME;
         if full_range && ctx.hybrid && s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP {
             return Some(Exit::Switch(*s));
         }
@@ -1300,7 +1316,6 @@ impl Perturbation {
         packed: &Packed,
     ) -> Option<Exit<D>> {
         let full_range = D::NAME == FloatExp::NAME;
-        let two = D::from_f64(2.0);
         let (mut zm, mut full, mut z) = at;
         // Entered at the seed only: the cursor starts there.
         debug_assert_eq!(s.m, packed.seed_index());
@@ -1318,20 +1333,11 @@ impl Perturbation {
                 }
                 zm = [D::ZERO; 2];
             }
-            if DER {
-                der.step(z, full, ctx.add_fe);
-            }
-            if INT {
-                s.shrink.step(full, f2, self.check());
-            }
-            s.dz = cadd(cmul(cadd([zm[0] * two, zm[1] * two], s.dz), s.dz), s.dc);
-            s.m += 1;
-            s.n += 1;
-            local.steps += 1;
+            let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
             if rebase || glitch {
-                // Back in the dense part, after `op`'s test after a step.
-                let up = s.dz[0].to_f64().abs().max(s.dz[1].to_f64().abs()) > UP;
-                return (full_range && ctx.hybrid && up).then_some(Exit::Switch(*s));
+                // Back in the dense part: the switch `op` takes after a step. Within the
+                // tail the sample keeps its number type.
+                return switch;
             }
             let more = cursor.advance(packed);
             debug_assert!(more, "the tail's end was tested before the step");
@@ -1535,7 +1541,7 @@ mod tests {
                 numbers: Numbers::FloatExp,
                 simd: SimdLevel::detect(),
                 references: None,
-                dense_limit: None,
+                dense_orbit: None,
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let skip = p.skip.expect("the view has common steps");
@@ -1604,7 +1610,7 @@ mod tests {
                     numbers,
                     simd: SimdLevel::detect(),
                     references: None,
-                    dense_limit,
+                    dense_orbit: dense_limit,
                 };
                 let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
                 let packed = p.refs.iter().any(|r| r.packed().is_some());

@@ -225,7 +225,7 @@ pub struct Options {
     /// them when they serve the view.
     pub references: Option<Arc<orbit::saved::SavedReferences>>,
     /// Store at most this many reference iterations densely, the rest packed (None: the
-    /// engine's rule, [`orbit::dense_limit`]): `render --dense-orbit`, which reaches the
+    /// engine's rule, [`orbit::dense_split`]): `render --dense-orbit`, which reaches the
     /// packed tail's path on short orbits.
     pub dense_orbit: Option<u32>,
 }
@@ -292,7 +292,7 @@ pub fn deep_spec(scene: &Scene, plan: &EnginePlan, options: &Options) -> (FieldP
         numbers,
         simd: params.orbit.simd,
         references: None,
-        dense_limit: orbit::dense_limit(scene.max_iter, options.dense_orbit),
+        dense_orbit: options.dense_orbit,
     };
     (params, Some(spec))
 }
