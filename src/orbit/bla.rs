@@ -596,6 +596,46 @@ impl<T: Real> BlaTable<T> {
         if self.stages.marked(i) { self.stages.climb(i, z2, budget, best, |s| self.stages.second[s].r2) } else { best }
     }
 
+    /// The step [`BlaTable::lookup`] returns at index `m` for every |z|^2 below the bound
+    /// returned beside it and a budget of at least its length: the longest period-aligned
+    /// step from `m`. The bound is the least start radius of the aligned steps the search
+    /// climbs through on the way (it stops at the first that fails); the tree's steps at `m`
+    /// are shorter, or never valid, so the search keeps the aligned one. None where no
+    /// aligned step starts at `m`, a tree step there as long as it could be taken, or the
+    /// steps are not in the order the search assumes (lengths rising, radii numbers). A
+    /// loop that comes back to `m` again and again (the turns of a nucleus's reference)
+    /// tests the bound instead of searching, and takes the same step.
+    pub fn fixed_step(&self, m: u32) -> Option<(Step<'_, T>, u32, T)> {
+        let i = m.checked_sub(self.origin)?;
+        let s = &self.stages;
+        if !s.marked(i) {
+            return None;
+        }
+        let (from, to) = (s.at[i as usize] as usize, s.at[i as usize + 1] as usize);
+        let last = to.checked_sub(1).filter(|&l| l >= from)?;
+        let (start, n) = column(i, self.levels.len());
+        let tree = self.radii.get(start..start + n)?;
+        let longer = |k: usize| (2u64 << k) >= u64::from(s.len[last]);
+        // A radius that is not above zero holds no |z|^2 (and a NaN none either).
+        if tree.iter().enumerate().any(|(k, r)| longer(k) && T::ZERO < *r) {
+            return None;
+        }
+        let mut bound = s.start2[from];
+        for k in from..to {
+            let rising = k == from || s.len[k] > s.len[k - 1];
+            // A NaN radius fails every test in the search (and here, any comparison).
+            match s.start2[k].partial_cmp(&bound) {
+                Some(order) if rising => {
+                    if order == std::cmp::Ordering::Less {
+                        bound = s.start2[k];
+                    }
+                }
+                _ => return None,
+            }
+        }
+        Some((Step { first: &s.first[last], second: &s.second[last] }, s.len[last], bound))
+    }
+
     /// The squared radii of the steps of `level` (2^(level+1) iterations), or of the
     /// longest steps when the table has fewer levels.
     pub fn radii2(&self, level: usize) -> impl Iterator<Item = T> + '_ {

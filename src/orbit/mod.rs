@@ -252,6 +252,7 @@ pub fn prepare(
         numbers: spec.numbers,
         skip,
         single_d2,
+        turn_loop: true,
         orbit_seconds,
         tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
     })

@@ -221,6 +221,10 @@ pub struct Perturbation {
     /// single steps, which run in vector lanes (see [`single_step_threshold`]); 0 with
     /// BLA off.
     pub single_d2: f64,
+    /// Take the turns of a nucleus's reference in their own loop ([`Perturbation::turns`]);
+    /// false runs them through the general loop, which gives the same bits (for tests and
+    /// measurements).
+    pub turn_loop: bool,
     /// Seconds the reference orbit(s) took.
     pub orbit_seconds: f64,
     /// Seconds the BLA tables took.
@@ -1220,9 +1224,99 @@ impl Perturbation {
             s.n += len;
             local.bla_steps += 1;
             local.bla_iterations += len as u64;
+            if self.turn_loop
+                && !full_range
+                && traps.is_empty()
+                && s.m == r.last()
+                && r.period().is_some()
+                && r.packed().is_none()
+            {
+                return self.turns::<D, DER, INT>(s, der, ctx, local);
+            }
             return None;
         }
         self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local)
+    }
+
+    /// The passes of [`Perturbation::op`] through the turns of a nucleus's reference, for a
+    /// sample (f64 phase, no traps) that a BLA step has just brought to the reference's end
+    /// Z_p: there it rebases to Z_0 = 0 and takes the single step to Z_1, from where one
+    /// period-aligned step reaches Z_p again, turn after turn while it stays near the
+    /// minibrot (tens to thousands of turns at a minibrot-centred view). The same operations
+    /// in the same order as `op`'s passes, so the same bits; what it saves is the search
+    /// for the step at Z_1 (the step [`BlaTable::fixed_step`] says the search would find,
+    /// taken while |δ|^2 is below its bound) and the tests for what cannot happen at these
+    /// two indices. Returns None, to go on in `op`, at the start of a pass at Z_1 that would
+    /// do anything else (rebase, single steps, another step); the tests it has done there
+    /// give the same answers again.
+    #[inline(never)]
+    fn turns<D: Real, const DER: bool, const INT: bool>(
+        &self,
+        s: &mut Sample<D>,
+        der: &mut Der,
+        ctx: Ctx<'_, D>,
+        local: &mut Counters,
+    ) -> Option<Exit<D>> {
+        let r = &self.refs[s.which];
+        let table = ctx.tables[self.refs.len() - 1]?;
+        let (step, len, bound) = table.fixed_step(1)?;
+        let last = r.last();
+        if s.which != self.refs.len() - 1 || len == 0 || 1 + len != last {
+            return None;
+        }
+        let at = |m: u32| {
+            let g = r.get(m);
+            [D::from_f64(g[0]), D::from_f64(g[1])]
+        };
+        let (z_end, z_one) = (at(last), at(1));
+        let glitch2 = norm2(z_one).mul_f64(GLITCH2);
+        loop {
+            // The pass at Z_p: end tests, the rebase, Newton's test, the step to Z_1.
+            if INT && s.shrink.interior(self.check()) {
+                local.interior += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
+            let full = cadd(z_end, s.dz);
+            let z = cto_f64(full);
+            if let Some(exit) = self.ends::<D, DER>(s, z, der, &[], &mut []) {
+                return Some(exit);
+            }
+            let f2 = norm2(full);
+            self.rebase(s, full, false, local);
+            if INT && self.newton_probe(s) {
+                local.interior += 1;
+                local.newton += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
+            if ctx.hybrid && z[0].abs().max(z[1].abs()) < DOWN {
+                return Some(Exit::Switch(*s));
+            }
+            if let Some(exit) = self.perturb_step::<D, DER, INT>(s, der, ctx, ([D::ZERO; 2], full, z, f2), local) {
+                return Some(exit);
+            }
+            // The pass at Z_1, while it takes the step back to Z_p.
+            if INT && s.shrink.interior(self.check()) {
+                local.interior += 1;
+                return Some(Exit::Done(Orbit::interior()));
+            }
+            let full = cadd(z_one, s.dz);
+            if let Some(exit) = self.ends::<D, DER>(s, cto_f64(full), der, &[], &mut []) {
+                return Some(exit);
+            }
+            let (d2, f2) = (norm2(s.dz), norm2(full));
+            // `op`'s rebase, glitch and single-step tests, then the bound and budget under
+            // which its search finds `step` (a NaN fails the bound, as it fails the search).
+            let elsewhere = f2 < d2 || f2 < glitch2 || s.single || d2.to_f64() > self.single_d2;
+            let found = d2.partial_cmp(&bound) == Some(std::cmp::Ordering::Less) && self.max_iter - s.n >= len;
+            if elsewhere || !found {
+                return None;
+            }
+            self.apply_bla::<D, DER, INT>(step, s, d2, der, ctx.add_fe);
+            s.m += len;
+            s.n += len;
+            local.bla_steps += 1;
+            local.bla_iterations += len as u64;
+        }
     }
 
     /// One perturbation step from Z_m = `zm`, with the sample's full value z = Z_m + δ,
@@ -1625,6 +1719,21 @@ mod tests {
                 let one: Vec<Orbit> = offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one)).collect();
                 let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
                 let what = format!("{radius} derivative {derivative} interior {interior:?}");
+                // The turns of a nucleus's reference in their own loop and in the general
+                // one: the same bits and counts.
+                let general = Perturbation {
+                    refs: p.refs.clone(),
+                    bla_fe: p.bla_fe.clone(),
+                    bla_f64: p.bla_f64.clone(),
+                    turn_loop: false,
+                    ..p
+                };
+                let mut c_general = Counters::default();
+                for (k, off) in offsets.iter().enumerate() {
+                    let o = general.orbit(*off, &[], &mut [], &mut c_general);
+                    assert_eq!(bits(&o), bits(&one[k]), "{what}: sample {k} differs through the general loop");
+                }
+                assert_eq!(c_general, c_one, "{what}: counts through the general loop");
                 for simd in SimdLevel::usable() {
                     let mut many = vec![Orbit::interior(); offsets.len()];
                     let mut c_many = Counters::default();
@@ -1676,6 +1785,50 @@ mod tests {
         same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps, Some(900));
         let julia = Some(["-0.7436447860", "0.1318252536"]);
         same_both_ways(JULIA_CENTER, julia, "2e-40", 3000, Numbers::F64, eps, Some(300));
+    }
+
+    /// The step the turn loop takes at Z_1 of a nucleus's reference without searching
+    /// ([`BlaTable::fixed_step`]) is the one the search finds, for every |δ|^2 below its
+    /// bound and every budget that holds it; at the bound, or with a budget one short, the
+    /// search finds another.
+    #[test]
+    fn the_turn_loops_step_is_the_one_the_search_finds() {
+        let (w, h) = (32u32, 24u32);
+        let spec = DeepSpec {
+            center: dec(EYE_MINIBROT),
+            julia: None,
+            spacing: Scale::Radius(Decimal::parse("1e-102").unwrap()).spacing(h),
+            max_offset: f64::from(w * w + h * h).sqrt() / 2.0,
+            max_iter: 100_000,
+            escape_radius: 2.0,
+            derivative: true,
+            bla: Some(crate::orbit::DEFAULT_BLA_TOLERANCE),
+            interior: Detection::Off,
+            numbers: Numbers::F64,
+            simd: SimdLevel::detect(),
+            references: None,
+            dense_orbit: None,
+        };
+        let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+        let r = &p.refs[0];
+        assert_eq!(r.period(), Some(r.last()), "one period of the nucleus's orbit");
+        let table = p.bla_f64[0].as_ref().expect("tables");
+        let (step, len, bound) = table.fixed_step(1).expect("an aligned step from Z_1");
+        assert_eq!(1 + len, r.last(), "the step reaches the period's end");
+        assert!(bound > 0.0, "{bound}");
+        let same = |found: Option<(Step<'_, f64>, u32)>| {
+            found.is_some_and(|(s, l)| {
+                l == len && std::ptr::eq(s.first, step.first) && std::ptr::eq(s.second, step.second)
+            })
+        };
+        for k in 0..400 {
+            let z2 = bound * (1.0 - 1e-15) * 10f64.powf(-f64::from(k) / 10.0);
+            for budget in [len, len + 1, u32::MAX] {
+                assert!(same(table.lookup(1, z2, budget)), "|z|^2 = {z2:e}, budget {budget}");
+            }
+        }
+        assert!(!same(table.lookup(1, bound, u32::MAX)), "at the bound");
+        assert!(!same(table.lookup(1, bound * 0.5, len - 1)), "a budget one short");
     }
 
     /// The period-1429 minibrot of the all-seeing-eye location (size 1.6e-102): its
