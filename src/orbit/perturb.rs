@@ -221,9 +221,9 @@ pub struct Perturbation {
     /// single steps, which run in vector lanes (see [`single_step_threshold`]); 0 with
     /// BLA off.
     pub single_d2: f64,
-    /// Take the turns of a nucleus's reference in their own loop ([`Perturbation::turns`]);
-    /// false runs them through the general loop, which gives the same bits (for tests and
-    /// measurements).
+    /// Take the turns of a nucleus's reference (rebase at its end, a single step, one
+    /// period-aligned step back to the end) in a loop of their own; false runs them through
+    /// the general loop, which gives the same bits (for tests and measurements).
     pub turn_loop: bool,
     /// Seconds the reference orbit(s) took.
     pub orbit_seconds: f64,
@@ -376,6 +376,14 @@ pub fn single_step_threshold(tables: &[Option<BlaTable<f64>>]) -> f64 {
     let mid = r2.len() / 2;
     let (_, median, _) = r2.select_nth_unstable_by(mid, f64::total_cmp);
     *median * SINGLE_STEP_FRACTION * SINGLE_STEP_FRACTION
+}
+
+/// A sample found interior (by Newton's test where `newton` says so): counted, and its end.
+#[inline(always)]
+fn found_interior<D>(local: &mut Counters, newton: bool) -> Option<Exit<D>> {
+    local.interior += 1;
+    local.newton += u64::from(newton);
+    Some(Exit::Done(Orbit::interior()))
 }
 
 /// A sample's state in number type D.
@@ -1176,8 +1184,7 @@ impl Perturbation {
         // The previous step may have brought |dz/dz|^2 below the threshold (or out of its
         // window): decided first, as the vector lanes do before their other events.
         if INT && s.shrink.interior(self.check()) {
-            local.interior += 1;
-            return Some(Exit::Done(Orbit::interior()));
+            return found_interior(local, false);
         }
         let full_range = D::NAME == FloatExp::NAME;
         let r = &self.refs[s.which];
@@ -1204,9 +1211,7 @@ impl Perturbation {
             self.rebase(s, full, glitch, local);
             zm = [D::ZERO; 2];
             if INT && end && !full_range && self.newton_probe(s) {
-                local.interior += 1;
-                local.newton += 1;
-                return Some(Exit::Done(Orbit::interior()));
+                return found_interior(local, true);
             }
             if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
@@ -1219,11 +1224,7 @@ impl Perturbation {
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            self.apply_bla::<D, DER, INT>(e, s, d2, der, ctx.add_fe);
-            s.m += len;
-            s.n += len;
-            local.bla_steps += 1;
-            local.bla_iterations += len as u64;
+            self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
             if self.turn_loop
                 && !full_range
                 && traps.is_empty()
@@ -1273,8 +1274,7 @@ impl Perturbation {
         loop {
             // The pass at Z_p: end tests, the rebase, Newton's test, the step to Z_1.
             if INT && s.shrink.interior(self.check()) {
-                local.interior += 1;
-                return Some(Exit::Done(Orbit::interior()));
+                return found_interior(local, false);
             }
             let full = cadd(z_end, s.dz);
             let z = cto_f64(full);
@@ -1284,9 +1284,7 @@ impl Perturbation {
             let f2 = norm2(full);
             self.rebase(s, full, false, local);
             if INT && self.newton_probe(s) {
-                local.interior += 1;
-                local.newton += 1;
-                return Some(Exit::Done(Orbit::interior()));
+                return found_interior(local, true);
             }
             if ctx.hybrid && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
@@ -1296,8 +1294,7 @@ impl Perturbation {
             }
             // The pass at Z_1, while it takes the step back to Z_p.
             if INT && s.shrink.interior(self.check()) {
-                local.interior += 1;
-                return Some(Exit::Done(Orbit::interior()));
+                return found_interior(local, false);
             }
             let full = cadd(z_one, s.dz);
             if let Some(exit) = self.ends::<D, DER>(s, cto_f64(full), der, &[], &mut []) {
@@ -1311,11 +1308,7 @@ impl Perturbation {
             if elsewhere || !found {
                 return None;
             }
-            self.apply_bla::<D, DER, INT>(step, s, d2, der, ctx.add_fe);
-            s.m += len;
-            s.n += len;
-            local.bla_steps += 1;
-            local.bla_iterations += len as u64;
+            self.apply_bla::<D, DER, INT>((step, len), s, d2, der, ctx.add_fe, local);
         }
     }
 
@@ -1436,8 +1429,7 @@ impl Perturbation {
             let more = cursor.advance(packed);
             debug_assert!(more, "the tail's end was tested before the step");
             if INT && s.shrink.interior(self.check()) {
-                local.interior += 1;
-                return Some(Exit::Done(Orbit::interior()));
+                return found_interior(local, false);
             }
             zm = if full_range {
                 cconv(cursor.get_fe(packed))
@@ -1458,16 +1450,21 @@ impl Perturbation {
     /// are moderate (the common case), else in FloatExp (they may be huge at depth). With
     /// `INT`, |dz/dz|^2 is multiplied by |d(δ')/d(δ)|^2 (A + 2 A2 δ + AB δc, or A for a
     /// first-order step). The new δ is the same bits whether or not the Jacobian is
-    /// computed.
+    /// computed. The sample moves on by the step's length `len`, and it is counted.
     #[inline(always)]
     fn apply_bla<D: Real, const DER: bool, const INT: bool>(
         &self,
-        e: Step<'_, D>,
+        (e, len): (Step<'_, D>, u32),
         s: &mut Sample<D>,
         d2: D,
         der: &mut Der,
         add_fe: FloatExp,
+        local: &mut Counters,
     ) {
+        s.m += len;
+        s.n += len;
+        local.bla_steps += 1;
+        local.bla_iterations += u64::from(len);
         let linear = e.linear(d2);
         if !DER && !INT {
             s.dz = if linear { cadd(cmul(e.first.a, s.dz), cmul(e.first.b, s.dc)) } else { e.apply(s.dz, s.dc) };
