@@ -30,6 +30,11 @@
 //! reference index). Where the reference is one period of a nucleus, each end of a turn
 //! may also try Newton's method for an attracting cycle (`Perturbation::newton_probe`).
 //! It is off with traps, which must see every iteration.
+//!
+//! Where the reference is one period of a nucleus, samples near the minibrot go round it
+//! turn after turn (rebase at Z_p, a single step, one period-aligned BLA step from Z_1 back
+//! to Z_p): those passes run in a loop of their own (`Perturbation::turns`) that does the
+//! same operations in the same order without searching the table at Z_1 each time.
 
 mod lanes;
 
