@@ -383,6 +383,18 @@ pub fn single_step_threshold(tables: &[Option<BlaTable<f64>>]) -> f64 {
     *median * SINGLE_STEP_FRACTION * SINGLE_STEP_FRACTION
 }
 
+/// A reference value in the delta's number type: at full range where that is FloatExp
+/// (`fe`: the value with its exponent kept, below f64's range too), else the stored f64.
+#[inline(always)]
+fn reference_value<D: Real>(f: impl FnOnce() -> [f64; 2], fe: impl FnOnce() -> [FloatExp; 2]) -> [D; 2] {
+    if D::NAME == FloatExp::NAME {
+        cconv(fe())
+    } else {
+        let g = f();
+        [D::from_f64(g[0]), D::from_f64(g[1])]
+    }
+}
+
 /// A sample found interior (by Newton's test where `newton` says so): counted, and its end.
 #[inline(always)]
 fn found_interior<D>(local: &mut Counters, newton: bool) -> Option<Exit<D>> {
@@ -1193,12 +1205,7 @@ impl Perturbation {
         }
         let full_range = D::NAME == FloatExp::NAME;
         let r = &self.refs[s.which];
-        let mut zm: [D; 2] = if full_range {
-            cconv(r.get_fe(s.m))
-        } else {
-            let g = r.get(s.m);
-            [D::from_f64(g[0]), D::from_f64(g[1])]
-        };
+        let mut zm: [D; 2] = reference_value(|| r.get(s.m), || r.get_fe(s.m));
         let full = cadd(zm, s.dz);
         let z = cto_f64(full);
         if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
@@ -1270,10 +1277,7 @@ impl Perturbation {
         if s.which != self.refs.len() - 1 || len == 0 || 1 + len != last {
             return None;
         }
-        let at = |m: u32| {
-            let g = r.get(m);
-            [D::from_f64(g[0]), D::from_f64(g[1])]
-        };
+        let at = |m: u32| reference_value::<D>(|| r.get(m), || r.get_fe(m));
         let (z_end, z_one) = (at(last), at(1));
         let glitch2 = norm2(z_one).mul_f64(GLITCH2);
         loop {
@@ -1436,12 +1440,7 @@ impl Perturbation {
             if INT && s.shrink.interior(self.check()) {
                 return found_interior(local, false);
             }
-            zm = if full_range {
-                cconv(cursor.get_fe(packed))
-            } else {
-                let g = cursor.get();
-                [D::from_f64(g[0]), D::from_f64(g[1])]
-            };
+            zm = reference_value(|| cursor.get(), || cursor.get_fe(packed));
             full = cadd(zm, s.dz);
             z = cto_f64(full);
             if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {

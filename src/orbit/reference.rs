@@ -124,7 +124,9 @@ impl Reference {
                     out.tiny.push((n, fe));
                 }
                 out.z.push(f);
-                if let (Some(d), true) = (steps.dense_limit, pack_at == Some(n)) {
+                if pack_at == Some(n)
+                    && let Some(d) = steps.dense_limit
+                {
                     out.packed = Some(pack_after(&mut out.z, &mut out.tiny, d, c64));
                 }
             }
