@@ -57,6 +57,8 @@ const MAX_CYCLE_PERIODS: u32 = 8;
 /// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
 /// iteration limit holds [`MODEL_TURNS_SPARE`] such tests.
 const MODEL_MAX_PERIODS: u32 = 1024;
+/// A sample's [`Probe::at`] once it is to try no more Newton tests.
+const NEVER: u32 = u32::MAX;
 /// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]).
 const MODEL_ITERATIONS: u32 = 8192;
 /// See [`MODEL_MAX_PERIODS`].
@@ -79,31 +81,45 @@ fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
     Some([mult[0] / 2.0, mult[1] / 2.0])
 }
 
-/// A point of the attracting cycle of z -> z^2 + c, of period 2 to [`MODEL_MAX_PERIODS`], that
-/// the orbit of 0 settles on within [`MODEL_ITERATIONS`], and its period.
+/// What the orbit of 0 under the quadratic model z -> z^2 + c does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Model {
+    /// It settles on a cycle: a point of it, and its period.
+    Cycle([f64; 2], u32),
+    /// It escapes (|z| > 2): c is outside the model's Mandelbrot set.
+    Escapes,
+    /// Neither within [`MODEL_ITERATIONS`], or its cycle is longer than [`MODEL_MAX_PERIODS`].
+    Unsettled,
+}
+
+/// Where the orbit of 0 under z -> z^2 + c goes within [`MODEL_ITERATIONS`]: a point of the
+/// attracting cycle it settles on, of period 2 to [`MODEL_MAX_PERIODS`], and its period; or
+/// that it escapes.
 ///
 /// Brent's cycle detection: the orbit is compared with an anchor that moves to the current
 /// point whenever the steps since it reach a power of two, so a settled cycle of period k is
 /// seen within about 2 k steps of settling, at one comparison per step (testing every
 /// candidate period from fixed checkpoints costs k steps per checkpoint).
-fn model_settled_cycle(c: [f64; 2]) -> Option<([f64; 2], u32)> {
+fn model_settled_cycle(c: [f64; 2]) -> Model {
     let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
     let (mut z, mut anchor) = ([0.0, 0.0], [0.0, 0.0]);
     let (mut since, mut span) = (0u32, 1u32);
     for _ in 0..MODEL_ITERATIONS {
         z = step(z);
-        if norm2(z) > 4.0 {
-            return None;
+        // A c that is not a number escapes too.
+        let r2 = norm2(z);
+        if r2 > 4.0 || r2.is_nan() {
+            return Model::Escapes;
         }
         since += 1;
         if norm2([z[0] - anchor[0], z[1] - anchor[1]]) < MODEL_SETTLED2 && since >= 2 {
-            return (since <= MODEL_MAX_PERIODS).then_some((anchor, since));
+            return if since <= MODEL_MAX_PERIODS { Model::Cycle(anchor, since) } else { Model::Unsettled };
         }
         if since == span {
             (anchor, since, span) = (z, 0, span.saturating_mul(2));
         }
     }
-    None
+    Model::Unsettled
 }
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
@@ -773,6 +789,9 @@ impl Perturbation {
     fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
         let Some(p) = self.newton_period() else { return false };
         let pr = &mut s.probe;
+        if pr.at == NEVER {
+            return false;
+        }
         let since = s.n.wrapping_sub(pr.anchor_n);
         if pr.anchor_n != 0 && since >= p && since < p.saturating_mul(MAX_CYCLE_PERIODS) {
             // Turns 1 to MAX_CYCLE_PERIODS - 1 after the anchor: as below, but for a sample
@@ -797,13 +816,22 @@ impl Perturbation {
         let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
         let candidate = pr.candidate(k, w);
         // At the first end, a start from the quadratic model's attracting cycle, where the
-        // model has one: no need to wait for the orbit to settle.
-        if pr.anchor_n == 0
-            && let Some((w0, turns)) = self.model_cycle(w)
-            && u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
-            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))
-        {
-            return true;
+        // model has one: no need to wait for the orbit to settle. Where the model escapes,
+        // no test is tried again.
+        if pr.anchor_n == 0 {
+            match self.model_cycle(w) {
+                Some(Model::Cycle(w0, turns))
+                    if u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
+                        && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second)) =>
+                {
+                    return true;
+                }
+                Some(Model::Escapes) => {
+                    pr.at = NEVER;
+                    return false;
+                }
+                _ => {}
+            }
         }
         if candidate && exp < pr.anchor_exp && s.n >= pr.at {
             pr.at = s.n.saturating_mul(2);
@@ -827,12 +855,16 @@ impl Perturbation {
     /// of period k p at their first period end too, rather than after waiting for their
     /// orbit to come back to an anchor. None where Λ is unknown, or the model's orbit escapes
     /// or has not settled within [`MODEL_ITERATIONS`].
-    fn model_cycle(&self, a: [f64; 2]) -> Option<([f64; 2], u32)> {
+    fn model_cycle(&self, a: [f64; 2]) -> Option<Model> {
         let lam = self.renormal?;
         let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
-        let (z, k) = model_fixed_point(c).map(|z| (z, 1)).or_else(|| model_settled_cycle(c))?;
-        let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-        (w[0].is_finite() && w[1].is_finite()).then_some((w, k))
+        Some(match model_fixed_point(c).map_or_else(|| model_settled_cycle(c), |z| Model::Cycle(z, 1)) {
+            Model::Cycle(z, k) => {
+                let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+                if w[0].is_finite() && w[1].is_finite() { Model::Cycle(w, k) } else { Model::Unsettled }
+            }
+            other => other,
+        })
     }
 
     /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and
@@ -1528,13 +1560,13 @@ mod tests {
     /// up to past 64 (the limit before Brent's detection), each found here by Newton's method
     /// on f_c^q(0) = 0 from the bulb's estimated centre. The point returned must lie on a
     /// cycle of exactly the period returned. Outside the set (beside the cusp, past the tip)
-    /// there is no cycle.
+    /// there is no cycle; at the Feigenbaum point none settles.
     #[test]
     fn model_settled_cycle_finds_cycles_of_every_period_to_its_limit() {
         let step = |z: [f64; 2], c: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
         let far2 = |a: [f64; 2], b: [f64; 2]| norm2([a[0] - b[0], a[1] - b[1]]);
         let check = |c: [f64; 2], want: u32| {
-            let (z, k) = model_settled_cycle(c).unwrap_or_else(|| panic!("{c:?}: no cycle found"));
+            let Model::Cycle(z, k) = model_settled_cycle(c) else { panic!("{c:?}: no cycle found") };
             assert_eq!(k, want, "{c:?}");
             let mut y = z;
             for j in 1..=k {
@@ -1572,8 +1604,11 @@ mod tests {
         for q in [5, 17, 65, 100, 200, MODEL_MAX_PERIODS] {
             check(nucleus(q), q);
         }
-        assert!(model_settled_cycle([0.26, 0.0]).is_none());
-        assert!(model_settled_cycle([-2.01, 0.0]).is_none());
+        assert_eq!(model_settled_cycle([0.26, 0.0]), Model::Escapes);
+        assert_eq!(model_settled_cycle([-2.01, 0.0]), Model::Escapes);
+        assert_eq!(model_settled_cycle([f64::NAN, 0.0]), Model::Escapes);
+        // The Feigenbaum point: its orbit neither escapes nor settles on a short cycle.
+        assert_eq!(model_settled_cycle([-1.401155189092051, 0.0]), Model::Unsettled);
     }
 
     /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
