@@ -69,7 +69,10 @@ fn iterate(p: &Perturbation, offsets: &[[f64; 2]]) -> (Vec<Orbit>, Counters, f64
 }
 
 fn report(what: &str, c: &Counters, seconds: f64) {
-    println!("{what:<32} {seconds:>9.3} s  {:>10.3e} iterations  {:>8} stopped early", c.iterations as f64, c.interior);
+    println!(
+        "{what:<32} {seconds:>9.3} s  {:>10.3e} iterations  {:>8} stopped early ({} in disks)",
+        c.iterations as f64, c.interior, c.disks
+    );
 }
 
 fn main() {

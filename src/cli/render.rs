@@ -208,8 +208,8 @@ fn report(
             text.push_str(&format!("interior    detection {}", d.interior_detection.describe()));
             text.push_str(&match d.interior_threshold {
                 Some(t) => format!(
-                    ", |dz/dz|^2 < {t:.1e}: {} samples stopped early ({} by Newton's test)\n",
-                    d.interior_samples, d.interior_newton_samples
+                    ", |dz/dz|^2 < {t:.1e}: {} samples stopped early ({} by Newton's test, {} of them in disks certified at once)\n",
+                    d.interior_samples, d.interior_newton_samples, d.interior_disk_samples
                 ),
                 None => "\n".to_string(),
             });

@@ -59,6 +59,8 @@
 //! once per pass, and the threshold costs no second comparison: `lo`, the bottom of the
 //! window for the current exponent, is raised to threshold / 2^exp.
 
+use std::cmp::Ordering;
+
 use super::reference::Reference;
 use crate::num::real::{cadd, cconv, cmul, norm2};
 use crate::num::{FloatExp, Real};
@@ -251,19 +253,25 @@ pub struct Turn {
 /// f^(p-1)'(c)), whose second derivative 2 Λ = λ / w* hardly varies over the ball, so
 /// doubling it for L is ample. With the noise floor at 1e-12 |w|, multipliers up to about
 /// 1 - 1e-5 can be certified; those nearer 1 are left to the contraction criterion.
-pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) -> Option<Turn>) -> bool {
+pub fn newton_attracting(w: [f64; 2], map: impl FnMut([f64; 2], bool) -> Option<Turn>) -> bool {
+    newton_cycle(w, map).is_some()
+}
+
+/// [`newton_attracting`], returning the iterate at which the attracting cycle was certified
+/// (its point lies within twice that iterate's Newton step).
+pub fn newton_cycle(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) -> Option<Turn>) -> Option<[f64; 2]> {
     // The previous iterate and its f^p' (to check the Lipschitz bound against), and the
     // first iterate whose ball was small (the same check over a longer stretch).
     let mut before: Option<([f64; 2], [FloatExp; 2])> = None;
     let mut first_small: Option<([f64; 2], [FloatExp; 2])> = None;
     let mut near = false;
     for _ in 0..NEWTON_STEPS {
-        let Some(t) = map(w, near) else { return false };
+        let t = map(w, near)?;
         let f = cconv::<f64, FloatExp>([t.z[0] - w[0], t.z[1] - w[1]]);
         let slope = [t.d1[0] - FloatExp::ONE, t.d1[1]];
         let s2 = norm2(slope);
         if s2.is_zero() {
-            return false;
+            return None;
         }
         // F / F' = F conj(F') / |F'|^2.
         let q = cmul(f, [slope[0], -slope[1]]);
@@ -275,7 +283,7 @@ pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) ->
             before = Some((w, t.d1));
             w = [w[0] - step[0].to_f64(), w[1] - step[1].to_f64()];
             if !(w[0].is_finite() && w[1].is_finite()) {
-                return false;
+                return None;
             }
             continue;
         };
@@ -301,19 +309,107 @@ pub fn newton_attracting(mut w: [f64; 2], mut map: impl FnMut([f64; 2], bool) ->
             // A fixed point is certified: attracting, repelling, or not yet told apart.
             let (lambda, spread) = (norm2(t.d1).sqrt(), (reach * lip).ldexp(1));
             if lambda + spread < FloatExp::ONE {
-                return true;
+                return Some(w);
             }
             if lambda - spread > FloatExp::ONE {
-                return false;
+                return None;
             }
         }
         w = [w[0] - step[0].to_f64(), w[1] - step[1].to_f64()];
         if !(w[0].is_finite() && w[1].is_finite()) {
-            return false;
+            return None;
         }
     }
-    false
+    None
 }
+
+/// How a turn's value at a point depends on the parameter: ∂f^p/∂c and ∂(f^p)'/∂c there.
+#[derive(Debug, Clone, Copy)]
+pub struct Sensitivity {
+    /// ∂f^p(w)/∂c.
+    pub dc: [FloatExp; 2],
+    /// ∂²f^p(w)/∂w∂c: how the multiplier moves with the parameter.
+    pub dwc: [FloatExp; 2],
+}
+
+/// Newton's certificate ([`newton_attracting`]) extended from one parameter to a disk of
+/// them: true when every parameter within `rho` of the centre has an attracting fixed
+/// point of f^p, so the whole disk lies in a hyperbolic component (interior). `w` is the
+/// point [`newton_cycle`] certified at the centre; `map(w, shift)` gives f^p at w for the
+/// parameter centre + shift (f64, plane units), with its second derivative and its
+/// [`Sensitivity`].
+///
+/// For a parameter c in the disk, F_c(w) = f_c^p(w) - w at the centre's point is at most
+/// the centre's residual, the rounding ([`NEWTON_NOISE`]) and the value's shift, taken as
+/// [`DISK_MARGIN`] times its first-order part |∂f^p/∂c| rho; |F_c'| is at least |f^p' - 1|
+/// less the multiplier's shift, likewise [`DISK_MARGIN`] |∂f^p'/∂c| rho (plus
+/// [`DISK_TURN_FLOOR`] for its rounding). With the Lipschitz bound L = 2 |F''| as in
+/// Newton's certificate, Kantorovich's theorem (h = η L / |F_c'| <= 1/4, η the residual
+/// over the slope) gives each c a unique fixed point within t* = 2 η / (1 + sqrt(1 - 2 h))
+/// of w, whose multiplier is at most |f^p'| plus the multiplier's shift plus L t*.
+///
+/// The bounds are checked where they could fail: at the ball's edge (w + 2 η) f^p' must
+/// have moved by at most three quarters of what L allows and |F''| be below three quarters
+/// of L; at the disk's edge (the parameter centre + rho) the value and the multiplier must
+/// have moved from the centre's by their first-order parts give or take a fifth of them
+/// (what the margin allows, less room for the next order; the terms left out are of second
+/// order, the same size in every direction).
+///
+/// This is Newton's certificate made to cover many samples at once: a view centred on a
+/// minibrot tiles its cardioid with such disks (`Perturbation::orbits`), and each sample in
+/// a certified disk is interior without an iteration of its own.
+pub fn disk_attracting(
+    w: [f64; 2],
+    rho: f64,
+    mut map: impl FnMut([f64; 2], [f64; 2]) -> Option<(Turn, Sensitivity)>,
+) -> bool {
+    let abs = |v: [FloatExp; 2]| norm2(v).sqrt();
+    let Some((t, s)) = map(w, [0.0; 2]) else { return false };
+    let Some(d2) = t.d2 else { return false };
+    let r = FloatExp::from(rho);
+    let size = abs(cconv::<f64, FloatExp>(w));
+    let noise = size.mul_f64(NEWTON_NOISE);
+    let (shift, turn) = (abs(s.dc) * r, abs(s.dwc) * r);
+    let turn_bound = turn.mul_f64(DISK_MARGIN) + FloatExp::from(DISK_TURN_FLOOR);
+    let resid = abs(cconv::<f64, FloatExp>([t.z[0] - w[0], t.z[1] - w[1]])) + noise + shift.mul_f64(DISK_MARGIN);
+    let slope = abs([t.d1[0] - FloatExp::ONE, t.d1[1]]) - turn_bound;
+    if slope.partial_cmp(&FloatExp::ZERO) != Some(Ordering::Greater) {
+        return false;
+    }
+    let lip = abs(d2).ldexp(1);
+    let eta = resid / slope;
+    let h = (eta * lip / slope).to_f64();
+    if h.is_nan() || h > 0.25 {
+        return false;
+    }
+    let reach = eta.mul_f64(2.0 / (1.0 + (1.0 - 2.0 * h).sqrt()));
+    if (abs(t.d1) + turn_bound + lip * reach).partial_cmp(&FloatExp::ONE) != Some(Ordering::Less) {
+        return false;
+    }
+    // The ball's edge: F' and F'' as steady as L says.
+    let edge = eta.ldexp(1);
+    let Some((te, _)) = map([w[0] + edge.to_f64(), w[1]], [0.0; 2]) else { return false };
+    let Some(d2_edge) = te.d2 else { return false };
+    let moved = abs([te.d1[0] - t.d1[0], te.d1[1] - t.d1[1]]);
+    if moved > (lip * edge).mul_f64(0.75) || abs(d2_edge) > lip.mul_f64(0.75) {
+        return false;
+    }
+    // The disk's edge: what the first-order terms leave out within the margin.
+    let Some((tc, _)) = map(w, [rho, 0.0]) else { return false };
+    let value = cconv::<f64, FloatExp>([tc.z[0] - t.z[0], tc.z[1] - t.z[1]]);
+    let value_rest = [value[0] - s.dc[0] * r, value[1] - s.dc[1] * r];
+    let turn_rest = [tc.d1[0] - t.d1[0] - s.dwc[0] * r, tc.d1[1] - t.d1[1] - s.dwc[1] * r];
+    let fifth = (DISK_MARGIN - 1.0) * 0.8;
+    abs(value_rest) <= shift.mul_f64(fifth) + noise
+        && abs(turn_rest) <= turn.mul_f64(fifth) + FloatExp::from(DISK_TURN_FLOOR / 2.0)
+}
+
+/// How much of its first-order part a disk certificate allows for the change of f^p's
+/// value and multiplier across the disk ([`disk_attracting`]).
+pub const DISK_MARGIN: f64 = 1.25;
+/// An absolute allowance for the rounding of a multiplier (f^p' near 1 in size, computed
+/// with a relative error near 1e-14) in the disk certificate.
+pub const DISK_TURN_FLOOR: f64 = 1e-9;
 
 /// The fewest periods of a nucleus's reference the iteration limit must hold for detection
 /// to run by default.
@@ -509,6 +605,58 @@ mod tests {
         ] {
             assert!(!newton_attracting([c[0] * 0.5, c[1] * 0.5], map(c)), "{c:?}");
         }
+    }
+
+    /// The disk certificate on z -> z^2 + c itself (p = 1, ∂f/∂c = 1): disks about points
+    /// of the main cardioid are certified where they lie well inside it and refused where
+    /// they reach its edge; every parameter on the edge of every certified disk of a sweep
+    /// has an attracting fixed point (|1 - sqrt(1 - 4 c)| < 1).
+    #[test]
+    fn disks_are_certified_only_inside_the_cardioid() {
+        let csqrt = |a: [f64; 2]| {
+            let r = a[0].hypot(a[1]);
+            [((r + a[0]) / 2.0).sqrt(), ((r - a[0]) / 2.0).sqrt().copysign(a[1])]
+        };
+        let multiplier = |c: [f64; 2]| {
+            let s = csqrt([1.0 - 4.0 * c[0], -4.0 * c[1]]);
+            (1.0 - s[0]).hypot(s[1])
+        };
+        let turn = |c: [f64; 2], w: [f64; 2]| {
+            let z = [w[0] * w[0] - w[1] * w[1] + c[0], 2.0 * w[0] * w[1] + c[1]];
+            let d1 = [FloatExp::from(2.0 * w[0]), FloatExp::from(2.0 * w[1])];
+            Turn { z, d1, d2: Some([FloatExp::from(2.0), FloatExp::ZERO]) }
+        };
+        let certified = |c: [f64; 2], rho: f64| {
+            let Some(w) = newton_cycle([c[0] * 0.5, c[1] * 0.5], |w, _| Some(turn(c, w))) else { return false };
+            let one = Sensitivity { dc: [FloatExp::ONE, FloatExp::ZERO], dwc: [FloatExp::ZERO; 2] };
+            disk_attracting(w, rho, |w, s| Some((turn([c[0] + s[0], c[1] + s[1]], w), one)))
+        };
+        assert!(certified([0.0, 0.0], 0.04));
+        assert!(certified([-0.1, 0.05], 0.05));
+        assert!(certified([-0.4, 0.2], 0.02));
+        // Kantorovich's h is 1/2 there: too far from the centre's fixed point to bound.
+        assert!(!certified([0.0, 0.0], 0.1));
+        assert!(!certified([0.2, 0.0], 0.1), "reaches past the cusp");
+        assert!(!certified([-0.7, 0.0], 0.1), "reaches past -3/4");
+        assert!(!certified([-0.3, 0.5], 0.2), "reaches past the edge");
+        let mut seen = 0;
+        for i in 0..40 {
+            for j in 0..40 {
+                let c = [-0.8 + 1.1 * i as f64 / 40.0, -0.7 + 1.4 * j as f64 / 40.0];
+                for rho in [0.003, 0.03, 0.1] {
+                    if multiplier(c) >= 1.0 || !certified(c, rho) {
+                        continue;
+                    }
+                    seen += 1;
+                    for k in 0..32 {
+                        let a = std::f64::consts::TAU * k as f64 / 32.0;
+                        let e = [c[0] + rho * a.cos(), c[1] + rho * a.sin()];
+                        assert!(multiplier(e) < 1.0, "disk about {c:?} of radius {rho}: {e:?} is outside");
+                    }
+                }
+            }
+        }
+        assert!(seen > 500, "only {seen} disks certified");
     }
 
     #[test]

@@ -253,6 +253,7 @@ pub fn prepare(
         skip,
         single_d2,
         turn_loop: true,
+        disks: true,
         orbit_seconds,
         tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
     })

@@ -57,6 +57,8 @@ const MAX_CYCLE_PERIODS: u32 = 8;
 /// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
 /// iteration limit holds [`MODEL_TURNS_SPARE`] such tests.
 const MODEL_MAX_PERIODS: u32 = 1024;
+/// The fewest samples `Perturbation::certified_disks` tries a disk for.
+const DISK_MIN: usize = 8;
 /// A sample's [`Probe::at`] once it is to try no more Newton tests.
 const NEVER: u32 = u32::MAX;
 /// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]).
@@ -178,6 +180,9 @@ pub struct Counters {
     pub interior: u64,
     /// Of those, samples Newton's test found (the rest: the contraction criterion).
     pub newton: u64,
+    /// Of those, samples in disks of parameters certified at once, which took no iteration
+    /// ([`interior::disk_attracting`]).
+    pub disks: u64,
 }
 
 impl Counters {
@@ -192,6 +197,7 @@ impl Counters {
         self.glitches += o.glitches;
         self.interior += o.interior;
         self.newton += o.newton;
+        self.disks += o.disks;
     }
 }
 
@@ -246,6 +252,10 @@ pub struct Perturbation {
     /// period-aligned step back to the end) in a loop of their own; false runs them through
     /// the general loop, which gives the same bits (for tests and measurements).
     pub turn_loop: bool,
+    /// Find the samples of a batch that lie in the minibrot's cardioid together, by disks of
+    /// parameters certified interior (`Perturbation::certified_disks`): true by default; false
+    /// iterates each sample, for comparing the two.
+    pub disks: bool,
     /// Seconds the reference orbit(s) took.
     pub orbit_seconds: f64,
     /// Seconds the BLA tables took.
@@ -875,15 +885,31 @@ impl Perturbation {
     /// AB δc and d2' = m d2 + 2 A2 d1^2), single steps elsewhere (d1' = 2 z d1,
     /// d2' = 2 (d1^2 + z d2)); d2 only when `second` asks. None where the orbit of w escapes
     /// or leaves the reference within a turn (it would rebase elsewhere than at Z_p).
+    #[inline(always)]
     fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
+        self.return_map_with::<false>(w, dc, p, k, second).map(|(t, _)| t)
+    }
+
+    /// [`Perturbation::return_map`], with its [`interior::Sensitivity`] to the parameter
+    /// when `C`: e = ∂z/∂c and f = ∂²z/∂w∂c, through a BLA step e' = m e + n (n = B + AB δ +
+    /// 2 B2 δc, the step's derivative in δc) and f' = m f + d1 (2 A2 e + AB), through a
+    /// single step e' = 2 z e + 1 and f' = 2 (d1 e + z f).
+    fn return_map_with<const C: bool>(
+        &self,
+        w: [f64; 2],
+        dc: [f64; 2],
+        p: u32,
+        k: u32,
+        second: bool,
+    ) -> Option<(interior::Turn, Option<interior::Sensitivity>)> {
         let r = &self.refs[0];
         let table = self.bla_f64[0].as_ref();
         let mut z = w;
         // d1 as an f64 pair with its own exponent (FloatExp for each product would double
         // the cost of the turn); d2 likewise ([`Scaled`]: only its size enters Newton's
-        // bound), and only when asked for.
+        // bound), and only when asked for; e and f likewise.
         let mut d1 = Der { mant: [1.0, 0.0], exp: 0, add: 0.0 };
-        let mut d2 = Scaled::ZERO;
+        let (mut d2, mut e, mut f) = (Scaled::ZERO, Scaled::ZERO, Scaled::ZERO);
         for _ in 0..k {
             let (mut dz, mut m) = (z, 0u32);
             while m < p {
@@ -893,27 +919,35 @@ impl Perturbation {
                 if f2 > self.escape2 || (m > 0 && f2 < d2z) {
                     return None;
                 }
+                let d = || Scaled::new(d1.mant, d1.exp);
                 if let Some(t) = table
-                    && let Some((e, len)) = t.lookup(m, d2z, p - m)
+                    && let Some((s, len)) = t.lookup(m, d2z, p - m)
                 {
-                    let (next, jac) = if e.linear(d2z) {
-                        (cadd(cmul(e.first.a, dz), cmul(e.first.b, dc)), e.first.a)
+                    let linear = s.linear(d2z);
+                    let (next, jac, jc) = if linear {
+                        (cadd(cmul(s.first.a, dz), cmul(s.first.b, dc)), s.first.a, s.first.b)
                     } else {
-                        let (next, jac, _) = e.apply_with_jacobian(dz, dc);
-                        (next, jac)
+                        s.apply_with_jacobian(dz, dc)
                     };
+                    let a2 = Scaled::from_f64(s.second.a2).ldexp(1);
+                    if C {
+                        let mix = if linear { Scaled::ZERO } else { a2 * e + Scaled::from_f64(s.second.ab) };
+                        f = Scaled::from_f64(jac) * f + d() * mix;
+                        e = Scaled::from_f64(jac) * e + Scaled::from_f64(jc);
+                    }
                     if second {
-                        let d = Scaled::new(d1.mant, d1.exp);
-                        let a2 = Scaled::from_f64(e.second.a2).ldexp(1);
-                        d2 = Scaled::from_f64(jac) * d2 + a2 * d.square();
+                        d2 = Scaled::from_f64(jac) * d2 + a2 * d().square();
                     }
                     d1.mul(jac);
                     (dz, m) = (next, m + len);
                     continue;
                 }
+                if C {
+                    f = (d() * e + Scaled::from_f64(full) * f).ldexp(1);
+                    e = (Scaled::from_f64(full) * e).ldexp(1) + Scaled::from_f64([1.0, 0.0]);
+                }
                 if second {
-                    let d = Scaled::new(d1.mant, d1.exp);
-                    d2 = (d.square() + Scaled::from_f64(full) * d2).ldexp(1);
+                    d2 = (d().square() + Scaled::from_f64(full) * d2).ldexp(1);
                 }
                 d1.mul([full[0] * 2.0, full[1] * 2.0]);
                 dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
@@ -921,7 +955,8 @@ impl Perturbation {
             }
             z = cadd(r.get(p), dz);
         }
-        Some(interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2.to_fe()) })
+        let turn = interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2.to_fe()) };
+        Some((turn, C.then(|| interior::Sensitivity { dc: e.to_fe(), dwc: f.to_fe() })))
     }
 
     /// Interior detection's check (one that never fires when it is off).
@@ -955,7 +990,129 @@ impl Perturbation {
     /// `single_d2` run several samples to a vector (`perturb/lanes.rs`); with `scalar`,
     /// `LANES` samples at a time in the f64 phase (samples in their FloatExp phase run one at
     /// a time).
+    ///
+    /// In a view centred on a nucleus with interior detection on, runs of samples that lie
+    /// in the minibrot's cardioid are first found interior together (`Perturbation::certified_disks`):
+    /// the same N as iterating them, since each is interior.
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
+        let Some(done) = self.certified_disks(offsets, counters) else {
+            return self.orbits_each(offsets, out, counters, simd);
+        };
+        let rest: Vec<usize> = (0..offsets.len()).filter(|&k| !done[k]).collect();
+        let at: Vec<[f64; 2]> = rest.iter().map(|&k| offsets[k]).collect();
+        let mut each = vec![Orbit::interior(); at.len()];
+        self.orbits_each(&at, &mut each, counters, simd);
+        for (k, d) in done.iter().enumerate() {
+            if *d {
+                out[k] = Orbit::interior();
+            }
+        }
+        for (&k, o) in rest.iter().zip(each) {
+            out[k] = o;
+        }
+    }
+
+    /// The samples of a batch that lie in disks of parameters certified interior
+    /// ([`interior::disk_attracting`]), marked, and counted into `counters`; None where
+    /// there are none, or the view is not one where they are looked for: a Mandelbrot view
+    /// centred on a nucleus, with interior detection on and f64 deltas (the Newton test's
+    /// arithmetic).
+    ///
+    /// The batch is halved until its parts are below [`DISK_MIN`] samples: a part is tried
+    /// as one disk, the one around its samples' bounding box, where the quadratic model
+    /// puts that disk well inside the minibrot's cardioid (its parameter c' = K δc, K = Λ
+    /// ∂Z_p/∂c at the nucleus, with the model's multiplier μ = 1 - sqrt(1 - 4 c'): |μ| plus
+    /// twice its change across the disk below 1); then Newton's method finds the cycle at
+    /// the disk's centre from the model's fixed point, and the disk certificate decides. A
+    /// batch of rows thus tries whole stretches of a row, and halves them near the cardioid's
+    /// edge; what no disk covers is iterated as before.
+    fn certified_disks(&self, offsets: &[[f64; 2]], counters: &mut Counters) -> Option<Vec<bool>> {
+        let (p, lam) = (self.newton_period()?, self.renormal?);
+        if !self.disks || self.numbers != Numbers::F64 || offsets.len() < DISK_MIN {
+            return None;
+        }
+        let (_, sens) = self.return_map_with::<true>([0.0; 2], [0.0; 2], p, 1, false)?;
+        let scale = cmul(lam, sens?.dc);
+        let mut done = vec![false; offsets.len()];
+        let mut idx: Vec<usize> = (0..offsets.len()).collect();
+        let found = self.disks_in(offsets, &mut idx, &mut done, (p, lam, scale));
+        counters.interior += found;
+        counters.newton += found;
+        counters.disks += found;
+        (found > 0).then_some(done)
+    }
+
+    /// `Perturbation::certified_disks` on a part of the batch, the samples `idx` (reordered here).
+    fn disks_in(
+        &self,
+        offsets: &[[f64; 2]],
+        idx: &mut [usize],
+        done: &mut [bool],
+        model: (u32, [FloatExp; 2], [FloatExp; 2]),
+    ) -> u64 {
+        if idx.len() < DISK_MIN {
+            return 0;
+        }
+        let (lo, hi) = idx.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), &k| {
+            let o = offsets[k];
+            ([lo[0].min(o[0]), lo[1].min(o[1])], [hi[0].max(o[0]), hi[1].max(o[1])])
+        });
+        let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+        // Half the box's diagonal, a little more for the rounding of the centre.
+        let r = ((hi[0] - lo[0]) / 2.0).hypot((hi[1] - lo[1]) / 2.0) * (1.0 + 1e-9);
+        if self.disk_interior(centre, r, model) {
+            for &k in idx.iter() {
+                done[k] = true;
+            }
+            return idx.len() as u64;
+        }
+        if idx.len() < 2 * DISK_MIN {
+            return 0;
+        }
+        // Halved across the box's longer side, so that the parts tend to squares.
+        let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
+        let h = idx.len() / 2;
+        idx.select_nth_unstable_by(h, |&a, &b| offsets[a][axis].total_cmp(&offsets[b][axis]));
+        let (a, b) = idx.split_at_mut(h);
+        self.disks_in(offsets, a, done, model) + self.disks_in(offsets, b, done, model)
+    }
+
+    /// Whether the disk of radius `r` about `centre` (offsets, in spacings) is certified
+    /// interior (`Perturbation::certified_disks`).
+    fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> bool {
+        let (sp, o) = (self.spacing, self.origin);
+        let dc_fe = [o[0] + sp.mul_f64(centre[0]), o[1] + sp.mul_f64(centre[1])];
+        let dc = cto_f64(dc_fe);
+        let rho = sp.mul_f64(r).to_f64();
+        let normal = |x: f64| x == 0.0 || x.is_normal();
+        if !(normal(dc[0]) && normal(dc[1]) && rho.is_normal()) {
+            return false;
+        }
+        // The model's gate.
+        let cm = cto_f64(cmul(scale, dc_fe));
+        let rm = norm2(scale).sqrt().mul_f64(rho).to_f64();
+        let Some(z) = model_fixed_point(cm) else { return false };
+        // In the model the certificate's bounds come to about |μ| + 6 r' / |1 - μ| for the
+        // multiplier and 5 r' / |1 - μ|^2 for Kantorovich's h (r' the disk's radius there).
+        let mu = [2.0 * z[0], 2.0 * z[1]];
+        let gap = norm2([1.0 - mu[0], -mu[1]]).sqrt();
+        let fits = norm2(mu).sqrt() + 6.3 * rm / gap < 1.0 && 5.3 * rm < 0.25 * gap * gap;
+        if !fits {
+            return false;
+        }
+        let w0 = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+        let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, 1, second)) else {
+            return false;
+        };
+
+        interior::disk_attracting(w, rho, |w, shift| {
+            let (t, s) = self.return_map_with::<true>(w, [dc[0] + shift[0], dc[1] + shift[1]], p, 1, true)?;
+            Some((t, s?))
+        })
+    }
+
+    /// [`Perturbation::orbits`] for samples each iterated.
+    fn orbits_each(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
         if lanes::orbits(self, offsets, out, counters, simd) {
             return;
         }
@@ -1712,7 +1869,8 @@ mod tests {
     /// time through `orbit`, with interior detection off and on: bit for bit the same
     /// escape, z_n and derivative, and the same iteration, step and interior counts. Interior
     /// detection changes no sample's end but for stopping interior ones earlier (same N,
-    /// INTERIOR). Returns the samples found interior by detection.
+    /// INTERIOR). Returns the samples found interior by detection, and of those the samples in
+    /// certified disks.
     fn same_both_ways(
         center: [&str; 2],
         julia: Option<[&str; 2]>,
@@ -1721,9 +1879,9 @@ mod tests {
         numbers: Numbers,
         bla: Option<f64>,
         dense_limit: Option<u32>,
-    ) -> u64 {
+    ) -> (u64, u64) {
         let (w, h) = (32i32, 24i32);
-        let mut found = 0;
+        let (mut found, mut disks) = (0, 0);
         for derivative in [false, true] {
             let mut without: Option<Vec<Orbit>> = None;
             for interior in [Detection::Off, Detection::On] {
@@ -1770,10 +1928,27 @@ mod tests {
                     assert_eq!(bits(&o), bits(&one[k]), "{what}: sample {k} differs through the general loop");
                 }
                 assert_eq!(c_general, c_one, "{what}: counts through the general loop");
+                // With disks, the same bits, and the same samples found interior, as each
+                // sample iterated; without them, the same counts too.
+                let each = Perturbation {
+                    refs: p.refs.clone(),
+                    bla_fe: p.bla_fe.clone(),
+                    bla_f64: p.bla_f64.clone(),
+                    disks: false,
+                    ..p
+                };
+                let mut with_disks = vec![Orbit::interior(); offsets.len()];
+                let mut c_disks = Counters::default();
+                p.orbits(&offsets, &mut with_disks, &mut c_disks, SimdLevel::Scalar);
+                for k in 0..offsets.len() {
+                    assert_eq!(bits(&with_disks[k]), bits(&one[k]), "{what} with disks: sample {k}");
+                }
+                assert_eq!((c_disks.interior, c_disks.newton), (c_one.interior, c_one.newton), "{what} with disks");
+                disks += c_disks.disks;
                 for simd in SimdLevel::usable() {
                     let mut many = vec![Orbit::interior(); offsets.len()];
                     let mut c_many = Counters::default();
-                    p.orbits(&offsets, &mut many, &mut c_many, simd);
+                    each.orbits(&offsets, &mut many, &mut c_many, simd);
                     for k in 0..offsets.len() {
                         assert_eq!(bits(&many[k]), bits(&one[k]), "{what} {simd}: sample {k}");
                         escaped += (one[k].n != crate::formula::end::INTERIOR) as u32;
@@ -1800,7 +1975,7 @@ mod tests {
                 }
             }
         }
-        found
+        (found, disks)
     }
 
     #[test]
@@ -1874,15 +2049,17 @@ mod tests {
     fn lanes_match_one_sample_at_a_time_with_interior_found() {
         let eps = Some(crate::orbit::DEFAULT_BLA_TOLERANCE);
         for (numbers, bla) in [(Numbers::F64, eps), (Numbers::FloatExp, eps), (Numbers::F64, None)] {
-            let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, numbers, bla, None);
+            let (found, disks) = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, numbers, bla, None);
             assert!(found > 100, "{numbers:?} {bla:?}: {found} samples found interior");
+            // Disks need f64 deltas (Newton's arithmetic).
+            assert_eq!(disks > 0, numbers == Numbers::F64, "{numbers:?} {bla:?}: {disks} samples in disks");
         }
         // A nucleus's reference packed before its period ends: no Newton test, found by
         // the contraction alone.
-        let found = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, Numbers::F64, eps, Some(700));
+        let (found, _) = same_both_ways(EYE_MINIBROT, None, "1e-102", 100_000, Numbers::F64, eps, Some(700));
         assert!(found > 100, "packed after 700: {found} samples found interior");
         // The whole of a Julia set whose parameter is inside the period-3 bulb (the rabbit).
-        let found = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps, None);
+        let (found, _) = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps, None);
         assert!(found > 100, "rabbit: {found} samples found interior");
     }
 }

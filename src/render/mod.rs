@@ -167,6 +167,8 @@ pub struct DeepStats {
     pub interior_samples: u64,
     /// Of those, the samples Newton's test found (in views centred on a nucleus).
     pub interior_newton_samples: u64,
+    /// Of those, the samples in disks of parameters certified at once, not iterated.
+    pub interior_disk_samples: u64,
 }
 
 /// What a render did.
@@ -521,6 +523,7 @@ pub fn render<P: Send>(
             interior_threshold: d.interior.map(|c| c.below2.to_f64()),
             interior_samples: c.interior,
             interior_newton_samples: c.newton,
+            interior_disk_samples: c.disks,
         }
     });
     let precision = match plan.kind {
