@@ -133,6 +133,14 @@ impl Contraction {
         Contraction { mant: v.ldexp(-exp).to_f64(), exp, lo: lo.to_f64() }
     }
 
+    /// The state of a sample whose contraction is no longer followed (it has left interior
+    /// detection: its steps may or may not multiply it further): 2^(2^30), which no run of
+    /// steps within an iteration limit can bring below a threshold, except an orbit that
+    /// lands on 0 exactly (a superattracting cycle: interior indeed).
+    pub fn dropped(check: Check) -> Contraction {
+        Contraction::new(FloatExp::new(1.0, 1 << 30), check)
+    }
+
     /// The value, exactly.
     pub fn value(self) -> FloatExp {
         FloatExp::new(self.mant, self.exp)

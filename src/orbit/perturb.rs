@@ -57,6 +57,9 @@ const MAX_CYCLE_PERIODS: u32 = 8;
 /// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
 /// iteration limit holds [`MODEL_TURNS_SPARE`] such tests.
 const MODEL_MAX_PERIODS: u32 = 1024;
+/// Iterations of the quadratic model's orbit at most in a disk's gate (bulbs of period up to
+/// [`MAX_CYCLE_PERIODS`] settle within this where a disk can be certified).
+const DISK_MODEL_ITERATIONS: u32 = 256;
 /// The fewest samples `Perturbation::certified_disks` tries a disk for.
 const DISK_MIN: usize = 8;
 /// A sample's [`Probe::at`] once it is to try no more Newton tests.
@@ -103,10 +106,15 @@ enum Model {
 /// seen within about 2 k steps of settling, at one comparison per step (testing every
 /// candidate period from fixed checkpoints costs k steps per checkpoint).
 fn model_settled_cycle(c: [f64; 2]) -> Model {
+    model_cycle_within(c, MODEL_ITERATIONS)
+}
+
+/// [`model_settled_cycle`] within `iterations`.
+fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
     let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
     let (mut z, mut anchor) = ([0.0, 0.0], [0.0, 0.0]);
     let (mut since, mut span) = (0u32, 1u32);
-    for _ in 0..MODEL_ITERATIONS {
+    for _ in 0..iterations {
         z = step(z);
         // A c that is not a number escapes too.
         let r2 = norm2(z);
@@ -122,6 +130,16 @@ fn model_settled_cycle(c: [f64; 2]) -> Model {
         }
     }
     Model::Unsettled
+}
+
+/// The multiplier of the k-cycle of z -> z^2 + c through `z`: the product of 2 z_i round it.
+fn model_multiplier(c: [f64; 2], mut z: [f64; 2], k: u32) -> [f64; 2] {
+    let mut mu = [1.0, 0.0];
+    for _ in 0..k {
+        mu = cmul(mu, [2.0 * z[0], 2.0 * z[1]]);
+        z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+    }
+    mu
 }
 
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
@@ -448,7 +466,9 @@ struct Sample<D> {
 /// What a sample remembers for interior detection's Newton test, at the ends of the periods
 /// of a nucleus's reference: the iteration from which it may run, and an anchor (an end
 /// earlier, its full value, the binary exponent of |dz/dz|^2 there, and the squared distance
-/// from its value to the next end's).
+/// from its value to the next end's); and whether it has left interior detection
+/// altogether (`plain`: its quadratic model escaped, and its |dz/dz|^2 is
+/// [`Contraction::dropped`]).
 #[derive(Debug, Clone, Copy)]
 struct Probe {
     at: u32,
@@ -456,6 +476,7 @@ struct Probe {
     anchor_exp: i32,
     anchor: [f64; 2],
     first2: f64,
+    plain: bool,
 }
 
 impl Probe {
@@ -723,7 +744,7 @@ impl Perturbation {
         let shrink = self.interior.map_or(Contraction::IDLE, |c| Contraction::new(FloatExp::ONE, c));
         // The first Newton test at the end of the second period, if the first contracted.
         let at = self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2));
-        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0 };
+        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0, plain: false };
         let (mut start, add_fe) = if self.mandelbrot {
             (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink, probe }, self.spacing)
         } else {
@@ -838,6 +859,8 @@ impl Perturbation {
                 }
                 Some(Model::Escapes) => {
                     pr.at = NEVER;
+                    pr.plain = true;
+                    s.shrink = Contraction::dropped(self.check());
                     return false;
                 }
                 _ => {}
@@ -1091,22 +1114,39 @@ impl Perturbation {
         // The model's gate.
         let cm = cto_f64(cmul(scale, dc_fe));
         let rm = norm2(scale).sqrt().mul_f64(rho).to_f64();
-        let Some(z) = model_fixed_point(cm) else { return false };
-        // In the model the certificate's bounds come to about |μ| + 6 r' / |1 - μ| for the
-        // multiplier and 5 r' / |1 - μ|^2 for Kantorovich's h (r' the disk's radius there).
-        let mu = [2.0 * z[0], 2.0 * z[1]];
-        let gap = norm2([1.0 - mu[0], -mu[1]]).sqrt();
-        let fits = norm2(mu).sqrt() + 6.3 * rm / gap < 1.0 && 5.3 * rm < 0.25 * gap * gap;
-        if !fits {
-            return false;
-        }
+        let (z, k) = if let Some(z) = model_fixed_point(cm) {
+            // In the model the certificate's bounds come to about |μ| + 6 r' / |1 - μ| for
+            // the multiplier and 5 r' / |1 - μ|^2 for Kantorovich's h (r' the disk's radius
+            // there).
+            let mu = [2.0 * z[0], 2.0 * z[1]];
+            let gap = norm2([1.0 - mu[0], -mu[1]]).sqrt();
+            let fits = norm2(mu).sqrt() + 6.3 * rm / gap < 1.0 && 5.3 * rm < 0.25 * gap * gap;
+            if !fits {
+                return false;
+            }
+            (z, 1)
+        } else {
+            // A bulb's k-cycle: its multiplier at the centre, and its change across the disk
+            // as the model's cycle at the disk's edge has it, with the same margin.
+            let Model::Cycle(z, k) = model_cycle_within(cm, DISK_MODEL_ITERATIONS) else { return false };
+            let edge = [cm[0] + rm, cm[1]];
+            let Model::Cycle(z_edge, k_edge) = model_cycle_within(edge, DISK_MODEL_ITERATIONS) else { return false };
+            if k > MAX_CYCLE_PERIODS || k_edge != k {
+                return false;
+            }
+            let (mu, mu_edge) = (model_multiplier(cm, z, k), model_multiplier(edge, z_edge, k));
+            let change = norm2([mu_edge[0] - mu[0], mu_edge[1] - mu[1]]).sqrt();
+            if norm2(mu).sqrt() + 4.5 * change >= 1.0 {
+                return false;
+            }
+            (z, k)
+        };
         let w0 = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-        let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, 1, second)) else {
+        let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, k, second)) else {
             return false;
         };
-
         interior::disk_attracting(w, rho, |w, shift| {
-            let (t, s) = self.return_map_with::<true>(w, [dc[0] + shift[0], dc[1] + shift[1]], p, 1, true)?;
+            let (t, s) = self.return_map_with::<true>(w, [dc[0] + shift[0], dc[1] + shift[1]], p, k, true)?;
             Some((t, s?))
         })
     }
@@ -1425,7 +1465,11 @@ impl Perturbation {
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
+            if INT && s.probe.plain {
+                self.apply_bla::<D, DER, false>((e, len), s, d2, der, ctx.add_fe, local);
+            } else {
+                self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
+            }
             if self.turn_loop
                 && !full_range
                 && traps.is_empty()
@@ -1465,6 +1509,9 @@ impl Perturbation {
         let last = r.last();
         if s.which != self.refs.len() - 1 || len == 0 || 1 + len != last {
             return None;
+        }
+        if INT && s.probe.plain {
+            return self.turns::<D, DER, false>(s, der, ctx, local);
         }
         let at = |m: u32| reference_value::<D>(|| r.get(m), || r.get_fe(m));
         let (z_end, z_one) = (at(last), at(1));
