@@ -48,6 +48,23 @@
 //! few periods for |λ| up to about 1 - 1e-5. The contraction criterion still decides
 //! everywhere else.
 //!
+//! # Disks
+//!
+//! Samples inside a minibrot's cardioid or one of its bulbs need not each be iterated and
+//! tested: [`disk_attracting`] extends Newton's certificate from the parameter at a disk's
+//! centre to the whole disk, with the value's and the multiplier's first derivatives in
+//! the parameter (carried through the turn) and a margin for the rest that it checks at
+//! the disk's edge. The engine tiles a batch of samples with such disks, halving it
+//! across its longer side until a part's disk passes (`Perturbation::orbits`); what no disk
+//! covers is iterated and tested as above. At the 1e102 minibrot view, 88% of the interior
+//! samples lie in certified disks.
+//!
+//! A sample whose one-period quadratic model escapes (its parameter lies outside the
+//! model's Mandelbrot set) leaves detection: no Newton test, and its |dz/dz|^2 is no longer
+//! followed ([`Contraction::dropped`]). Detection only ever saves time (a sample it does
+//! not stop runs to the limit, with the same N), so such a judgement can cost time where
+//! the model is wrong, never a wrong pixel.
+//!
 //! # Representation
 //!
 //! `mant · 2^exp`, the mantissa kept in a window [`LO`, [`Check::hi`]] by renormalisation

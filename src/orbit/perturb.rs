@@ -28,7 +28,9 @@
 //! (the |z|^2 of the escape test), a BLA step by the squared modulus of the step's Jacobian
 //! in the delta, and a rebase leaves it alone (the sample's z does not change, only the
 //! reference index). Where the reference is one period of a nucleus, each end of a turn
-//! may also try Newton's method for an attracting cycle (`Perturbation::newton_probe`).
+//! may also try Newton's method for an attracting cycle (`Perturbation::newton_probe`),
+//! and before any sample of a batch is iterated, disks of parameters in the minibrot's
+//! cardioid and bulbs are certified interior whole (`Perturbation::certified_disks`).
 //! It is off with traps, which must see every iteration.
 //!
 //! Where the reference is one period of a nucleus, samples near the minibrot go round it
