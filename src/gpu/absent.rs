@@ -24,4 +24,9 @@ impl GpuContext {
     pub fn adapter_name(&self) -> &str {
         match *self {}
     }
+
+    /// Unreachable: no context exists.
+    pub fn software(&self) -> bool {
+        match *self {}
+    }
 }

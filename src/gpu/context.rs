@@ -12,6 +12,8 @@ pub struct GpuContext {
     device: wgpu::Device,
     queue: wgpu::Queue,
     adapter_name: String,
+    /// The adapter is a CPU (a software rasteriser such as lavapipe).
+    software: bool,
     /// Binding layout of every compute pipeline (uniforms, texels, output words).
     layout: wgpu::BindGroupLayout,
     pipelines: Mutex<HashMap<&'static str, Arc<wgpu::ComputePipeline>>>,
@@ -81,6 +83,7 @@ impl GpuContext {
             device,
             queue,
             adapter_name: format!("{} ({:?})", info.name, info.backend),
+            software: info.device_type == wgpu::DeviceType::Cpu,
             layout,
             pipelines: Mutex::new(HashMap::new()),
         })
@@ -96,6 +99,13 @@ impl GpuContext {
     /// The adapter's name and backend, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
     pub fn adapter_name(&self) -> &str {
         &self.adapter_name
+    }
+
+    /// True when the adapter runs on the CPU (lavapipe): its f32 arithmetic is the CPU's,
+    /// correctly rounded, where WGSL lets a GPU divide to 2.5 ULP and fuse a multiply with
+    /// an add.
+    pub fn software(&self) -> bool {
+        self.software
     }
 
     /// The device.
