@@ -79,7 +79,9 @@ const MODEL_SETTLED2: f64 = 1e-12;
 /// or not a number (an overflowed c).
 fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
     let (x, y) = (1.0 - 4.0 * c[0], -4.0 * c[1]);
-    let r = x.hypot(y);
+    // Not hypot (a libm call): an |x| or |y| past 1e154 makes r infinite and the multiplier
+    // not a number, which is refused below as it should be.
+    let r = (x * x + y * y).sqrt();
     let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
     let mult = [1.0 - sq[0], -sq[1]];
     if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
@@ -113,14 +115,20 @@ fn model_settled_cycle(c: [f64; 2]) -> Model {
 
 /// [`model_settled_cycle`] within `iterations`.
 fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
-    let step = |z: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-    let (mut z, mut anchor) = ([0.0, 0.0], [0.0, 0.0]);
+    // A parameter that is not a number escapes at once; from a finite one the orbit stays
+    // finite until it escapes, so the loop tests |z|^2 > 4 alone.
+    if !(c[0].is_finite() && c[1].is_finite()) {
+        return Model::Escapes;
+    }
+    // The products of z that the escape test takes are those the next step needs: x^2 - y^2
+    // and 2 x y (as xy + xy, the same bits).
+    let (mut x2, mut y2, mut xy) = (0.0, 0.0, 0.0);
+    let mut anchor = [0.0, 0.0];
     let (mut since, mut span) = (0u32, 1u32);
     for _ in 0..iterations {
-        z = step(z);
-        // A c that is not a number escapes too.
-        let r2 = norm2(z);
-        if r2 > 4.0 || r2.is_nan() {
+        let z = [x2 - y2 + c[0], xy + xy + c[1]];
+        (x2, y2, xy) = (z[0] * z[0], z[1] * z[1], z[0] * z[1]);
+        if x2 + y2 > 4.0 {
             return Model::Escapes;
         }
         since += 1;
