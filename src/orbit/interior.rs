@@ -381,7 +381,7 @@ pub struct Sensitivity {
 /// order, the same size in every direction).
 ///
 /// This is Newton's certificate made to cover many samples at once: a view centred on a
-/// minibrot tiles its cardioid with such disks (`Perturbation::orbits`), and each sample in
+/// minibrot tiles its cardioid and bulbs with such disks (`Perturbation::orbits`), and each sample in
 /// a certified disk is interior without an iteration of its own.
 pub fn disk_attracting(
     w: [f64; 2],

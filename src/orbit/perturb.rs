@@ -280,9 +280,9 @@ pub struct Perturbation {
     /// period-aligned step back to the end) in a loop of their own; false runs them through
     /// the general loop, which gives the same bits (for tests and measurements).
     pub turn_loop: bool,
-    /// Find the samples of a batch that lie in the minibrot's cardioid together, by disks of
-    /// parameters certified interior (`Perturbation::certified_disks`): true by default; false
-    /// iterates each sample, for comparing the two.
+    /// Find the samples of a batch that lie in the minibrot's cardioid or bulbs together, by
+    /// disks of parameters certified interior (`Perturbation::certified_disks`): true by
+    /// default; false iterates each sample, for comparing the two.
     pub disks: bool,
     /// Seconds the reference orbit(s) took.
     pub orbit_seconds: f64,
@@ -1024,9 +1024,10 @@ impl Perturbation {
     /// `LANES` samples at a time in the f64 phase (samples in their FloatExp phase run one at
     /// a time).
     ///
-    /// In a view centred on a nucleus with interior detection on, runs of samples that lie
-    /// in the minibrot's cardioid are first found interior together (`Perturbation::certified_disks`):
-    /// the same N as iterating them, since each is interior.
+    /// In a view centred on a nucleus with interior detection on, groups of samples that lie
+    /// in the minibrot's cardioid or bulbs are first found interior together
+    /// (`Perturbation::certified_disks`): the same N as iterating them, since each is
+    /// interior.
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
         let Some(done) = self.certified_disks(offsets, counters) else {
             return self.orbits_each(offsets, out, counters, simd);
@@ -1051,14 +1052,12 @@ impl Perturbation {
     /// centred on a nucleus, with interior detection on and f64 deltas (the Newton test's
     /// arithmetic).
     ///
-    /// The batch is halved until its parts are below [`DISK_MIN`] samples: a part is tried
-    /// as one disk, the one around its samples' bounding box, where the quadratic model
-    /// puts that disk well inside the minibrot's cardioid (its parameter c' = K δc, K = Λ
-    /// ∂Z_p/∂c at the nucleus, with the model's multiplier μ = 1 - sqrt(1 - 4 c'): |μ| plus
-    /// twice its change across the disk below 1); then Newton's method finds the cycle at
-    /// the disk's centre from the model's fixed point, and the disk certificate decides. A
-    /// batch of rows thus tries whole stretches of a row, and halves them near the cardioid's
-    /// edge; what no disk covers is iterated as before.
+    /// The batch is tried as one disk, the one around its samples' bounding box, and halved
+    /// across the box's longer side (so that the parts tend to squares) while it fails, down
+    /// to [`DISK_MIN`] samples. A disk is tried where the quadratic model puts it well inside
+    /// the minibrot's cardioid or one of its bulbs (`Perturbation::disk_interior`); then
+    /// Newton's method finds the cycle at the disk's centre from the model's, and the disk
+    /// certificate decides. What no disk covers is iterated as before.
     fn certified_disks(&self, offsets: &[[f64; 2]], counters: &mut Counters) -> Option<Vec<bool>> {
         let (p, lam) = (self.newton_period()?, self.renormal?);
         if !self.disks || self.numbers != Numbers::F64 || offsets.len() < DISK_MIN {
@@ -1111,7 +1110,12 @@ impl Perturbation {
     }
 
     /// Whether the disk of radius `r` about `centre` (offsets, in spacings) is certified
-    /// interior (`Perturbation::certified_disks`).
+    /// interior (`Perturbation::certified_disks`). The gate: the model's parameter
+    /// c' = K δc (K = Λ ∂Z_p/∂c at the nucleus) and the disk's radius there r' = |K| rho. In
+    /// the cardioid the model's multiplier is μ = 1 - sqrt(1 - 4 c') and the certificate's
+    /// bounds come to what is tested below; in a bulb of period k up to
+    /// [`MAX_CYCLE_PERIODS`], the multiplier of the model's k-cycle at the centre and at the
+    /// disk's edge stand in for them.
     fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> bool {
         let (sp, o) = (self.spacing, self.origin);
         let dc_fe = [o[0] + sp.mul_f64(centre[0]), o[1] + sp.mul_f64(centre[1])];
@@ -1137,7 +1141,8 @@ impl Perturbation {
             (z, 1)
         } else {
             // A bulb's k-cycle: its multiplier at the centre, and its change across the disk
-            // as the model's cycle at the disk's edge has it, with the same margin.
+            // as the model's cycle at the disk's edge has it, taken 4.5 times (as the
+            // cardioid's bounds take theirs about 3 times, with room for Kantorovich's h).
             let Model::Cycle(z, k) = model_cycle_within(cm, DISK_MODEL_ITERATIONS) else { return false };
             let edge = [cm[0] + rm, cm[1]];
             let Model::Cycle(z_edge, k_edge) = model_cycle_within(edge, DISK_MODEL_ITERATIONS) else { return false };
