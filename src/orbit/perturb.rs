@@ -1999,14 +1999,17 @@ mod tests {
                     disks: false,
                     ..p
                 };
-                let mut with_disks = vec![Orbit::interior(); offsets.len()];
-                let mut c_disks = Counters::default();
-                p.orbits(&offsets, &mut with_disks, &mut c_disks, SimdLevel::Scalar);
-                for k in 0..offsets.len() {
-                    assert_eq!(bits(&with_disks[k]), bits(&one[k]), "{what} with disks: sample {k}");
+                for simd in SimdLevel::usable() {
+                    let mut with_disks = vec![Orbit::interior(); offsets.len()];
+                    let mut c_disks = Counters::default();
+                    p.orbits(&offsets, &mut with_disks, &mut c_disks, simd);
+                    for k in 0..offsets.len() {
+                        assert_eq!(bits(&with_disks[k]), bits(&one[k]), "{what} {simd} with disks: sample {k}");
+                    }
+                    let counts = |c: &Counters| (c.interior, c.newton);
+                    assert_eq!(counts(&c_disks), counts(&c_one), "{what} {simd} with disks");
+                    disks += c_disks.disks;
                 }
-                assert_eq!((c_disks.interior, c_disks.newton), (c_one.interior, c_one.newton), "{what} with disks");
-                disks += c_disks.disks;
                 for simd in SimdLevel::usable() {
                     let mut many = vec![Orbit::interior(); offsets.len()];
                     let mut c_many = Counters::default();
