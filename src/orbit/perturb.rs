@@ -90,6 +90,18 @@ fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
     Some([mult[0] / 2.0, mult[1] / 2.0])
 }
 
+/// What a disk of parameters was found to be ([`Perturbation::disk_interior`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Disk {
+    /// Certified interior.
+    Interior,
+    /// Not certified; smaller disks inside it may be.
+    Failed,
+    /// Far outside the model's Mandelbrot set, it and every smaller disk of its parts: not
+    /// worth halving.
+    Outside,
+}
+
 /// What the orbit of 0 under the quadratic model z -> z^2 + c does.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Model {
@@ -140,6 +152,27 @@ fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
         }
     }
     Model::Unsettled
+}
+
+/// True when the orbit of 0 under z -> z^2 + c escapes within `iterations` and the
+/// distance estimate puts c farther than `r` from the Mandelbrot set: with the estimate
+/// d = 2 |z| ln|z| / |dz/dc| taken where |z| has passed 1e4, Koebe's quarter theorem keeps
+/// the true distance above d / 4 (as |z| grows), so c is taken as far where d / 4 > r.
+fn model_far(c: [f64; 2], r: f64, iterations: u32) -> bool {
+    let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
+    for _ in 0..iterations {
+        dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
+        z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        let r2 = norm2(z);
+        if r2 > 1e8 {
+            let size = r2.sqrt();
+            return 2.0 * size * size.ln() / norm2(dz).sqrt() > 4.0 * r;
+        }
+        if r2.is_nan() {
+            return false;
+        }
+    }
+    false
 }
 
 /// The multiplier of the k-cycle of z -> z^2 + c through `z`: the product of 2 z_i round it.
@@ -1092,11 +1125,16 @@ impl Perturbation {
         let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         // Half the box's diagonal, a little more for the rounding of the centre.
         let r = ((hi[0] - lo[0]) / 2.0).hypot((hi[1] - lo[1]) / 2.0) * (1.0 + 1e-9);
-        if self.disk_interior(centre, r, model) {
-            for &k in idx.iter() {
-                done[k] = true;
+        match self.disk_interior(centre, r, model) {
+            Disk::Interior => {
+                for &k in idx.iter() {
+                    done[k] = true;
+                }
+                return idx.len() as u64;
             }
-            return idx.len() as u64;
+            // Every part's disk lies within twice this one's radius of its centre.
+            Disk::Outside => return 0,
+            Disk::Failed => {}
         }
         if idx.len() < 2 * DISK_MIN {
             return 0;
@@ -1116,14 +1154,14 @@ impl Perturbation {
     /// bounds come to what is tested below; in a bulb of period k up to
     /// [`MAX_CYCLE_PERIODS`], the multiplier of the model's k-cycle at the centre and at the
     /// disk's edge stand in for them.
-    fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> bool {
+    fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> Disk {
         let (sp, o) = (self.spacing, self.origin);
         let dc_fe = [o[0] + sp.mul_f64(centre[0]), o[1] + sp.mul_f64(centre[1])];
         let dc = cto_f64(dc_fe);
         let rho = sp.mul_f64(r).to_f64();
         let normal = |x: f64| x == 0.0 || x.is_normal();
         if !(normal(dc[0]) && normal(dc[1]) && rho.is_normal()) {
-            return false;
+            return Disk::Failed;
         }
         // The model's gate.
         let cm = cto_f64(cmul(scale, dc_fe));
@@ -1136,34 +1174,41 @@ impl Perturbation {
             let gap = norm2([1.0 - mu[0], -mu[1]]).sqrt();
             let fits = norm2(mu).sqrt() + 6.3 * rm / gap < 1.0 && 5.3 * rm < 0.25 * gap * gap;
             if !fits {
-                return false;
+                return Disk::Failed;
             }
             (z, 1)
         } else {
             // A bulb's k-cycle: its multiplier at the centre, and its change across the disk
             // as the model's cycle at the disk's edge has it, taken 4.5 times (as the
             // cardioid's bounds take theirs about 3 times, with room for Kantorovich's h).
-            let Model::Cycle(z, k) = model_cycle_within(cm, DISK_MODEL_ITERATIONS) else { return false };
+            let (z, k) = match model_cycle_within(cm, DISK_MODEL_ITERATIONS) {
+                Model::Cycle(z, k) => (z, k),
+                Model::Escapes if model_far(cm, 2.0 * rm, DISK_MODEL_ITERATIONS) => return Disk::Outside,
+                _ => return Disk::Failed,
+            };
             let edge = [cm[0] + rm, cm[1]];
-            let Model::Cycle(z_edge, k_edge) = model_cycle_within(edge, DISK_MODEL_ITERATIONS) else { return false };
+            let Model::Cycle(z_edge, k_edge) = model_cycle_within(edge, DISK_MODEL_ITERATIONS) else {
+                return Disk::Failed;
+            };
             if k > MAX_CYCLE_PERIODS || k_edge != k {
-                return false;
+                return Disk::Failed;
             }
             let (mu, mu_edge) = (model_multiplier(cm, z, k), model_multiplier(edge, z_edge, k));
             let change = norm2([mu_edge[0] - mu[0], mu_edge[1] - mu[1]]).sqrt();
             if norm2(mu).sqrt() + 4.5 * change >= 1.0 {
-                return false;
+                return Disk::Failed;
             }
             (z, k)
         };
         let w0 = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
         let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, k, second)) else {
-            return false;
+            return Disk::Failed;
         };
-        interior::disk_attracting(w, rho, |w, shift| {
+        let certified = interior::disk_attracting(w, rho, |w, shift| {
             let (t, s) = self.return_map_with::<true>(w, [dc[0] + shift[0], dc[1] + shift[1]], p, k, true)?;
             Some((t, s?))
-        })
+        });
+        if certified { Disk::Interior } else { Disk::Failed }
     }
 
     /// [`Perturbation::orbits`] for samples each iterated.
@@ -1828,6 +1873,44 @@ mod tests {
         assert_eq!(model_settled_cycle([f64::NAN, 0.0]), Model::Escapes);
         // The Feigenbaum point: its orbit neither escapes nor settles on a short cycle.
         assert_eq!(model_settled_cycle([-1.401155189092051, 0.0]), Model::Unsettled);
+    }
+
+    /// A parameter the distance estimate calls far from the Mandelbrot set is: every point
+    /// of a sweep of disks it calls far escapes (none is in the set), and parameters inside
+    /// the set or beside it are never far.
+    #[test]
+    fn model_far_is_far() {
+        let escapes = |c: [f64; 2]| {
+            let mut z = [0.0f64, 0.0];
+            (0..20000).any(|_| {
+                z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+                norm2(z) > 4.0
+            })
+        };
+        assert!(model_far([3.0, 0.0], 0.5, 256));
+        assert!(!model_far([0.0, 0.0], 1e-9, 256));
+        assert!(!model_far([-0.75, 0.1], 0.01, 256));
+        assert!(!model_far([0.26, 0.0], 0.1, 256));
+        let mut far = 0;
+        for i in 0..60 {
+            for j in 0..60 {
+                let c = [-2.5 + 3.5 * i as f64 / 60.0, -1.5 + 3.0 * j as f64 / 60.0];
+                for r in [0.01, 0.05, 0.2] {
+                    if !model_far(c, r, 256) {
+                        continue;
+                    }
+                    far += 1;
+                    for k in 0..16 {
+                        for t in [0.5, 1.0] {
+                            let a = std::f64::consts::TAU * k as f64 / 16.0;
+                            let e = [c[0] + t * r * a.cos(), c[1] + t * r * a.sin()];
+                            assert!(escapes(e), "{c:?} called farther than {r} from the set, but {e:?} is in it");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(far > 1000, "only {far} disks called far");
     }
 
     /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
