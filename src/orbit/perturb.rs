@@ -765,6 +765,42 @@ fn start_arithmetic<T: Real>(
     (cconv(d), moved)
 }
 
+/// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`]):
+/// the spacing, the origin, the common steps' coefficients and the offset are zero or
+/// within exponents that keep every product and sum the start forms a normal f64, where
+/// FloatExp's operations give the bits f64's give (its mantissa products and sums are f64
+/// operations, rounded alike; its alignment by powers of two is exact).
+///
+/// Without an origin or a derivative (a render of its own, no distance layer) the window
+/// follows the view: δc = spacing · offset has an exponent within the spacing's plus
+/// [-60, 41], and each product the start forms (K δc, K δc δc) must lie within 2^±900, so
+/// that each sum of two of them (cancelling at most 53 bits) stays normal too. Otherwise
+/// fixed windows cover the origin's sum and the derivative's products.
+fn start_fits_f64(
+    spacing: FloatExp,
+    origin: [FloatExp; 2],
+    common: Option<&[[FloatExp; 2]; 2]>,
+    derivative: bool,
+    offset: [f64; 2],
+) -> bool {
+    let o = |x: f64| x == 0.0 || (2f64.powi(-60)..=2f64.powi(40)).contains(&x.abs());
+    if !(o(offset[0]) && o(offset[1])) {
+        return false;
+    }
+    let coefficients = || common.into_iter().flatten().flatten().filter(|v| !v.is_zero());
+    if origin == [FloatExp::ZERO; 2] && !derivative && !spacing.is_zero() {
+        let within = |lo: i32, hi: i32| lo >= -900 && hi <= 900;
+        let d = (spacing.exponent() - 60, spacing.exponent() + 41);
+        return within(d.0, d.1)
+            && coefficients().all(|v| {
+                let e = v.exponent();
+                within(e + d.0, e + d.1) && within(e + 2 * d.0, e + 2 * d.1)
+            });
+    }
+    let fits = |v: FloatExp, lo: i32, hi: i32| v.is_zero() || (lo..=hi).contains(&v.exponent());
+    fits(spacing, -250, 0) && origin.iter().all(|&v| fits(v, -250, 40)) && coefficients().all(|&v| fits(v, -250, 250))
+}
+
 /// Samples the interleaved loop keeps in flight: their dependency chains (each step waits
 /// for the previous one's multiply-adds) overlap in the out-of-order core. Measured by
 /// alternating binaries (liiiines, 1e50 view): 2 lanes beat 1, 3, 4 and 8 (4 lanes: 25%
@@ -812,19 +848,10 @@ impl Perturbation {
         (start, der, add_fe)
     }
 
-    /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`]):
-    /// the spacing, the origin, the common steps' coefficients and the offset are zero or
-    /// within exponents that keep every product and sum the start forms a normal f64, where
-    /// FloatExp's operations give the bits f64's give (its mantissa products and sums are
-    /// f64 operations, rounded alike; its alignment by powers of two is exact).
+    /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`],
+    /// [`start_fits_f64`]).
     fn start_in_f64(&self, offset: [f64; 2]) -> bool {
-        let fits = |v: FloatExp, lo: i32, hi: i32| v.is_zero() || (lo..=hi).contains(&v.exponent());
-        let o = |x: f64| x == 0.0 || (2f64.powi(-60)..=2f64.powi(40)).contains(&x.abs());
-        o(offset[0])
-            && o(offset[1])
-            && fits(self.spacing, -250, 0)
-            && self.origin.iter().all(|&v| fits(v, -250, 40))
-            && self.skip.as_ref().is_none_or(|k| k.k.iter().flatten().all(|&v| fits(v, -250, 250)))
+        start_fits_f64(self.spacing, self.origin, self.skip.as_ref().map(|k| &k.k), self.derivative, offset)
     }
 
     /// The period of the reference when interior detection may use Newton's test: a
@@ -1873,6 +1900,55 @@ mod tests {
         assert_eq!(model_settled_cycle([f64::NAN, 0.0]), Model::Escapes);
         // The Feigenbaum point: its orbit neither escapes nor settles on a short cycle.
         assert_eq!(model_settled_cycle([-1.401155189092051, 0.0]), Model::Unsettled);
+    }
+
+    /// Where [`start_fits_f64`] allows it, a start computed in f64 has FloatExp's bits: over
+    /// a grid of spacings from 2^-1000 to 2^-10, coefficients K1 and K2 each from 2^-600 to
+    /// 2^600 and offsets over their whole range (mantissas and signs drawn at random), with and
+    /// without a derivative and an origin, so that products reach both edges of the window.
+    /// The view-dependent window takes in a 1e-102 view's starts (spacing 2^-349).
+    #[test]
+    fn a_start_in_f64_has_floatexps_bits() {
+        let mut seed = 12345u64;
+        let mut u = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut allowed, mut deep) = (0, 0);
+        for es in (-1000..=-10).step_by(15) {
+            for (ek, ek2) in (-600..=600).step_by(40).flat_map(|a| (-600..=600).step_by(40).map(move |b| (a, b))) {
+                for (eo, variant) in [-59, -20, 0, 39].into_iter().flat_map(|eo| (0..4).map(move |v| (eo, v))) {
+                    let mut fe = |e: i32| {
+                        let m = 1.0 + u();
+                        FloatExp::new(if u() < 0.5 { -m } else { m }, e)
+                    };
+                    let spacing = fe(es).abs();
+                    let k = [[fe(ek), fe(ek - 3)], [fe(ek2), fe(ek2 - 2)]];
+                    let origin = if variant == 1 { [fe(-120), fe(-130)] } else { [FloatExp::ZERO; 2] };
+                    let derivative = variant == 2;
+                    let offset = [(1.0 + u()) * 2f64.powi(eo), -(1.0 + u()) * 2f64.powi(eo)];
+                    // Variant 3: no common steps.
+                    let common = (variant != 3).then_some(k);
+                    if !start_fits_f64(spacing, origin, common.as_ref(), derivative, offset) {
+                        continue;
+                    }
+                    allowed += 1;
+                    deep += usize::from(es < -300);
+                    let bits = |v: [FloatExp; 2]| v.map(|x| (x.mantissa().to_bits(), x.exponent()));
+                    let a = start_arithmetic::<f64>(spacing, origin, offset, common, derivative);
+                    let b = start_arithmetic::<FloatExp>(spacing, origin, offset, common, derivative);
+                    let what =
+                        format!("spacing 2^{es}, coefficients 2^{ek} and 2^{ek2}, offset 2^{eo}, variant {variant}");
+                    assert_eq!(bits(a.0), bits(b.0), "δc: {what}");
+                    if let (Some(ma), Some(mb)) = (a.1, b.1) {
+                        assert_eq!((bits(ma.0), bits(ma.1)), (bits(mb.0), bits(mb.1)), "start: {what}");
+                    }
+                }
+            }
+        }
+        assert!(allowed > 1000 && deep > 100, "{allowed} starts in f64, {deep} of them past 2^-300");
+        let k = [[FloatExp::new(1.3, 40), FloatExp::new(-1.1, 38)], [FloatExp::new(1.7, 300), FloatExp::ZERO]];
+        assert!(start_fits_f64(FloatExp::new(1.2, -349), [FloatExp::ZERO; 2], Some(&k), false, [123.5, -7.25]));
     }
 
     /// A parameter the distance estimate calls far from the Mandelbrot set is: every point
