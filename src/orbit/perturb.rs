@@ -154,6 +154,12 @@ fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
     Model::Unsettled
 }
 
+/// One step of the quadratic model, z^2 + c.
+#[inline(always)]
+fn model_step(z: [f64; 2], c: [f64; 2]) -> [f64; 2] {
+    [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]]
+}
+
 /// True when the orbit of 0 under z -> z^2 + c escapes within `iterations` and the
 /// distance estimate puts c farther than `r` from the Mandelbrot set: with the estimate
 /// d = 2 |z| ln|z| / |dz/dc| taken where |z| has passed 1e4, Koebe's quarter theorem keeps
@@ -162,7 +168,7 @@ fn model_far(c: [f64; 2], r: f64, iterations: u32) -> bool {
     let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
     for _ in 0..iterations {
         dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
-        z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        z = model_step(z, c);
         let r2 = norm2(z);
         if r2 > 1e8 {
             let size = r2.sqrt();
@@ -180,7 +186,7 @@ fn model_multiplier(c: [f64; 2], mut z: [f64; 2], k: u32) -> [f64; 2] {
     let mut mu = [1.0, 0.0];
     for _ in 0..k {
         mu = cmul(mu, [2.0 * z[0], 2.0 * z[1]]);
-        z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+        z = model_step(z, c);
     }
     mu
 }
@@ -733,6 +739,14 @@ struct Lane {
     dc_fe: [FloatExp; 2],
 }
 
+/// A sample's δc in `T`: the origin plus the spacing times its offset (a zero origin is
+/// not added, which is exact either way: a render of its own is unchanged bit for bit).
+fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset: [f64; 2]) -> [T; 2] {
+    let sp = T::from_fe(spacing);
+    let d = [sp.mul_f64(offset[0]), sp.mul_f64(offset[1])];
+    if origin == [FloatExp::ZERO; 2] { d } else { cadd(cconv(origin), d) }
+}
+
 /// A sample's delta at the start, u = origin + spacing × offset, and, when the view's
 /// common BLA steps are taken (`common` = their K1, K2), δ_m = K1 u + K2 u² with the scaled
 /// derivative (K1 + 2 K2 u) × spacing where `derivative` asks for it (else zero): computed
@@ -748,9 +762,7 @@ fn start_arithmetic<T: Real>(
 ) -> ([FloatExp; 2], Option<([FloatExp; 2], [FloatExp; 2])>) {
     let fe = |v: [FloatExp; 2]| -> [T; 2] { cconv(v) };
     let sp = T::from_fe(spacing);
-    let d = [sp.mul_f64(offset[0]), sp.mul_f64(offset[1])];
-    // Adding a zero origin is exact: a render of its own is unchanged bit for bit.
-    let d = if origin == [FloatExp::ZERO; 2] { d } else { cadd(fe(origin), d) };
+    let d = delta_c::<T>(spacing, origin, offset);
     let moved = common.map(|[k1, k2]| {
         let (k1, k2) = (fe(k1), fe(k2));
         let dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
@@ -1022,14 +1034,16 @@ impl Perturbation {
                     } else {
                         s.apply_with_jacobian(dz, dc)
                     };
-                    let a2 = Scaled::from_f64(s.second.a2).ldexp(1);
+                    // 2 A2 (as d, made only where it is used: on the plain turn of Newton's
+                    // first steps, neither asks for it).
+                    let a2 = || Scaled::from_f64(s.second.a2).ldexp(1);
                     if C {
-                        let mix = if linear { Scaled::ZERO } else { a2 * e + Scaled::from_f64(s.second.ab) };
+                        let mix = if linear { Scaled::ZERO } else { a2() * e + Scaled::from_f64(s.second.ab) };
                         f = Scaled::from_f64(jac) * f + d() * mix;
                         e = Scaled::from_f64(jac) * e + Scaled::from_f64(jc);
                     }
                     if second {
-                        d2 = Scaled::from_f64(jac) * d2 + a2 * d().square();
+                        d2 = Scaled::from_f64(jac) * d2 + a2() * d().square();
                     }
                     d1.mul(jac);
                     (dz, m) = (next, m + len);
@@ -1182,10 +1196,9 @@ impl Perturbation {
     /// [`MAX_CYCLE_PERIODS`], the multiplier of the model's k-cycle at the centre and at the
     /// disk's edge stand in for them.
     fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> Disk {
-        let (sp, o) = (self.spacing, self.origin);
-        let dc_fe = [o[0] + sp.mul_f64(centre[0]), o[1] + sp.mul_f64(centre[1])];
+        let dc_fe = delta_c::<FloatExp>(self.spacing, self.origin, centre);
         let dc = cto_f64(dc_fe);
-        let rho = sp.mul_f64(r).to_f64();
+        let rho = self.spacing.mul_f64(r).to_f64();
         let normal = |x: f64| x == 0.0 || x.is_normal();
         if !(normal(dc[0]) && normal(dc[1]) && rho.is_normal()) {
             return Disk::Failed;
