@@ -1672,7 +1672,7 @@ impl Perturbation {
         if DER {
             der.step(z, full, ctx.add_fe);
         }
-        if INT {
+        if INT && !s.probe.plain {
             s.shrink.step(full, f2, self.check());
         }
         let two = D::from_f64(2.0);

@@ -24,7 +24,9 @@
 //! While every lane of every vector holds a sample and none is near its stop, the loop runs
 //! in bursts ([`burst`]): the deltas (and derivatives) stay in registers, each lane reads its
 //! Z_m at its start address plus the bytes stepped, and the only test per step is for an
-//! event, before which the burst ends and hands the vectors to the general step.
+//! event, before which the burst ends and hands the vectors to the general step. With
+//! interior detection, bursts run while every lane's sample has left it (`Probe::plain`:
+//! most samples outside a minibrot, from their start); such a lane carries no |dz/dz|^2.
 //!
 //! The loop is written once, generic over pulp's [`Simd`] (the vector width and the
 //! arithmetic). What differs between instruction sets is only how every lane's Z_m is
@@ -317,6 +319,8 @@ struct Lanes<S: Simd> {
     shrink: S::f64s,
     shrink_lo: S::f64s,
     act: u32,
+    /// Lanes whose samples have left interior detection ([`Lanes::put`]).
+    plain: u32,
     /// Lanes that rebased in the lane and have not yet taken their first step from Z_0.
     fresh: u32,
     t16: i64,
@@ -351,6 +355,7 @@ impl<S: Simd> Lanes<S> {
             shrink: z,
             shrink_lo: z,
             act: 0,
+            plain: 0,
             fresh: 0,
             t16: 0,
             at0: [0; MAX_W],
@@ -369,10 +374,14 @@ impl<S: Simd> Lanes<S> {
         *lane::<S>(&mut self.der_r, i) = h.der.mant[0];
         *lane::<S>(&mut self.der_i, i) = h.der.mant[1];
         *lane::<S>(&mut self.add, i) = h.der.add;
-        *lane::<S>(&mut self.shrink, i) = h.s.shrink.mant;
-        *lane::<S>(&mut self.shrink_lo, i) = h.s.shrink.lo;
+        // A sample that has left interior detection (`Probe::plain`) carries no |dz/dz|^2:
+        // 0 times any step stays 0 (or NaN), which the window below -inf never lets out.
+        let plain = h.s.probe.plain;
+        *lane::<S>(&mut self.shrink, i) = if plain { 0.0 } else { h.s.shrink.mant };
+        *lane::<S>(&mut self.shrink_lo, i) = if plain { f64::NEG_INFINITY } else { h.s.shrink.lo };
         self.place(i, h.s.which, h.s.m, h.s.n, p, refs);
         self.act |= 1 << i;
+        self.plain = (self.plain & !(1 << i)) | (u32::from(plain) << i);
     }
 
     /// Writes lane `i`'s state back into `h` and empties the lane; returns the steps the
@@ -380,13 +389,16 @@ impl<S: Simd> Lanes<S> {
     fn take(&mut self, i: usize, h: &mut Held, refs: &Refs) -> u32 {
         h.s.dz = [*lane::<S>(&mut self.dzr, i), *lane::<S>(&mut self.dzi, i)];
         h.der.mant = [*lane::<S>(&mut self.der_r, i), *lane::<S>(&mut self.der_i, i)];
-        h.s.shrink.mant = *lane::<S>(&mut self.shrink, i);
+        if !h.s.probe.plain {
+            h.s.shrink.mant = *lane::<S>(&mut self.shrink, i);
+        }
         h.s.m = ((self.at0[i] + self.t16 - refs.start[h.s.which]) / 16) as u32;
         let n = (self.n0[i] + self.t16 / 16) as u32;
         let steps = n - h.s.n;
         h.s.n = n;
         self.act &= !(1 << i);
         self.fresh &= !(1 << i);
+        self.plain &= !(1 << i);
         self.stop[i] = i64::MAX;
         steps
     }
@@ -537,7 +549,9 @@ fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Co
     };
     let full = Lanes::<U>::FULL;
     while lanes.iter().any(|l| l.act != 0) {
-        if !INT {
+        // With interior detection, bursts only while every lane's sample has left it (its
+        // |dz/dz|^2 is not followed; the bursts' steps are then exactly `step`'s).
+        if !INT || lanes.iter().all(|l| l.act & !l.plain == 0) {
             burst::<U, DER>(unit, &mut lanes, &k, &refs);
         }
         for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
@@ -666,6 +680,26 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     calm
 }
 
+/// `[e(0), e(1)]` for an expression `e` of the vector's index `g`: what
+/// `std::array::from_fn` would build, written out, since the compiler does not always
+/// inline its closures into the instruction set's function (with both settings of interior
+/// detection running bursts, their intrinsics then ran as calls, at half the speed).
+macro_rules! per_vector {
+    (|$g:ident| $e:expr) => {{
+        const _: () = assert!(G == 2);
+        [
+            {
+                let $g = 0;
+                $e
+            },
+            {
+                let $g = 1;
+                $e
+            },
+        ]
+    }};
+}
+
 /// Plain steps of every vector while nothing can happen but a step: every lane active,
 /// none just rebased, none within reach of its stop, and (tested before each step) no lane
 /// at an event. The deltas stay in registers for the whole run and each lane's Z_m is read
@@ -687,21 +721,21 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
     if room < 2 {
         return;
     }
-    let at: [[usize; MAX_W]; G] = std::array::from_fn(|g| lanes[g].addresses(refs));
-    let mut d: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].dzr, lanes[g].dzi));
-    let c: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].dcr, lanes[g].dci));
-    let mut der: [Z<U>; G] = std::array::from_fn(|g| (lanes[g].der_r, lanes[g].der_i));
-    let add: [U::f64s; G] = std::array::from_fn(|g| lanes[g].add);
+    let at: [[usize; MAX_W]; G] = per_vector!(|g| lanes[g].addresses(refs));
+    let mut d: [Z<U>; G] = per_vector!(|g| (lanes[g].dzr, lanes[g].dzi));
+    let c: [Z<U>; G] = per_vector!(|g| (lanes[g].dcr, lanes[g].dci));
+    let mut der: [Z<U>; G] = per_vector!(|g| (lanes[g].der_r, lanes[g].der_i));
+    let add: [U::f64s; G] = per_vector!(|g| lanes[g].add);
     let mut off = 0usize;
     let end = room as usize * 32;
     'pairs: while off < end {
         // SAFETY: every lane is active and at least two steps from its stop (`room`), so
         // Z_m and Z_m+1 lie inside its reference.
-        let z: [(Z<U>, Z<U>); G] = std::array::from_fn(|g| unsafe { u.load_pair(&at[g].map(|x| x.wrapping_add(off))) });
+        let z: [(Z<U>, Z<U>); G] = per_vector!(|g| unsafe { u.load_pair(&at[g].map(|x| x.wrapping_add(off))) });
         for second in [false, true] {
-            let zs: [Z<U>; G] = std::array::from_fn(|g| if second { z[g].1 } else { z[g].0 });
+            let zs: [Z<U>; G] = per_vector!(|g| if second { z[g].1 } else { z[g].0 });
             // Z_m + δ of every vector, which the event test and the derivative's step share.
-            let f: [Z<U>; G] = std::array::from_fn(|g| plus(u, zs[g], d[g]));
+            let f: [Z<U>; G] = per_vector!(|g| plus(u, zs[g], d[g]));
             let mut ev = event::<U, DER>(u, k, f[0], d[0]);
             for g in 1..G {
                 ev = u.or_m64s(ev, event::<U, DER>(u, k, f[g], d[g]));
@@ -712,7 +746,7 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
             if DER {
                 // A step after which a derivative must be renormalised is left to `step`,
                 // which hands the sample back for it.
-                let next: [Z<U>; G] = std::array::from_fn(|g| der_step(u, k, f[g], der[g], add[g]));
+                let next: [Z<U>; G] = per_vector!(|g| der_step(u, k, f[g], der[g], add[g]));
                 if next.iter().any(|&n| renorm_bits(u, k, n) != 0) {
                     break 'pairs;
                 }
