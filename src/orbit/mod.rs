@@ -234,7 +234,7 @@ pub fn prepare(
             crate::num::real::cmul(l, [z[0].ldexp(1), z[1].ldexp(1)])
         })
     });
-    Ok(Perturbation {
+    let mut engine = Perturbation {
         refs,
         bla_fe: std::sync::Arc::new(bla_fe),
         bla_f64: std::sync::Arc::new(bla_f64),
@@ -249,6 +249,7 @@ pub fn prepare(
         interior_asked: spec.interior,
         interior_decision,
         renormal,
+        model_scale: None,
         numbers: spec.numbers,
         skip,
         single_d2,
@@ -256,7 +257,9 @@ pub fn prepare(
         disks: true,
         orbit_seconds,
         tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
-    })
+    };
+    engine.model_scale = engine.model_scale();
+    Ok(engine)
 }
 
 impl Perturbation {
