@@ -185,8 +185,9 @@ fn model_escapes_within(c: [f64; 2], iterations: u32) -> bool {
     let mut z = [0.0, 0.0];
     for _ in 0..iterations {
         z = model_step(z, c);
-        // NaN (from a c that is not a number) fails the test and counts as escaped.
-        if !(norm2(z) <= 4.0) {
+        // NaN (from a c that is not a number) counts as escaped.
+        let r2 = norm2(z);
+        if r2 > 4.0 || r2.is_nan() {
             return true;
         }
     }
@@ -211,8 +212,8 @@ fn model_attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
         let q = cmul(g, [gd[0], -gd[1]]);
         let step = [q[0] / norm2(gd), q[1] / norm2(gd)];
         w = [w[0] - step[0], w[1] - step[1]];
-        // NaN fails the test and ends here.
-        if !(norm2(w) <= 4.0) {
+        let r2 = norm2(w);
+        if r2 > 4.0 || r2.is_nan() {
             return None;
         }
         let (moved2, mult2) = (norm2(step), norm2(d));
@@ -224,7 +225,7 @@ fn model_attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
             let mut y = w;
             for k in 1..n {
                 y = model_step(y, c);
-                if n % k == 0 && norm2([y[0] - w[0], y[1] - w[1]]) <= MODEL_NEWTON_BACK2 {
+                if n.is_multiple_of(k) && norm2([y[0] - w[0], y[1] - w[1]]) <= MODEL_NEWTON_BACK2 {
                     return Some((w, k));
                 }
             }
