@@ -155,7 +155,11 @@ impl Contraction {
     /// steps within an iteration limit can bring below a threshold, except an orbit that
     /// lands on 0 exactly (a superattracting cycle: interior indeed).
     pub fn dropped(check: Check) -> Contraction {
-        Contraction::new(FloatExp::new(1.0, 1 << 30), check)
+        // `Contraction::new` of that value, without its FloatExp arithmetic (a sample that
+        // leaves detection at its start takes this): the mantissa 2^mid, and the threshold
+        // 2^(2^30 - mid) times below the window, clamped to its bottom.
+        let mant = f64::from_bits(((1023 + check.mid) as u64) << 52);
+        Contraction { mant, exp: (1 << 30) - check.mid, lo: LO.min(check.hi) }
     }
 
     /// The value, exactly.
@@ -767,5 +771,9 @@ mod tests {
         let wide = Check::new(1000, 1e150);
         let mut k = Contraction::new(FloatExp::ONE, wide);
         assert!(!step(&mut k, FloatExp::from(1e300), wide) && k.value().log2() > 996.0);
+        // A dropped contraction is the value 2^(2^30), whatever the window.
+        for check in [check, wide, Check::new(1, 2.0), Check::new(u32::MAX, 1e150), Check::OFF] {
+            assert_eq!(Contraction::dropped(check), Contraction::new(FloatExp::new(1.0, 1 << 30), check));
+        }
     }
 }

@@ -1722,15 +1722,15 @@ impl Perturbation {
         ctx: Ctx<'_, D>,
         local: &mut Counters,
     ) -> Option<Exit<D>> {
+        if INT && s.probe.plain {
+            return self.turns::<D, DER, false>(s, der, ctx, local);
+        }
         let r = &self.refs[s.which];
         let table = ctx.tables[self.refs.len() - 1]?;
         let (step, len, bound) = table.fixed_step(1)?;
         let last = r.last();
         if s.which != self.refs.len() - 1 || len == 0 || 1 + len != last {
             return None;
-        }
-        if INT && s.probe.plain {
-            return self.turns::<D, DER, false>(s, der, ctx, local);
         }
         let at = |m: u32| reference_value::<D>(|| r.get(m), || r.get_fe(m));
         let (z_end, z_one) = (at(last), at(1));
