@@ -62,11 +62,8 @@ const MODEL_MAX_PERIODS: u32 = 1024;
 /// Iterations of the quadratic model's orbit at most in a disk's gate (bulbs of period up to
 /// [`MAX_CYCLE_PERIODS`] settle within this where a disk can be certified).
 const DISK_MODEL_ITERATIONS: u32 = 256;
-/// Iterations of the quadratic model's orbit at most at a sample's start
-/// ([`Perturbation::model_escapes`]).
-const START_MODEL_ITERATIONS: u32 = 256;
 /// The fewest samples `Perturbation::certified_disks` tries a disk for.
-const DISK_MIN: usize = 8;
+const DISK_MIN: usize = 4;
 /// A sample's [`Probe::at`] once it is to try no more Newton tests.
 const NEVER: u32 = u32::MAX;
 /// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]).
@@ -177,21 +174,6 @@ fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
         }
     }
     Model::Unsettled
-}
-
-/// True when the orbit of 0 under z -> z^2 + c escapes (|z| > 2) within `iterations`, or c
-/// is not a number.
-fn model_escapes_within(c: [f64; 2], iterations: u32) -> bool {
-    let mut z = [0.0, 0.0];
-    for _ in 0..iterations {
-        z = model_step(z, c);
-        // NaN (from a c that is not a number) counts as escaped.
-        let r2 = norm2(z);
-        if r2 > 4.0 || r2.is_nan() {
-            return true;
-        }
-    }
-    false
 }
 
 /// An attracting cycle of z -> z^2 + c whose period divides `n`, by Newton's method on
@@ -602,7 +584,8 @@ struct Sample<D> {
 /// earlier, its full value, the binary exponent of |dz/dz|^2 there, and the squared distance
 /// from its value to the next end's); and whether it has left interior detection
 /// altogether (`plain`: its quadratic model escaped, and its |dz/dz|^2 is
-/// [`Contraction::dropped`]).
+/// [`Contraction::dropped`]); and the period in turns of the attracting cycle the quadratic
+/// model has at its offset ([`Perturbation::start_model`]; 0 where it has none).
 #[derive(Debug, Clone, Copy)]
 struct Probe {
     at: u32,
@@ -611,6 +594,7 @@ struct Probe {
     anchor: [f64; 2],
     first2: f64,
     plain: bool,
+    period: u32,
 }
 
 impl Probe {
@@ -909,7 +893,15 @@ const LANES: usize = 2;
 impl Perturbation {
     /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
     /// after the view's common BLA steps when `skip` (counted into `counters`).
-    fn start(&self, offset: [f64; 2], skip: bool, counters: &mut Counters) -> (Sample<FloatExp>, Der, FloatExp) {
+    /// `known`: the sample's [`Perturbation::start_model`] where the batch has worked it out
+    /// (`Perturbation::sample_models`).
+    fn start(
+        &self,
+        offset: [f64; 2],
+        known: Option<Model>,
+        skip: bool,
+        counters: &mut Counters,
+    ) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
         let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
         let (d, moved) = if self.start_in_f64(offset) {
@@ -917,8 +909,10 @@ impl Perturbation {
         } else {
             start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
         };
-        // A sample whose quadratic model escapes at once leaves interior detection here.
-        let plain = self.model_escapes(d);
+        // A sample whose quadratic model escapes leaves interior detection here.
+        let model = known.or_else(|| self.start_model(self.model_map()?, offset));
+        let plain = model == Some(Model::Escapes);
+        let period = if let Some(Model::Cycle(_, k)) = model { k } else { 0 };
         let shrink = match self.interior {
             None => Contraction::IDLE,
             Some(c) if plain => Contraction::dropped(c),
@@ -926,7 +920,7 @@ impl Perturbation {
         };
         // The first Newton test at the end of the second period, if the first contracted.
         let at = if plain { NEVER } else { self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2)) };
-        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0, plain };
+        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0, plain, period };
         let (mut start, add_fe) = if self.mandelbrot {
             (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink, probe }, self.spacing)
         } else {
@@ -1020,22 +1014,13 @@ impl Perturbation {
         let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
         let candidate = pr.candidate(k, w);
         // At the first end, a start from the quadratic model's attracting cycle, where the
-        // model has one: no need to wait for the orbit to settle. Where the model escapes,
-        // no test is tried again.
-        if pr.anchor_n == 0 {
-            match self.model_cycle(w) {
-                Some(Model::Cycle(w0, turns))
-                    if u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
-                        && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second)) =>
-                {
-                    return true;
-                }
-                Some(Model::Escapes) => {
-                    self.leave_detection(s);
-                    return false;
-                }
-                _ => {}
-            }
+        // model has one: no need to wait for the orbit to settle.
+        if pr.anchor_n == 0
+            && let Some((w0, turns)) = self.model_cycle(w, pr.period)
+            && u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
+            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))
+        {
+            return true;
         }
         if candidate && exp < pr.anchor_exp && s.n >= pr.at {
             pr.at = s.n.saturating_mul(2);
@@ -1058,48 +1043,61 @@ impl Perturbation {
         Some(cmul(lam, sens?.dc))
     }
 
-    /// True where the quadratic model, at its parameter to first order c' = K δc
-    /// ([`Perturbation::model_scale`]), escapes within [`START_MODEL_ITERATIONS`]: a sample
-    /// whose model escapes that fast lies well outside the minibrot and leaves interior
-    /// detection from its start, so that its first turn (in which most such samples escape)
-    /// runs as without detection, vector lanes' bursts included. The samples nearer the
-    /// minibrot wait for their first period end, where the model takes their own value.
-    fn model_escapes(&self, dc: [FloatExp; 2]) -> bool {
-        let Some(k) = self.model_scale else { return false };
-        let c = cto_f64(cmul(k, dc));
-        // Inside the main cardioid or the period-2 disk nothing escapes: no need to iterate.
-        let inside = model_fixed_point(c).is_some() || norm2([c[0] + 1.0, c[1]]) < 1.0 / 16.0;
-        !inside && model_escapes_within(c, START_MODEL_ITERATIONS)
+    /// The quadratic model's parameter as a function of a sample's offset, to first order:
+    /// c' = K δc = K origin + K spacing × offset ([`Perturbation::model_scale`]), as the two
+    /// complex numbers K origin and K spacing in f64 (both are near the scale of the
+    /// minibrot's own Mandelbrot set, where its samples lie). None where the view has no
+    /// model, or no interior detection to use it.
+    fn model_map(&self) -> Option<([f64; 2], [f64; 2])> {
+        self.interior?;
+        let k = self.model_scale?;
+        Some((cto_f64(cmul(k, self.origin)), [(k[0] * self.spacing).to_f64(), (k[1] * self.spacing).to_f64()]))
     }
 
-    /// Takes a sample out of interior detection: no Newton test again, and its |dz/dz|^2 no
-    /// longer followed (`Probe::plain`, [`Contraction::dropped`]).
-    fn leave_detection<D>(&self, s: &mut Sample<D>) {
-        s.probe.at = NEVER;
-        s.probe.plain = true;
-        s.shrink = Contraction::dropped(self.check());
+    /// What the quadratic model does at a sample's `offset`, its parameter c' by
+    /// [`Perturbation::model_map`] `(ko, ks)`: its attracting fixed point inside the main
+    /// cardioid, else [`model_settled_cycle`].
+    ///
+    /// A sample whose model escapes lies outside the minibrot and leaves interior detection
+    /// from its start, so that its first turn (in which most such samples escape) runs as
+    /// without detection, vector lanes' bursts included. One whose model has an attracting
+    /// cycle keeps its period, and at its first period end Newton's method finds the cycle
+    /// of the model at its own value ([`Perturbation::model_cycle`]), a start for the test.
+    fn start_model(&self, (ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
+        let d = cmul(ks, offset);
+        let c = [ko[0] + d[0], ko[1] + d[1]];
+        Some(model_fixed_point(c).map_or_else(|| model_settled_cycle(c), |z| Model::Cycle(z, 1)))
     }
 
-    /// A point of the attracting cycle of the quadratic model w -> a + Λ w^2 of one period
-    /// near 0 (a the sample's value at its first period end, f^p(0)) and its period k in
-    /// turns, k at most [`MODEL_MAX_PERIODS`]. In the renormalised coordinate z = Λ w the
-    /// model is z -> z^2 + c' with c' = Λ a: its attracting fixed point where it has one
-    /// (the minibrot's cardioid, [`model_fixed_point`]); elsewhere its own orbit from 0,
-    /// which settles on the attracting k-cycle where c' lies in a bulb of the standard
-    /// Mandelbrot set's period k, so that samples in the minibrot's bulbs get Newton's test
-    /// of period k p at their first period end too, rather than after waiting for their
-    /// orbit to come back to an anchor. None where Λ is unknown, or the model's orbit escapes
-    /// or has not settled within [`MODEL_ITERATIONS`].
-    fn model_cycle(&self, a: [f64; 2]) -> Option<Model> {
+    /// [`Perturbation::start_model`] of every sample of a batch (None where the view has no
+    /// model): worked out before the disks, which then look only among the samples whose
+    /// model has a short attracting cycle.
+    fn sample_models(&self, offsets: &[[f64; 2]]) -> Option<Vec<Model>> {
+        let map = self.model_map()?;
+        offsets.iter().map(|&o| self.start_model(map, o)).collect()
+    }
+
+    /// A point of the attracting cycle of period k turns of the quadratic model
+    /// w -> a + Λ w^2 of one period near 0 (a the sample's value at its first period end,
+    /// f^p(0)), and its exact period, where the model has one: in the renormalised
+    /// coordinate z = Λ w the model is z -> z^2 + c' with c' = Λ a, whose attracting fixed
+    /// point is [`model_fixed_point`]'s (the minibrot's cardioid, k = 1) and whose k-cycle
+    /// Newton's method finds ([`model_attractor`]) where c' lies in a bulb of the standard
+    /// Mandelbrot set of period k, so that samples in the minibrot's bulbs get Newton's test of
+    /// period k p at their first period end too, rather than after waiting for their orbit to
+    /// come back to an anchor. `k` is the period the model had at the sample's offset
+    /// ([`Perturbation::start_model`]; 0: none, and so None here, as where Λ is unknown or
+    /// Newton's method finds no attracting cycle at the sample's own value).
+    fn model_cycle(&self, a: [f64; 2], k: u32) -> Option<([f64; 2], u32)> {
         let lam = self.renormal?;
         let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
-        Some(match model_fixed_point(c).map_or_else(|| model_settled_cycle(c), |z| Model::Cycle(z, 1)) {
-            Model::Cycle(z, k) => {
-                let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-                if w[0].is_finite() && w[1].is_finite() { Model::Cycle(w, k) } else { Model::Unsettled }
-            }
-            other => other,
-        })
+        let (z, k) = match k {
+            0 => return None,
+            1 => (model_fixed_point(c)?, 1),
+            k => model_attractor(c, k)?,
+        };
+        let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+        (w[0].is_finite() && w[1].is_finite()).then_some((w, k))
     }
 
     /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and
@@ -1206,7 +1204,7 @@ impl Perturbation {
     /// letting traps observe every z_k, k >= 1. Returns the orbit's end; z_n is exact to f64
     /// and dz_n is the derivative times the spacing.
     pub fn orbit(&self, offset: [f64; 2], traps: &[Trap], states: &mut [TrapState], counters: &mut Counters) -> Orbit {
-        let (start, mut der, add_fe) = self.start(offset, traps.is_empty(), counters);
+        let (start, mut der, add_fe) = self.start(offset, None, traps.is_empty(), counters);
         let fe = self.starts_in_floatexp(&start);
         let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
         self.finish(phase, start.dc, &mut der, add_fe, traps, states, counters)
@@ -1223,13 +1221,15 @@ impl Perturbation {
     /// (`Perturbation::certified_disks`): the same N as iterating them, since each is
     /// interior.
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
-        let Some(done) = self.certified_disks(offsets, counters) else {
-            return self.orbits_each(offsets, out, counters, simd);
+        let models = self.sample_models(offsets);
+        let Some(done) = self.certified_disks(offsets, models.as_deref(), counters) else {
+            return self.orbits_each(offsets, models.as_deref(), out, counters, simd);
         };
         let rest: Vec<usize> = (0..offsets.len()).filter(|&k| !done[k]).collect();
         let at: Vec<[f64; 2]> = rest.iter().map(|&k| offsets[k]).collect();
+        let known: Option<Vec<Model>> = models.map(|m| rest.iter().map(|&k| m[k]).collect());
         let mut each = vec![Orbit::interior(); at.len()];
-        self.orbits_each(&at, &mut each, counters, simd);
+        self.orbits_each(&at, known.as_deref(), &mut each, counters, simd);
         for (k, d) in done.iter().enumerate() {
             if *d {
                 out[k] = Orbit::interior();
@@ -1252,14 +1252,21 @@ impl Perturbation {
     /// the minibrot's cardioid or one of its bulbs (`Perturbation::disk_interior`); then
     /// Newton's method finds the cycle at the disk's centre from the model's, and the disk
     /// certificate decides. What no disk covers is iterated as before.
-    fn certified_disks(&self, offsets: &[[f64; 2]], counters: &mut Counters) -> Option<Vec<bool>> {
+    fn certified_disks(
+        &self,
+        offsets: &[[f64; 2]],
+        models: Option<&[Model]>,
+        counters: &mut Counters,
+    ) -> Option<Vec<bool>> {
         let (p, lam) = (self.newton_period()?, self.renormal?);
         if !self.disks || self.numbers != Numbers::F64 || offsets.len() < DISK_MIN {
             return None;
         }
         let scale = self.model_scale?;
         let mut done = vec![false; offsets.len()];
-        let mut idx: Vec<usize> = (0..offsets.len()).collect();
+        // Disks are tried among the samples whose model has a short attracting cycle.
+        let cycle = |k: usize| models.is_none_or(|m| matches!(m[k], Model::Cycle(_, n) if n <= MAX_CYCLE_PERIODS));
+        let mut idx: Vec<usize> = (0..offsets.len()).filter(|&k| cycle(k)).collect();
         let found = self.disks_in(offsets, &mut idx, &mut done, (p, lam, scale));
         counters.interior += found;
         counters.newton += found;
@@ -1370,16 +1377,24 @@ impl Perturbation {
         if certified { Disk::Interior } else { Disk::Failed }
     }
 
-    /// [`Perturbation::orbits`] for samples each iterated.
-    fn orbits_each(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
-        if lanes::orbits(self, offsets, out, counters, simd) {
+    /// [`Perturbation::orbits`] for samples each iterated; `known`: their
+    /// [`Perturbation::start_model`]s where the batch worked them out.
+    fn orbits_each(
+        &self,
+        offsets: &[[f64; 2]],
+        known: Option<&[Model]>,
+        out: &mut [Orbit],
+        counters: &mut Counters,
+        simd: SimdLevel,
+    ) {
+        if lanes::orbits(self, offsets, known, out, counters, simd) {
             return;
         }
         match (self.derivative, self.interior.is_some()) {
-            (false, false) => self.orbits_with::<false, false>(offsets, out, counters),
-            (true, false) => self.orbits_with::<true, false>(offsets, out, counters),
-            (false, true) => self.orbits_with::<false, true>(offsets, out, counters),
-            (true, true) => self.orbits_with::<true, true>(offsets, out, counters),
+            (false, false) => self.orbits_with::<false, false>(offsets, known, out, counters),
+            (true, false) => self.orbits_with::<true, false>(offsets, known, out, counters),
+            (false, true) => self.orbits_with::<false, true>(offsets, known, out, counters),
+            (true, true) => self.orbits_with::<true, true>(offsets, known, out, counters),
         }
     }
 
@@ -1389,6 +1404,7 @@ impl Perturbation {
     fn orbits_with<const DER: bool, const INT: bool>(
         &self,
         offsets: &[[f64; 2]],
+        known: Option<&[Model]>,
         out: &mut [Orbit],
         counters: &mut Counters,
     ) {
@@ -1402,7 +1418,7 @@ impl Perturbation {
                 while slot.is_none() && next < offsets.len() {
                     let k = next;
                     next += 1;
-                    let (start, mut der, _) = self.start(offsets[k], true, counters);
+                    let (start, mut der, _) = self.start(offsets[k], known.map(|m| m[k]), true, counters);
                     let s = if self.starts_in_floatexp(&start) {
                         let cfe = self.ctx(&self.bla_fe, true, add_fe);
                         match self.run::<FloatExp>(start, &mut der, cfe, &[], &mut [], counters) {
@@ -1468,8 +1484,15 @@ impl Perturbation {
 
     /// Runs sample `k` from its start until it ends (written to `out`) or reaches a single
     /// step in single-step mode, where it is returned for the vector lanes.
-    fn begin(&self, k: usize, offset: [f64; 2], out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
-        let (start, der, _) = self.start(offset, true, counters);
+    fn begin(
+        &self,
+        k: usize,
+        offset: [f64; 2],
+        known: Option<Model>,
+        out: &mut [Orbit],
+        counters: &mut Counters,
+    ) -> Option<Held> {
+        let (start, der, _) = self.start(offset, known, true, counters);
         let phase = if self.starts_in_floatexp(&start) { Phase::Fe(start) } else { Phase::F64(start.convert()) };
         self.hand_over(phase, k, start.dc, der, out, counters)
     }

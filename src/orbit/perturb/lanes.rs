@@ -49,7 +49,7 @@
 
 use pulp::Simd;
 
-use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
+use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Model, Numbers, Perturbation};
 use crate::orbit::interior;
 
 // The lanes hand a step back for either reason with one comparison.
@@ -244,6 +244,7 @@ impl<U: Unit, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>> pulp::WithS
 pub(super) fn orbits(
     p: &Perturbation,
     offsets: &[[f64; 2]],
+    known: Option<&[Model]>,
     out: &mut [Orbit],
     counters: &mut Counters,
     level: SimdLevel,
@@ -258,7 +259,7 @@ pub(super) fn orbits(
         while next < offsets.len() {
             let k = next;
             next += 1;
-            if let Some(h) = p.begin(k, offsets[k], out, counters) {
+            if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), out, counters) {
                 return Some(h);
             }
         }
