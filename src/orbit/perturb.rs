@@ -38,7 +38,9 @@
 //! to Z_p): those passes run in a loop of their own (`Perturbation::turns`) that does the
 //! same operations in the same order without searching the table at Z_1 each time.
 
+mod disks;
 mod lanes;
+mod model;
 
 use super::bla::{BlaTable, Step};
 use super::interior::{self, Check, Contraction, Decision, Detection};
@@ -49,211 +51,16 @@ use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real, Scaled};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
+use model::Model;
 
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
 const MAX_CYCLE_PERIODS: u32 = 8;
-/// The longest cycle the quadratic model's orbit is searched for, in periods: bulbs of the
-/// minibrot, and the minibrots embedded near its edge, whose samples the anchor test above
-/// would reach only after many turns and the contraction criterion only after thousands
-/// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
-/// iteration limit holds [`MODEL_TURNS_SPARE`] such tests.
-const MODEL_MAX_PERIODS: u32 = 1024;
-/// Iterations of the quadratic model's orbit at most in a disk's gate (bulbs of period up to
-/// [`MAX_CYCLE_PERIODS`] settle within this where a disk can be certified).
-const DISK_MODEL_ITERATIONS: u32 = 256;
-/// The fewest samples `Perturbation::certified_disks` tries a disk for.
-const DISK_MIN: usize = 4;
 /// A sample's [`Probe::at`] once it is to try no more Newton tests.
 const NEVER: u32 = u32::MAX;
-/// Iterations of the quadratic model's orbit at most ([`Perturbation::model_cycle`]).
-const MODEL_ITERATIONS: u32 = 8192;
-/// See [`MODEL_MAX_PERIODS`].
+/// A Newton test of k turns from the quadratic model's cycle is tried only where the
+/// iteration limit holds this many of them ([`model::MAX_PERIODS`]).
 const MODEL_TURNS_SPARE: u64 = 16;
-/// The Newton search for a period n found at a new minimum of |z_n| waits until iteration
-/// n times this, for an orbit that escapes by then (most outside the set) to cost nothing.
-const MODEL_NEWTON_DELAY: u32 = 4;
-/// Newton's steps at most in [`model_attractor`].
-const MODEL_NEWTON_STEPS: u32 = 24;
-/// [`model_attractor`] has converged once a Newton step's squared length is below this.
-const MODEL_NEWTON_CLOSE2: f64 = 1e-26;
-/// Newton's squared step below which [`model_attractor`] judges the multiplier: known then
-/// to about 10^-5, and a cycle nearer neutral than that is no start the certificate could
-/// use (its bound needs the multiplier 10^-5 below 1, [`interior::newton_attracting`]).
-const MODEL_NEWTON_JUDGE2: f64 = 1e-10;
-/// A cycle point that comes back within this squared distance after a divisor of the period
-/// has that period (well above the rounding of k steps, far below any two points of a cycle
-/// the model's start can use).
-const MODEL_NEWTON_BACK2: f64 = 1e-18;
-
-/// The attracting fixed point of z -> z^2 + c, (1 - sqrt(1 - 4c)) / 2, whose multiplier is
-/// 1 - sqrt(1 - 4c); None where that is not below 1 in modulus (c outside the main cardioid)
-/// or not a number (an overflowed c).
-fn model_fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
-    let (x, y) = (1.0 - 4.0 * c[0], -4.0 * c[1]);
-    // Not hypot (a libm call): an |x| or |y| past 1e154 makes r infinite and the multiplier
-    // not a number, which is refused below as it should be.
-    let r = (x * x + y * y).sqrt();
-    let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
-    let mult = [1.0 - sq[0], -sq[1]];
-    if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
-        return None;
-    }
-    Some([mult[0] / 2.0, mult[1] / 2.0])
-}
-
-/// What a disk of parameters was found to be ([`Perturbation::disk_interior`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Disk {
-    /// Certified interior.
-    Interior,
-    /// Not certified; smaller disks inside it may be.
-    Failed,
-    /// Far outside the model's Mandelbrot set, it and every smaller disk of its parts: not
-    /// worth halving.
-    Outside,
-}
-
-/// What the orbit of 0 under the quadratic model z -> z^2 + c does.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Model {
-    /// It settles on a cycle: a point of it, and its period.
-    Cycle([f64; 2], u32),
-    /// It escapes (|z| > 2): c is outside the model's Mandelbrot set.
-    Escapes,
-    /// Neither within [`MODEL_ITERATIONS`], or its cycle is longer than [`MODEL_MAX_PERIODS`].
-    Unsettled,
-}
-
-/// Where the orbit of 0 under z -> z^2 + c goes within [`MODEL_ITERATIONS`]: a point of the
-/// attracting cycle it settles on, of period 2 to [`MODEL_MAX_PERIODS`], and its period; or
-/// that it escapes.
-///
-/// The cycle is solved for, not waited for: at each iteration n where |z_n| reaches a new
-/// minimum (n is then the period of an atom domain that holds c, after Claude
-/// Heiland-Allen's notes on atom domains; a hyperbolic component lies inside the domain of
-/// its own period), Newton's method looks for an n-cycle from 0 ([`model_attractor`]), and
-/// an attracting one ends the search; the search waits [`MODEL_NEWTON_DELAY`] times n
-/// iterations, and an orbit that escapes meanwhile (most outside the set) costs none.
-/// Waiting instead for the orbit to come back to itself (Brent's cycle detection, as this
-/// did before) takes log(accuracy) / log|λ| turns of the cycle, hundreds near a bulb's edge
-/// where |λ| is near 1 (on the 1e-102 minibrot view: 579 iterations a sample on average,
-/// and 621 samples not settled within [`MODEL_ITERATIONS`]); Newton's method takes a few
-/// times the period there too.
-fn model_settled_cycle(c: [f64; 2]) -> Model {
-    model_cycle_within(c, MODEL_ITERATIONS)
-}
-
-/// [`model_settled_cycle`] within `iterations`.
-fn model_cycle_within(c: [f64; 2], iterations: u32) -> Model {
-    // A parameter that is not a number escapes at once; from a finite one the orbit stays
-    // finite until it escapes, so the loop tests |z|^2 > 4 alone.
-    if !(c[0].is_finite() && c[1].is_finite()) {
-        return Model::Escapes;
-    }
-    // The products of z that the escape test takes are those the next step needs: x^2 - y^2
-    // and 2 x y (as xy + xy, the same bits).
-    let (mut x2, mut y2, mut xy) = (0.0, 0.0, 0.0);
-    // The latest new minimum's iteration, and when its Newton search is due.
-    let (mut least, mut period, mut due) = (f64::INFINITY, 0, 0);
-    for n in 1..=iterations {
-        let z = [x2 - y2 + c[0], xy + xy + c[1]];
-        (x2, y2, xy) = (z[0] * z[0], z[1] * z[1], z[0] * z[1]);
-        let r2 = x2 + y2;
-        if r2 > 4.0 {
-            return Model::Escapes;
-        }
-        if r2 < least {
-            (least, period, due) = (r2, n, n.saturating_mul(MODEL_NEWTON_DELAY));
-        }
-        if n == due
-            && (2..=MODEL_MAX_PERIODS).contains(&period)
-            && let Some((w, k)) = model_attractor(c, period)
-        {
-            return Model::Cycle(w, k);
-        }
-    }
-    Model::Unsettled
-}
-
-/// An attracting cycle of z -> z^2 + c whose period divides `n`, by Newton's method on
-/// f^n(w) - w from w = 0 (whose first step lands on z_n): its point near 0 and its exact
-/// period. None where Newton's method leaves |w| <= 2 (every cycle lies inside), has not
-/// converged within [`MODEL_NEWTON_STEPS`], or converges on a repelling cycle, which it
-/// takes for one as soon as a step is below [`MODEL_NEWTON_JUDGE2`] with |f^n'| >= 1.
-fn model_attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
-    let mut w = [0.0, 0.0];
-    for _ in 0..MODEL_NEWTON_STEPS {
-        let (mut z, mut d) = (w, [1.0, 0.0]);
-        for _ in 0..n {
-            d = cmul([2.0 * z[0], 2.0 * z[1]], d);
-            z = model_step(z, c);
-        }
-        // (f^n(w) - w) / (f^n'(w) - 1), as g conj(g') / |g'|^2.
-        let (g, gd) = ([z[0] - w[0], z[1] - w[1]], [d[0] - 1.0, d[1]]);
-        let q = cmul(g, [gd[0], -gd[1]]);
-        let step = [q[0] / norm2(gd), q[1] / norm2(gd)];
-        w = [w[0] - step[0], w[1] - step[1]];
-        let r2 = norm2(w);
-        if r2 > 4.0 || r2.is_nan() {
-            return None;
-        }
-        let (moved2, mult2) = (norm2(step), norm2(d));
-        if moved2 <= MODEL_NEWTON_JUDGE2 && mult2 >= 1.0 {
-            return None;
-        }
-        if moved2 <= MODEL_NEWTON_CLOSE2 {
-            // The exact period: the first divisor of n after which w comes back.
-            let mut y = w;
-            for k in 1..n {
-                y = model_step(y, c);
-                if n.is_multiple_of(k) && norm2([y[0] - w[0], y[1] - w[1]]) <= MODEL_NEWTON_BACK2 {
-                    return Some((w, k));
-                }
-            }
-            return Some((w, n));
-        }
-    }
-    None
-}
-
-/// One step of the quadratic model, z^2 + c.
-#[inline(always)]
-fn model_step(z: [f64; 2], c: [f64; 2]) -> [f64; 2] {
-    [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]]
-}
-
-/// True when the orbit of 0 under z -> z^2 + c escapes within `iterations` and the
-/// distance estimate puts c farther than `r` from the Mandelbrot set: with the estimate
-/// d = 2 |z| ln|z| / |dz/dc| taken where |z| has passed 1e4, Koebe's quarter theorem keeps
-/// the true distance above d / 4 (as |z| grows), so c is taken as far where d / 4 > r.
-fn model_far(c: [f64; 2], r: f64, iterations: u32) -> bool {
-    let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
-    for _ in 0..iterations {
-        dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
-        z = model_step(z, c);
-        let r2 = norm2(z);
-        if r2 > 1e8 {
-            let size = r2.sqrt();
-            return 2.0 * size * size.ln() / norm2(dz).sqrt() > 4.0 * r;
-        }
-        if r2.is_nan() {
-            return false;
-        }
-    }
-    false
-}
-
-/// The multiplier of the k-cycle of z -> z^2 + c through `z`: the product of 2 z_i round it.
-fn model_multiplier(c: [f64; 2], mut z: [f64; 2], k: u32) -> [f64; 2] {
-    let mut mu = [1.0, 0.0];
-    for _ in 0..k {
-        mu = cmul(mu, [2.0 * z[0], 2.0 * z[1]]);
-        z = model_step(z, c);
-    }
-    mu
-}
-
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
 /// above the offset δc, which at these depths is below the f64 range.
@@ -1056,7 +863,7 @@ impl Perturbation {
 
     /// What the quadratic model does at a sample's `offset`, its parameter c' by
     /// [`Perturbation::model_map`] `(ko, ks)`: its attracting fixed point inside the main
-    /// cardioid, else [`model_settled_cycle`].
+    /// cardioid, else [`model::settled_cycle`].
     ///
     /// A sample whose model escapes lies outside the minibrot and leaves interior detection
     /// from its start, so that its first turn (in which most such samples escape) runs as
@@ -1066,7 +873,7 @@ impl Perturbation {
     fn start_model(&self, (ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
         let d = cmul(ks, offset);
         let c = [ko[0] + d[0], ko[1] + d[1]];
-        Some(model_fixed_point(c).map_or_else(|| model_settled_cycle(c), |z| Model::Cycle(z, 1)))
+        Some(model::fixed_point(c).map_or_else(|| model::settled_cycle(c), |z| Model::Cycle(z, 1)))
     }
 
     /// [`Perturbation::start_model`] of every sample of a batch (None where the view has no
@@ -1081,8 +888,8 @@ impl Perturbation {
     /// w -> a + Λ w^2 of one period near 0 (a the sample's value at its first period end,
     /// f^p(0)), and its exact period, where the model has one: in the renormalised
     /// coordinate z = Λ w the model is z -> z^2 + c' with c' = Λ a, whose attracting fixed
-    /// point is [`model_fixed_point`]'s (the minibrot's cardioid, k = 1) and whose k-cycle
-    /// Newton's method finds ([`model_attractor`]) where c' lies in a bulb of the standard
+    /// point is [`model::fixed_point`]'s (the minibrot's cardioid, k = 1) and whose k-cycle
+    /// Newton's method finds ([`model::attractor`]) where c' lies in a bulb of the standard
     /// Mandelbrot set of period k, so that samples in the minibrot's bulbs get Newton's test of
     /// period k p at their first period end too, rather than after waiting for their orbit to
     /// come back to an anchor. `k` is the period the model had at the sample's offset
@@ -1093,8 +900,8 @@ impl Perturbation {
         let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
         let (z, k) = match k {
             0 => return None,
-            1 => (model_fixed_point(c)?, 1),
-            k => model_attractor(c, k)?,
+            1 => (model::fixed_point(c)?, 1),
+            k => model::attractor(c, k)?,
         };
         let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
         (w[0].is_finite() && w[1].is_finite()).then_some((w, k))
@@ -1238,143 +1045,6 @@ impl Perturbation {
         for (&k, o) in rest.iter().zip(each) {
             out[k] = o;
         }
-    }
-
-    /// The samples of a batch that lie in disks of parameters certified interior
-    /// ([`interior::disk_attracting`]), marked, and counted into `counters`; None where
-    /// there are none, or the view is not one where they are looked for: a Mandelbrot view
-    /// centred on a nucleus, with interior detection on and f64 deltas (the Newton test's
-    /// arithmetic).
-    ///
-    /// The batch is tried as one disk, the one around its samples' bounding box, and halved
-    /// across the box's longer side (so that the parts tend to squares) while it fails, down
-    /// to [`DISK_MIN`] samples. A disk is tried where the quadratic model puts it well inside
-    /// the minibrot's cardioid or one of its bulbs (`Perturbation::disk_interior`); then
-    /// Newton's method finds the cycle at the disk's centre from the model's, and the disk
-    /// certificate decides. What no disk covers is iterated as before.
-    fn certified_disks(
-        &self,
-        offsets: &[[f64; 2]],
-        models: Option<&[Model]>,
-        counters: &mut Counters,
-    ) -> Option<Vec<bool>> {
-        let (p, lam) = (self.newton_period()?, self.renormal?);
-        if !self.disks || self.numbers != Numbers::F64 || offsets.len() < DISK_MIN {
-            return None;
-        }
-        let scale = self.model_scale?;
-        let mut done = vec![false; offsets.len()];
-        // Disks are tried among the samples whose model has a short attracting cycle.
-        let cycle = |k: usize| models.is_none_or(|m| matches!(m[k], Model::Cycle(_, n) if n <= MAX_CYCLE_PERIODS));
-        let mut idx: Vec<usize> = (0..offsets.len()).filter(|&k| cycle(k)).collect();
-        let found = self.disks_in(offsets, &mut idx, &mut done, (p, lam, scale));
-        counters.interior += found;
-        counters.newton += found;
-        counters.disks += found;
-        (found > 0).then_some(done)
-    }
-
-    /// `Perturbation::certified_disks` on a part of the batch, the samples `idx` (reordered here).
-    fn disks_in(
-        &self,
-        offsets: &[[f64; 2]],
-        idx: &mut [usize],
-        done: &mut [bool],
-        model: (u32, [FloatExp; 2], [FloatExp; 2]),
-    ) -> u64 {
-        if idx.len() < DISK_MIN {
-            return 0;
-        }
-        let (lo, hi) = idx.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), &k| {
-            let o = offsets[k];
-            ([lo[0].min(o[0]), lo[1].min(o[1])], [hi[0].max(o[0]), hi[1].max(o[1])])
-        });
-        let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-        // Half the box's diagonal, a little more for the rounding of the centre.
-        let r = ((hi[0] - lo[0]) / 2.0).hypot((hi[1] - lo[1]) / 2.0) * (1.0 + 1e-9);
-        match self.disk_interior(centre, r, model) {
-            Disk::Interior => {
-                for &k in idx.iter() {
-                    done[k] = true;
-                }
-                return idx.len() as u64;
-            }
-            // Every part's disk lies within twice this one's radius of its centre.
-            Disk::Outside => return 0,
-            Disk::Failed => {}
-        }
-        if idx.len() < 2 * DISK_MIN {
-            return 0;
-        }
-        // Halved across the box's longer side, so that the parts tend to squares.
-        let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
-        let h = idx.len() / 2;
-        idx.select_nth_unstable_by(h, |&a, &b| offsets[a][axis].total_cmp(&offsets[b][axis]));
-        let (a, b) = idx.split_at_mut(h);
-        self.disks_in(offsets, a, done, model) + self.disks_in(offsets, b, done, model)
-    }
-
-    /// Whether the disk of radius `r` about `centre` (offsets, in spacings) is certified
-    /// interior (`Perturbation::certified_disks`). The gate: the model's parameter
-    /// c' = K δc (K = Λ ∂Z_p/∂c at the nucleus) and the disk's radius there r' = |K| rho. In
-    /// the cardioid the model's multiplier is μ = 1 - sqrt(1 - 4 c') and the certificate's
-    /// bounds come to what is tested below; in a bulb of period k up to
-    /// [`MAX_CYCLE_PERIODS`], the multiplier of the model's k-cycle at the centre and at the
-    /// disk's edge stand in for them.
-    fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> Disk {
-        let dc_fe = delta_c::<FloatExp>(self.spacing, self.origin, centre);
-        let dc = cto_f64(dc_fe);
-        let rho = self.spacing.mul_f64(r).to_f64();
-        let normal = |x: f64| x == 0.0 || x.is_normal();
-        if !(normal(dc[0]) && normal(dc[1]) && rho.is_normal()) {
-            return Disk::Failed;
-        }
-        // The model's gate.
-        let cm = cto_f64(cmul(scale, dc_fe));
-        let rm = norm2(scale).sqrt().mul_f64(rho).to_f64();
-        let (z, k) = if let Some(z) = model_fixed_point(cm) {
-            // In the model the certificate's bounds come to about |μ| + 6 r' / |1 - μ| for
-            // the multiplier and 5 r' / |1 - μ|^2 for Kantorovich's h (r' the disk's radius
-            // there).
-            let mu = [2.0 * z[0], 2.0 * z[1]];
-            let gap = norm2([1.0 - mu[0], -mu[1]]).sqrt();
-            let fits = norm2(mu).sqrt() + 6.3 * rm / gap < 1.0 && 5.3 * rm < 0.25 * gap * gap;
-            if !fits {
-                return Disk::Failed;
-            }
-            (z, 1)
-        } else {
-            // A bulb's k-cycle: its multiplier at the centre, and its change across the disk
-            // as the model's cycle at the disk's edge has it, taken 4.5 times (as the
-            // cardioid's bounds take theirs about 3 times, with room for Kantorovich's h).
-            let (z, k) = match model_cycle_within(cm, DISK_MODEL_ITERATIONS) {
-                Model::Cycle(z, k) => (z, k),
-                Model::Escapes if model_far(cm, 2.0 * rm, DISK_MODEL_ITERATIONS) => return Disk::Outside,
-                _ => return Disk::Failed,
-            };
-            let edge = [cm[0] + rm, cm[1]];
-            let Model::Cycle(z_edge, k_edge) = model_cycle_within(edge, DISK_MODEL_ITERATIONS) else {
-                return Disk::Failed;
-            };
-            if k > MAX_CYCLE_PERIODS || k_edge != k {
-                return Disk::Failed;
-            }
-            let (mu, mu_edge) = (model_multiplier(cm, z, k), model_multiplier(edge, z_edge, k));
-            let change = norm2([mu_edge[0] - mu[0], mu_edge[1] - mu[1]]).sqrt();
-            if norm2(mu).sqrt() + 4.5 * change >= 1.0 {
-                return Disk::Failed;
-            }
-            (z, k)
-        };
-        let w0 = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-        let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, k, second)) else {
-            return Disk::Failed;
-        };
-        let certified = interior::disk_attracting(w, rho, |w, shift| {
-            let (t, s) = self.return_map_with::<true>(w, [dc[0] + shift[0], dc[1] + shift[1]], p, k, true)?;
-            Some((t, s?))
-        });
-        if certified { Disk::Interior } else { Disk::Failed }
     }
 
     /// [`Perturbation::orbits`] for samples each iterated; `known`: their
@@ -2001,62 +1671,6 @@ mod tests {
         "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
     ];
 
-    /// The model's cycle finder on parameters of known period: the period-2 bulb, the
-    /// airplane and the rabbit (3), and nuclei of the 1/q bulbs of the main cardioid for q
-    /// up to past 64 (the limit before Brent's detection), each found here by Newton's method
-    /// on f_c^q(0) = 0 from the bulb's estimated centre. The point returned must lie on a
-    /// cycle of exactly the period returned. Outside the set (beside the cusp, past the tip)
-    /// there is no cycle; at the Feigenbaum point none settles.
-    #[test]
-    fn model_settled_cycle_finds_cycles_of_every_period_to_its_limit() {
-        let step = |z: [f64; 2], c: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-        let far2 = |a: [f64; 2], b: [f64; 2]| norm2([a[0] - b[0], a[1] - b[1]]);
-        let check = |c: [f64; 2], want: u32| {
-            let Model::Cycle(z, k) = model_settled_cycle(c) else { panic!("{c:?}: no cycle found") };
-            assert_eq!(k, want, "{c:?}");
-            let mut y = z;
-            for j in 1..=k {
-                y = step(y, c);
-                if j < k {
-                    assert!(far2(y, z) > MODEL_NEWTON_BACK2, "{c:?}: back after {j} of {k}");
-                }
-            }
-            assert!(far2(y, z) < 1e-10, "{c:?}: not a {k}-cycle");
-        };
-        check([-1.0, 0.0], 2);
-        check([-1.754877666246693, 0.0], 3);
-        check([-0.12256116687665362, 0.7448617666197442], 3);
-        // The 1/q bulb touches the cardioid c = μ/2 - μ^2/4 at μ = e^(2πi/q); its centre lies
-        // outward, about sin(π/q)/q^2 from there.
-        let nucleus = |q: u32| {
-            let t = std::f64::consts::TAU / q as f64;
-            let mu = [t.cos(), t.sin()];
-            let mu2 = [mu[0] * mu[0] - mu[1] * mu[1], 2.0 * mu[0] * mu[1]];
-            let root = [mu[0] / 2.0 - mu2[0] / 4.0, mu[1] / 2.0 - mu2[1] / 4.0];
-            let out = [mu[0] - mu2[0], mu[1] - mu2[1]];
-            let (n, r) = (out[0].hypot(out[1]), (std::f64::consts::PI / q as f64).sin() / (q * q) as f64);
-            let mut c = [root[0] + out[0] / n * r, root[1] + out[1] / n * r];
-            for _ in 0..60 {
-                let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
-                for _ in 0..q {
-                    dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
-                    z = step(z, c);
-                }
-                let d2 = dz[0] * dz[0] + dz[1] * dz[1];
-                c = [c[0] - (z[0] * dz[0] + z[1] * dz[1]) / d2, c[1] - (z[1] * dz[0] - z[0] * dz[1]) / d2];
-            }
-            c
-        };
-        for q in [5, 17, 65, 100, 200, MODEL_MAX_PERIODS] {
-            check(nucleus(q), q);
-        }
-        assert_eq!(model_settled_cycle([0.26, 0.0]), Model::Escapes);
-        assert_eq!(model_settled_cycle([-2.01, 0.0]), Model::Escapes);
-        assert_eq!(model_settled_cycle([f64::NAN, 0.0]), Model::Escapes);
-        // The Feigenbaum point: its orbit neither escapes nor settles on a short cycle.
-        assert_eq!(model_settled_cycle([-1.401155189092051, 0.0]), Model::Unsettled);
-    }
-
     /// Where [`start_fits_f64`] allows it, a start computed in f64 has FloatExp's bits: over
     /// a grid of spacings from 2^-1000 to 2^-10, coefficients K1 and K2 each from 2^-600 to
     /// 2^600 and offsets over their whole range (mantissas and signs drawn at random), with and
@@ -2104,44 +1718,6 @@ mod tests {
         assert!(allowed > 1000 && deep > 100, "{allowed} starts in f64, {deep} of them past 2^-300");
         let k = [[FloatExp::new(1.3, 40), FloatExp::new(-1.1, 38)], [FloatExp::new(1.7, 300), FloatExp::ZERO]];
         assert!(start_fits_f64(FloatExp::new(1.2, -349), [FloatExp::ZERO; 2], Some(&k), false, [123.5, -7.25]));
-    }
-
-    /// A parameter the distance estimate calls far from the Mandelbrot set is: every point
-    /// of a sweep of disks it calls far escapes (none is in the set), and parameters inside
-    /// the set or beside it are never far.
-    #[test]
-    fn model_far_is_far() {
-        let escapes = |c: [f64; 2]| {
-            let mut z = [0.0f64, 0.0];
-            (0..20000).any(|_| {
-                z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
-                norm2(z) > 4.0
-            })
-        };
-        assert!(model_far([3.0, 0.0], 0.5, 256));
-        assert!(!model_far([0.0, 0.0], 1e-9, 256));
-        assert!(!model_far([-0.75, 0.1], 0.01, 256));
-        assert!(!model_far([0.26, 0.0], 0.1, 256));
-        let mut far = 0;
-        for i in 0..60 {
-            for j in 0..60 {
-                let c = [-2.5 + 3.5 * i as f64 / 60.0, -1.5 + 3.0 * j as f64 / 60.0];
-                for r in [0.01, 0.05, 0.2] {
-                    if !model_far(c, r, 256) {
-                        continue;
-                    }
-                    far += 1;
-                    for k in 0..16 {
-                        for t in [0.5, 1.0] {
-                            let a = std::f64::consts::TAU * k as f64 / 16.0;
-                            let e = [c[0] + t * r * a.cos(), c[1] + t * r * a.sin()];
-                            assert!(escapes(e), "{c:?} called farther than {r} from the set, but {e:?} is in it");
-                        }
-                    }
-                }
-            }
-        }
-        assert!(far > 1000, "only {far} disks called far");
     }
 
     /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
