@@ -62,6 +62,28 @@ const MAX_W: usize = 8;
 /// Vectors in flight (their dependency chains overlap).
 const G: usize = 2;
 
+/// `[e(0), e(1)]` for an expression `e` of the vector's index `g`: what
+/// `std::array::from_fn` (or an iterator over the vectors) would build, written out. The
+/// compiler does not always inline such closures into the instruction set's function: once
+/// both settings of interior detection ran bursts, they had two call sites each, and their
+/// intrinsics ran as calls (twice the time on every view; an AVX-512 `and` in the
+/// derivative's test kept liiiines 8% slower).
+macro_rules! per_vector {
+    (|$g:ident| $e:expr) => {{
+        const _: () = assert!(G == 2);
+        [
+            {
+                let $g = 0;
+                $e
+            },
+            {
+                let $g = 1;
+                $e
+            },
+        ]
+    }};
+}
+
 /// Where an empty lane reads: two steps' worth of zeros.
 static PARK: [f64; 4] = [0.0; 4];
 
@@ -552,7 +574,7 @@ fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Co
     while lanes.iter().any(|l| l.act != 0) {
         // With interior detection, bursts only while every lane's sample has left it (its
         // |dz/dz|^2 is not followed; the bursts' steps are then exactly `step`'s).
-        if !INT || lanes.iter().all(|l| l.act & !l.plain == 0) {
+        if !INT || per_vector!(|g| lanes[g].act & !lanes[g].plain) == [0; G] {
             burst::<U, DER>(unit, &mut lanes, &k, &refs);
         }
         for (l, m) in lanes.iter_mut().zip(meta.iter_mut()) {
@@ -681,26 +703,6 @@ fn step<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut C
     calm
 }
 
-/// `[e(0), e(1)]` for an expression `e` of the vector's index `g`: what
-/// `std::array::from_fn` would build, written out, since the compiler does not always
-/// inline its closures into the instruction set's function (with both settings of interior
-/// detection running bursts, their intrinsics then ran as calls, at half the speed).
-macro_rules! per_vector {
-    (|$g:ident| $e:expr) => {{
-        const _: () = assert!(G == 2);
-        [
-            {
-                let $g = 0;
-                $e
-            },
-            {
-                let $g = 1;
-                $e
-            },
-        ]
-    }};
-}
-
 /// Plain steps of every vector while nothing can happen but a step: every lane active,
 /// none just rebased, none within reach of its stop, and (tested before each step) no lane
 /// at an event. The deltas stay in registers for the whole run and each lane's Z_m is read
@@ -714,11 +716,12 @@ macro_rules! per_vector {
 #[inline(always)]
 fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U>, refs: &Refs) {
     let full = Lanes::<U>::FULL;
-    if lanes.iter().any(|l| l.act != full || l.fresh != 0) {
+    if per_vector!(|g| lanes[g].act != full || lanes[g].fresh != 0) != [false; G] {
         return;
     }
     // Pairs of steps while every vector has two steps before any stop.
-    let room = lanes.iter().map(|l| (l.next_stop - l.t16) / 32).min().unwrap_or(0);
+    let [r0, r1] = per_vector!(|g| (lanes[g].next_stop - lanes[g].t16) / 32);
+    let room = r0.min(r1);
     if room < 2 {
         return;
     }
@@ -748,7 +751,7 @@ fn burst<U: Unit, const DER: bool>(u: U, lanes: &mut [Lanes<U>; G], k: &Consts<U
                 // A step after which a derivative must be renormalised is left to `step`,
                 // which hands the sample back for it.
                 let next: [Z<U>; G] = per_vector!(|g| der_step(u, k, f[g], der[g], add[g]));
-                if next.iter().any(|&n| renorm_bits(u, k, n) != 0) {
+                if per_vector!(|g| renorm_bits(u, k, next[g])) != [0; G] {
                     break 'pairs;
                 }
                 der = next;
