@@ -852,9 +852,10 @@ impl Perturbation {
 
     /// The quadratic model's parameter as a function of a sample's offset, to first order:
     /// c' = K δc = K origin + K spacing × offset ([`Perturbation::model_scale`]), as the two
-    /// complex numbers K origin and K spacing in f64 (both are near the scale of the
-    /// minibrot's own Mandelbrot set, where its samples lie). None where the view has no
-    /// model, or no interior detection to use it.
+    /// complex numbers K origin and K spacing in f64 (in the model's coordinate, where the
+    /// minibrot is the whole Mandelbrot set: K spacing is a sample's step there, and both
+    /// terms are a few units at most where the samples lie near the minibrot). None where
+    /// the view has no model, or no interior detection to use it.
     fn model_map(&self) -> Option<([f64; 2], [f64; 2])> {
         self.interior?;
         let k = self.model_scale?;

@@ -196,11 +196,14 @@ mod tests {
     use super::*;
 
     /// The model's cycle finder on parameters of known period: the period-2 bulb, the
-    /// airplane and the rabbit (3), and nuclei of the 1/q bulbs of the main cardioid for q
-    /// up to past 64 (the longest cycle the search tries), each found here by Newton's method
-    /// on f_c^q(0) = 0 from the bulb's estimated centre. The point returned must lie on a
-    /// cycle of exactly the period returned. Outside the set (beside the cusp, past the tip)
-    /// there is no cycle; at the Feigenbaum point none settles.
+    /// airplane and the rabbit (3), nuclei of the 1/q bulbs of the main cardioid for q up
+    /// to [`MAX_PERIODS`] (the longest cycle the search tries), each found here by Newton's
+    /// method on f_c^q(0) = 0 from the bulb's estimated centre, and parameters near the edge
+    /// of the period-2 bulb whose 2-cycle attracts slowly (multiplier 0.999 and 0.9999 in
+    /// modulus: an orbit waited for would take 10^4 to 10^5 turns to settle, past
+    /// [`ITERATIONS`]). The point returned must lie on a cycle of exactly the period
+    /// returned. Outside the set (beside the cusp, past the tip) there is no cycle; at the
+    /// Feigenbaum point none settles.
     #[test]
     fn model_settled_cycle_finds_cycles_of_every_period_to_its_limit() {
         let step = |z: [f64; 2], c: [f64; 2]| [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
@@ -218,6 +221,10 @@ mod tests {
             assert!(far2(y, z) < 1e-10, "{c:?}: not a {k}-cycle");
         };
         check([-1.0, 0.0], 2);
+        // The period-2 bulb is |c + 1| < 1/4, its 2-cycle's multiplier 4 (c + 1).
+        for (m, t) in [(0.999, 1.0f64), (0.9999, 2.5), (0.9999, -0.3)] {
+            check([-1.0 + m / 4.0 * t.cos(), m / 4.0 * t.sin()], 2);
+        }
         check([-1.754877666246693, 0.0], 3);
         check([-0.12256116687665362, 0.7448617666197442], 3);
         // The 1/q bulb touches the cardioid c = μ/2 - μ^2/4 at μ = e^(2πi/q); its centre lies
