@@ -12,10 +12,11 @@
 use crate::num::real::{cmul, norm2};
 
 /// The longest cycle the quadratic model's orbit is searched for, in periods: bulbs of the
-/// minibrot, and the minibrots embedded near its edge, whose samples the anchor test above
-/// would reach only after many turns and the contraction criterion only after thousands
-/// (their multiplier per turn is near 1). A Newton test of k turns is tried only where the
-/// iteration limit holds [`super::MODEL_TURNS_SPARE`] such tests.
+/// minibrot, and the minibrots embedded near its edge, whose samples Newton's test from an
+/// anchor (`Perturbation::newton_probe`) would reach only after many turns and the
+/// contraction criterion only after thousands (their multiplier per turn is near 1). A
+/// Newton test of k turns is tried only where the iteration limit holds
+/// [`super::MODEL_TURNS_SPARE`] such tests.
 pub(super) const MAX_PERIODS: u32 = 1024;
 /// Iterations of the quadratic model's orbit at most ([`super::Perturbation::model_cycle`]).
 const ITERATIONS: u32 = 8192;
@@ -26,9 +27,10 @@ const NEWTON_DELAY: u32 = 4;
 const NEWTON_STEPS: u32 = 24;
 /// [`attractor`] has converged once a Newton step's squared length is below this.
 const NEWTON_CLOSE2: f64 = 1e-26;
-/// Newton's squared step below which [`attractor`] judges the multiplier: known then
-/// to about 10^-5, and a cycle nearer neutral than that is no start the certificate could
-/// use (its bound needs the multiplier 10^-5 below 1, [`crate::orbit::interior::newton_attracting`]).
+/// Newton's squared step below which [`attractor`] judges the multiplier: known then to
+/// about 10^-5, and a cycle nearer neutral than that is no start the certificate could use
+/// (its bound needs the multiplier 10^-5 below 1:
+/// [`crate::orbit::interior::newton_attracting`]).
 const NEWTON_JUDGE2: f64 = 1e-10;
 /// A cycle point that comes back within this squared distance after a divisor of the period
 /// has that period (well above the rounding of k steps, far below any two points of a cycle
