@@ -258,7 +258,7 @@ pub fn prepare(
         orbit_seconds,
         tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
     };
-    engine.model_scale = engine.model_scale();
+    engine.model_scale = engine.compute_model_scale();
     Ok(engine)
 }
 

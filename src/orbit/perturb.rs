@@ -179,7 +179,7 @@ pub struct Perturbation {
     pub renormal: Option<[FloatExp; 2]>,
     /// With [`Perturbation::renormal`]: K = Λ ∂Z_p/∂c at the nucleus, which takes a sample's
     /// offset δc to the quadratic model's parameter c' = K δc to first order
-    /// ([`Perturbation::model_scale`]; set once the engine is built).
+    /// (`Perturbation::compute_model_scale`; set once the engine is built).
     pub model_scale: Option<[FloatExp; 2]>,
     /// Delta number types.
     pub numbers: Numbers,
@@ -615,6 +615,13 @@ struct Lane {
     dc_fe: [FloatExp; 2],
 }
 
+/// A point z of the quadratic model's coordinate z = Λ w as the full value w near 0 at a
+/// period end (`Perturbation::model_cycle`); None where it is not a finite f64.
+fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
+    let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+    (w[0].is_finite() && w[1].is_finite()).then_some(w)
+}
+
 /// A sample's δc in `T`: the origin plus the spacing times its offset (a zero origin is
 /// not added, which is exact either way: a render of its own is unchanged bit for bit).
 fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset: [f64; 2]) -> [T; 2] {
@@ -841,17 +848,17 @@ impl Perturbation {
         false
     }
 
-    /// K = Λ ∂Z_p/∂c of a nucleus's reference ([`Perturbation::model_scale`]'s field): the
-    /// sensitivity of one turn from w = 0 at the nucleus, times Λ. None where the view has
-    /// no Newton test.
-    pub fn model_scale(&self) -> Option<[FloatExp; 2]> {
+    /// K = Λ ∂Z_p/∂c of a nucleus's reference, which the engine keeps in its `model_scale`
+    /// field: the sensitivity of one turn from w = 0 at the nucleus, times Λ. None where the
+    /// view has no Newton test.
+    pub(super) fn compute_model_scale(&self) -> Option<[FloatExp; 2]> {
         let (p, lam) = (self.newton_period()?, self.renormal?);
         let (_, sens) = self.return_map_with::<true>([0.0; 2], [0.0; 2], p, 1, false)?;
         Some(cmul(lam, sens?.dc))
     }
 
     /// The quadratic model's parameter as a function of a sample's offset, to first order:
-    /// c' = K δc = K origin + K spacing × offset ([`Perturbation::model_scale`]), as the two
+    /// c' = K δc = K origin + K spacing × offset (K the engine's `model_scale`), as the two
     /// complex numbers K origin and K spacing in f64 (in the model's coordinate, where the
     /// minibrot is the whole Mandelbrot set: K spacing is a sample's step there, and both
     /// terms are a few units at most where the samples lie near the minibrot). None where
@@ -904,8 +911,7 @@ impl Perturbation {
             1 => (model::fixed_point(c)?, 1),
             k => model::attractor(c, k)?,
         };
-        let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-        (w[0].is_finite() && w[1].is_finite()).then_some((w, k))
+        Some((from_model(lam, z)?, k))
     }
 
     /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and

@@ -11,9 +11,9 @@
 //! reached the iteration limit, so the disks change no pixel, only the time.
 
 use super::model::{self, Model};
-use super::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation, delta_c};
+use super::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation, delta_c, from_model};
 use crate::num::FloatExp;
-use crate::num::real::{cconv, cmul, cto_f64, norm2};
+use crate::num::real::{cmul, cto_f64, norm2};
 use crate::orbit::interior;
 
 /// Iterations of the quadratic model's orbit at most in a disk's gate (the cycles of bulbs
@@ -162,7 +162,7 @@ impl Perturbation {
             }
             (z, k)
         };
-        let w0 = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
+        let Some(w0) = from_model(lam, z) else { return Disk::Failed };
         let Some(w) = interior::newton_cycle(w0, |w, second| self.return_map(w, dc, p, k, second)) else {
             return Disk::Failed;
         };
