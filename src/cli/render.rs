@@ -175,7 +175,7 @@ fn report(
         );
         if let Some(d) = &stats.deep {
             text.push_str(&format!(
-                "reference   {} iterations{}{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages)\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations, {} rebases\n",
+                "reference   {} iterations{}{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages{})\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations{}, {} rebases\n",
                 d.reference_iterations,
                 match (d.reference_escaped, d.reference_period) {
                     (true, _) => " (escaped)".to_string(),
@@ -199,10 +199,16 @@ fn report(
                 d.bla_bytes as f64 / 1e6,
                 d.aligned_steps,
                 d.aligned_stages,
+                if d.tail_steps > 0 {
+                    format!("; {} steps of {}-iteration blocks through the packed tail", d.tail_steps, d.tail_block)
+                } else {
+                    String::new()
+                },
                 d.steps,
                 d.floatexp_steps,
                 d.bla_steps,
                 d.bla_iterations,
+                if d.tail_steps > 0 { format!(" ({} of the steps through the packed tail)", d.tail_bla_steps) } else { String::new() },
                 d.rebases
             ));
             text.push_str(&format!("interior    detection {}", d.interior_detection.describe()));

@@ -43,7 +43,11 @@
 //! phase of the loop, where entries f64 cannot hold are marked unusable. Level 0 (single
 //! steps) is not stored: the loop takes those as perturbation steps.
 
+mod tail;
+
 use rayon::prelude::*;
+
+pub use tail::TailSteps;
 
 use super::reference::Reference;
 use crate::num::real::{cadd, cmul, norm2};
@@ -136,6 +140,8 @@ pub struct BlaTable<T> {
     radii: Vec<T>,
     /// Steps aligned to the reference's near-periods (see [`Stages`]).
     stages: Stages<T>,
+    /// Steps of whole blocks through the reference's packed tail, if it has one.
+    tail: Option<TailSteps<T>>,
 }
 
 /// Steps that end where the reference dips towards 0, in stages (after Zhuoran's "LA v2").
@@ -369,7 +375,10 @@ impl BlaTable<FloatExp> {
         };
         let mag2 = |i| norm2(orbit.get_fe(origin + i));
         let stages = Stages::build(count, top, mag2, tree, |x, y| merge(x, y, dc_max, epsilon));
-        BlaTable { origin, levels, seconds, radii, stages }
+        let tail = orbit
+            .packed()
+            .and_then(|p| TailSteps::build(p, orbit.get_fe(p.seed_index()), one, epsilon, dc_max, escape));
+        BlaTable { origin, levels, seconds, radii, stages, tail }
     }
 
     /// The same table for the f64 loop; entries f64 cannot hold are never valid.
@@ -396,7 +405,8 @@ impl BlaTable<FloatExp> {
             second.iter().zip(&s.start2).map(|(q, r)| if q.r2 < 0.0 { -1.0 } else { r.to_f64() }).collect();
         let (marked, at, len, count) = (s.marked.clone(), s.at.clone(), s.len.clone(), s.count);
         let stages = Stages { marked, at, first, second, start2, len, count };
-        BlaTable { origin: self.origin, levels, seconds, radii, stages }
+        let tail = self.tail.as_ref().map(TailSteps::to_f64);
+        BlaTable { origin: self.origin, levels, seconds, radii, stages, tail }
     }
 }
 
@@ -654,6 +664,13 @@ impl<T: Real> BlaTable<T> {
             + s.start2.capacity() * std::mem::size_of::<T>()
             + (s.len.capacity() + s.at.capacity()) * 4
             + s.marked.capacity() * 8
+            + self.tail.as_ref().map_or(0, TailSteps::bytes)
+    }
+
+    /// The steps through the reference's packed tail, if it has one.
+    #[inline(always)]
+    pub fn tail(&self) -> Option<&TailSteps<T>> {
+        self.tail.as_ref()
     }
 
     /// How many period-aligned steps the table holds.

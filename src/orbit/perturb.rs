@@ -109,6 +109,8 @@ pub struct Counters {
     pub bla_steps: u64,
     /// Iterations covered by BLA steps.
     pub bla_iterations: u64,
+    /// Of the BLA steps, those over whole blocks of a packed tail ([`crate::orbit::bla::TailSteps`]).
+    pub tail_steps: u64,
     /// Rebases to the start of an orbit of 0.
     pub rebases: u64,
     /// Samples Pauldelbrot's criterion flagged (each was fixed by rebasing).
@@ -130,6 +132,7 @@ impl Counters {
         self.floatexp_steps += o.floatexp_steps;
         self.bla_steps += o.bla_steps;
         self.bla_iterations += o.bla_iterations;
+        self.tail_steps += o.tail_steps;
         self.rebases += o.rebases;
         self.glitches += o.glitches;
         self.interior += o.interior;
@@ -1571,6 +1574,7 @@ impl Perturbation {
         // Entered at the seed only: the cursor starts there.
         debug_assert_eq!(s.m, packed.seed_index());
         let mut cursor = packed.cursor();
+        let steps = ctx.tables[s.which].and_then(BlaTable::tail);
         loop {
             let d2 = norm2(s.dz);
             let f2 = norm2(full);
@@ -1584,14 +1588,30 @@ impl Perturbation {
                 }
                 zm = [D::ZERO; 2];
             }
-            let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
-            if rebase || glitch {
-                // Back in the dense part: the switch `op` takes after a step. Within the
-                // tail the sample keeps its number type.
-                return switch;
+            // A block's step where one starts here and is valid (in the f64 phase, for a
+            // delta that `op` would still look a step up for).
+            let bla = !(rebase || glitch) && (full_range || (!s.single && d2.to_f64() <= self.single_d2));
+            if let Some(t) = steps.filter(|_| bla)
+                && let Some((e, len, at)) = t.lookup(s.m, d2, self.max_iter - s.n)
+            {
+                if INT && s.probe.plain {
+                    self.apply_bla::<D, DER, false>((e, len), s, d2, der, ctx.add_fe, local);
+                } else {
+                    self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
+                }
+                local.tail_steps += 1;
+                cursor = at;
+            } else {
+                let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
+                if rebase || glitch {
+                    // Back in the dense part: the switch `op` takes after a step. Within the
+                    // tail the sample keeps its number type.
+                    return switch;
+                }
+                let more = cursor.advance(packed);
+                debug_assert!(more, "the tail's end was tested before the step");
             }
-            let more = cursor.advance(packed);
-            debug_assert!(more, "the tail's end was tested before the step");
+            debug_assert_eq!(cursor.index(), s.m, "the reader stands at the sample's index");
             if INT && s.shrink.interior(self.check()) {
                 return found_interior(local, false);
             }
@@ -1921,6 +1941,12 @@ mod tests {
                     assert_eq!(c_many.newton, c_one.newton, "{what} {simd}: samples found by Newton's test");
                 }
                 assert!(escaped > 0 && c_one.steps > 1000, "{radius}: the view must exercise single steps");
+                // A packed tail with BLA: samples cross it by its blocks' steps too (the Julia
+                // view's tail is its orbit of 0's, which samples follow after a rebase with
+                // deltas as large as the orbit, too large for a block's step).
+                let tail = packed && bla.is_some() && julia.is_none();
+                assert!(c_one.tail_steps > 0 || !tail, "{what}: steps through the packed tail");
+                assert!(c_one.tail_steps == 0 || bla.is_some(), "{what}: tail steps without BLA");
                 match &without {
                     None => {
                         assert_eq!(c_one.interior, 0, "{what}");

@@ -146,6 +146,11 @@ pub struct DeepStats {
     pub aligned_steps: usize,
     /// The stages of near-periods they reach.
     pub aligned_stages: usize,
+    /// Steps over whole blocks of the primary reference's packed tail in its table (0 without
+    /// a packed tail or BLA).
+    pub tail_steps: usize,
+    /// Those blocks' length in iterations (0 without).
+    pub tail_block: u32,
     /// Perturbation steps performed one at a time.
     pub steps: u64,
     /// Of those, steps in FloatExp.
@@ -154,6 +159,8 @@ pub struct DeepStats {
     pub bla_steps: u64,
     /// Iterations skipped by BLA steps.
     pub bla_iterations: u64,
+    /// Of the BLA steps, those over blocks of a packed tail.
+    pub tail_bla_steps: u64,
     /// Rebases.
     pub rebases: u64,
     /// Whether interior detection ran, and why (`on`, `auto-on`, `off`,
@@ -514,10 +521,13 @@ pub fn render<P: Send>(
             bla_bytes,
             aligned_steps: d.bla_f64[0].as_ref().map_or(0, |t| t.aligned_steps()),
             aligned_stages: d.bla_f64[0].as_ref().map_or(0, |t| t.stage_count()),
+            tail_steps: d.bla_f64[0].as_ref().and_then(|t| t.tail()).map_or(0, |t| t.steps()),
+            tail_block: d.bla_f64[0].as_ref().and_then(|t| t.tail()).map_or(0, |t| t.block()),
             steps: c.steps,
             floatexp_steps: c.floatexp_steps,
             bla_steps: c.bla_steps,
             bla_iterations: c.bla_iterations,
+            tail_bla_steps: c.tail_steps,
             rebases: c.rebases,
             interior_detection: d.interior_decision,
             interior_threshold: d.interior.map(|c| c.below2.to_f64()),

@@ -1,0 +1,263 @@
+//! BLA steps through a packed tail ([`crate::orbit::packed`]): the part of a long reference
+//! orbit that is stored in about a byte per iteration, past its dense part, and can only be
+//! read in order.
+//!
+//! The dense part's tree holds a step of every length 2^k at every index it can start from,
+//! about 200 bytes per iteration in its two number types: 200 GB for the 10^9 iterations
+//! that the packed store keeps in 1 GB. Its single steps are not stored at all (the loop
+//! takes them as perturbation steps from the orbit's values), and the values of a packed
+//! tail are not at hand by index. So the tail keeps only long steps: the tail is cut into
+//! blocks of 2^shift iterations from its seed (the dense part's last index), each block's
+//! step is merged from its single steps as the dense tree merges them (pairwise, level by
+//! level), and a tree of whole blocks is built over those. Beside each block boundary the
+//! table keeps a reader ([`Cursor`]) standing there, so that a sample that takes a step goes
+//! on reading the tail from where the step ends. The block length is chosen so that a
+//! table has at most 2^[`BLOCK_BITS`] blocks: 2^4 iterations for short tails, 2^11 for
+//! 10^9.
+//!
+//! A sample in the tail takes single steps (the dense loop's) until it stands at a block
+//! boundary, then the longest step from there that is valid for its delta, as the dense
+//! tree's lookup climbs its levels. A sample whose delta is too large for a block's step
+//! takes that block's iterations one at a time; near its escape it would in the dense tree
+//! too. The dense table's period-aligned stages have no counterpart here: a tail is long
+//! because its reference has no period to rebase at.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::{Bla, Node, Second, Step, entry_to_f64, largest_root, merge};
+use crate::num::{FloatExp, Real, Scaled};
+use crate::orbit::packed::{Cursor, Packed};
+
+/// A tail table has at most 2^BLOCK_BITS blocks (the block length grows with the tail).
+const BLOCK_BITS: u32 = 19;
+/// Blocks are at least 2^MIN_SHIFT iterations long.
+const MIN_SHIFT: u32 = 4;
+
+/// Steps of whole blocks of a packed tail, and readers at the blocks' boundaries.
+#[derive(Debug, Clone)]
+pub struct TailSteps<T> {
+    /// Index of the tail's seed, where block 0 starts.
+    seed: u32,
+    /// Blocks are 2^shift iterations long.
+    shift: u32,
+    /// A reader standing at each block boundary, seed + j 2^shift, the end of the last
+    /// whole block included.
+    marks: Arc<[Cursor]>,
+    /// levels[k][j]: the step over blocks j 2^k to (j + 1) 2^k - 1, first-order parts.
+    levels: Vec<Vec<Bla<T>>>,
+    /// Their second-order parts.
+    seconds: Vec<Vec<Second<T>>>,
+    /// Their squared start radii (a delta tested at the step's first index, as
+    /// [`super::BlaTable::lookup`] takes them); negative where never valid.
+    starts: Vec<Vec<T>>,
+}
+
+/// [`merge`] of `x` then `y`, a single step ([`Node::single`]: a2 = 1, ab = b2 = 0), with
+/// those coefficients' products left out: the same composite, for a block's steps folded
+/// one iteration at a time (the whole cost of building a tail's steps).
+fn then_single(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
+    let a = y.a * x.a;
+    let b = y.a * x.b + y.b;
+    let a2 = y.a * x.a2 + x.a.square();
+    let ab = y.a * x.ab + (x.a * x.b).ldexp(1);
+    let b2 = y.a * x.b2 + x.b.square();
+    let [ax, bx, a2x, abx, b2x] = [x.a, x.b, x.a2, x.ab, x.b2].map(Scaled::abs);
+    let ay = y.a.abs();
+    let g = gamma;
+    let (qp, qq, qs) = (a2x, abx * g, b2x * g * g);
+    let quarter = FloatExp::from(eps / 4.0);
+    // The bounds of `merge`; the third (|AB_y| g |Q| <= ε/4 |A_y| |L|) holds everywhere
+    // where AB_y = 0, and |A2_y| = 1 in the fourth.
+    let bounds = [
+        largest_root(qp, ax + qq, bx * g + qs - y.r),
+        largest_root(qp, qq - ax, qs - bx * g),
+        largest_root(qp, qq, qs - quarter * ay),
+    ];
+    let r = bounds.into_iter().flatten().fold(x.r, FloatExp::min);
+    let r0 = bounds.into_iter().flatten().fold(x.r0, FloatExp::min);
+    let through = (y.lin - bx * g).max(FloatExp::ZERO);
+    let lin = x.lin.min(if ax.is_zero() { y.lin.max(FloatExp::ZERO) } else { through / ax });
+    Node { a, b, a2, ab, b2, r, r0, lin }
+}
+
+/// The block length's exponent for a tail of `len` values.
+fn block_shift(len: u32) -> u32 {
+    let bits = u32::BITS - len.leading_zeros();
+    bits.saturating_sub(BLOCK_BITS).max(MIN_SHIFT)
+}
+
+impl TailSteps<FloatExp> {
+    /// The steps of `packed`'s whole blocks; `seed` is the seed's value at full range (kept
+    /// with the dense part). `one`, `epsilon`, `dc_max` and `escape` as the dense tree's
+    /// build takes them. None where the tail holds no whole block.
+    pub(super) fn build(
+        packed: &Packed,
+        seed: [FloatExp; 2],
+        one: Scaled,
+        epsilon: f64,
+        dc_max: FloatExp,
+        escape: FloatExp,
+    ) -> Option<Self> {
+        let shift = block_shift(packed.len());
+        let blocks = (packed.len() >> shift) as usize;
+        if blocks == 0 {
+            return None;
+        }
+        let block = 1u32 << shift;
+        // One pass in order for the readers at the boundaries.
+        let mut cursor = packed.cursor();
+        let mut marks = Vec::with_capacity(blocks + 1);
+        marks.push(cursor);
+        for _ in 0..blocks {
+            for _ in 0..block {
+                let more = cursor.advance(packed);
+                debug_assert!(more, "whole blocks lie within the tail");
+            }
+            marks.push(cursor);
+        }
+        // Each block's step, from its single steps merged pairwise.
+        let first: Vec<Node> = (0..blocks)
+            .into_par_iter()
+            .map(|j| {
+                let mut c = marks[j];
+                // The seed's own exponent, when it is tiny, is kept with the dense part.
+                let z = if j == 0 { seed } else { c.get_fe(packed) };
+                let mut acc = Node::single(z, one, epsilon, escape);
+                for _ in 1..block {
+                    c.advance(packed);
+                    acc = then_single(&acc, &Node::single(c.get_fe(packed), one, epsilon, escape), dc_max, epsilon);
+                }
+                acc
+            })
+            .collect();
+        let (mut levels, mut seconds, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+        let mut level = first;
+        loop {
+            let (l, q): (Vec<_>, Vec<_>) = level.par_iter().map(Node::parts).unzip();
+            levels.push(l);
+            seconds.push(q);
+            starts.push(level.par_iter().map(|n| n.r0 * n.r0).collect());
+            if level.len() < 2 {
+                break;
+            }
+            level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], dc_max, epsilon)).collect();
+        }
+        let seed = packed.seed_index();
+        Some(TailSteps { seed, shift, marks: marks.into(), levels, seconds, starts })
+    }
+
+    /// The same steps for the f64 loop; steps f64 cannot hold are never valid.
+    pub(super) fn to_f64(&self) -> TailSteps<f64> {
+        let mut levels = Vec::new();
+        let mut seconds = Vec::new();
+        let mut starts = Vec::new();
+        for ((l, q), r) in self.levels.iter().zip(&self.seconds).zip(&self.starts) {
+            let (l, q): (Vec<_>, Vec<_>) = l.iter().zip(q).map(|(e, q)| entry_to_f64(e, q)).unzip();
+            starts.push(q.iter().zip(r).map(|(q, r)| if q.r2 < 0.0 { -1.0 } else { r.to_f64() }).collect());
+            levels.push(l);
+            seconds.push(q);
+        }
+        TailSteps { seed: self.seed, shift: self.shift, marks: self.marks.clone(), levels, seconds, starts }
+    }
+}
+
+impl<T: Real> TailSteps<T> {
+    /// The longest valid step from index `m` for a delta with |z|^2 = `z2` that was tested
+    /// at `m` (no rebase, no escape), at most `budget` iterations long: the step, its length
+    /// and a reader standing where it ends. None where `m` is no block boundary or no step
+    /// from it is valid. A longer step from the same boundary is valid on a subset of where
+    /// a shorter one is, so the search stops at the first that fails.
+    #[inline]
+    pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32, Cursor)> {
+        let i = m.checked_sub(self.seed)?;
+        if i & ((1 << self.shift) - 1) != 0 {
+            return None;
+        }
+        let j = (i >> self.shift) as usize;
+        let mut best = None;
+        for (k, radii) in self.starts.iter().enumerate() {
+            if j & ((1 << k) - 1) != 0 {
+                break;
+            }
+            let Some(r) = radii.get(j >> k) else { break };
+            let len = 1u64 << (self.shift as usize + k);
+            // Written so that a NaN radius fails as "not valid".
+            let valid = z2 < *r;
+            if len > u64::from(budget) || !valid {
+                break;
+            }
+            best = Some(k);
+        }
+        let k = best?;
+        let step = Step { first: &self.levels[k][j >> k], second: &self.seconds[k][j >> k] };
+        Some((step, 1 << (self.shift as usize + k), self.marks[j + (1 << k)]))
+    }
+
+    /// Bytes of memory the steps and readers use.
+    pub fn bytes(&self) -> usize {
+        fn each<E>(v: &[Vec<E>]) -> usize {
+            v.iter().map(|l| l.capacity() * std::mem::size_of::<E>()).sum()
+        }
+        each(&self.levels) + each(&self.seconds) + each(&self.starts) + self.marks.len() * std::mem::size_of::<Cursor>()
+    }
+
+    /// How many block steps it holds (every level).
+    pub fn steps(&self) -> usize {
+        self.levels.iter().map(Vec::len).sum()
+    }
+
+    /// The block length in iterations.
+    pub fn block(&self) -> u32 {
+        1 << self.shift
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fold's composite is `merge`'s with a single step, to rounding: over an orbit of
+    /// the period-3 bulb's edge, from offsets deep and shallow.
+    #[test]
+    fn a_single_step_folds_as_merge_composes_it() {
+        let one = Scaled::from_f64([1.0, 0.0]);
+        let escape = FloatExp::from(1e8);
+        let c = [-0.1225611668766536, 0.7448617666197442];
+        let mut z = [0.0f64, 0.0];
+        for gamma in [FloatExp::from(1e-30), FloatExp::from(1e-300).mul_f64(1e-300)] {
+            let fe = |z: [f64; 2]| [FloatExp::from(z[0]), FloatExp::from(z[1])];
+            let mut fold = Node::single(fe([0.3, 0.1]), one, 1e-14, escape);
+            let mut merged = fold;
+            for _ in 0..300 {
+                z = [z[0] * z[0] - z[1] * z[1] + c[0], 2.0 * z[0] * z[1] + c[1]];
+                let y = Node::single(fe(z), one, 1e-14, escape);
+                fold = then_single(&fold, &y, gamma, 1e-14);
+                merged = merge(&merged, &y, gamma, 1e-14);
+                let near = |u: FloatExp, v: FloatExp| u == v || ((u - v).abs() / u.abs().max(v.abs())).to_f64() < 1e-12;
+                let (fp, mp) = (fold.parts(), merged.parts());
+                for (u, v) in [(fp.1.r2, mp.1.r2), (fp.0.lin2, mp.0.lin2), (fold.r0, merged.r0)] {
+                    assert!(near(u, v), "{u:?} {v:?}");
+                }
+                for (u, v) in
+                    [fp.0.a, fp.0.b, fp.1.a2, fp.1.ab, fp.1.b2].iter().zip([mp.0.a, mp.0.b, mp.1.a2, mp.1.ab, mp.1.b2])
+                {
+                    for k in 0..2 {
+                        assert!(near(u[k], v[k]), "{u:?} {v:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn blocks_grow_with_the_tail_to_bound_the_table() {
+        assert_eq!(block_shift(1000), MIN_SHIFT);
+        assert_eq!(block_shift(1 << 20), MIN_SHIFT);
+        assert_eq!(block_shift(1 << 25), 7);
+        // 10^9 values: blocks of 2048, fewer than 2^19 of them.
+        assert_eq!(block_shift(1_000_000_000), 11);
+        assert!(1_000_000_000u32 >> block_shift(1_000_000_000) < 1 << BLOCK_BITS);
+    }
+}
