@@ -199,8 +199,11 @@ fn report(
                 d.bla_bytes as f64 / 1e6,
                 d.aligned_steps,
                 d.aligned_stages,
-                if d.tail_steps > 0 {
-                    format!("; {} steps of {}-iteration blocks through the packed tail", d.tail_steps, d.tail_block)
+                if d.block_steps > 0 {
+                    format!(
+                        "; {} steps of {}-iteration blocks from iteration {}",
+                        d.block_steps, d.block_length, d.blocks_from
+                    )
                 } else {
                     String::new()
                 },
@@ -208,7 +211,11 @@ fn report(
                 d.floatexp_steps,
                 d.bla_steps,
                 d.bla_iterations,
-                if d.tail_steps > 0 { format!(" ({} of the steps through the packed tail)", d.tail_bla_steps) } else { String::new() },
+                if d.reference_dense < d.reference_iterations {
+                    format!(" ({} of the steps through the packed tail)", d.tail_bla_steps)
+                } else {
+                    String::new()
+                },
                 d.rebases
             ));
             text.push_str(&format!("interior    detection {}", d.interior_detection.describe()));

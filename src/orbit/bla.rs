@@ -140,9 +140,19 @@ pub struct BlaTable<T> {
     radii: Vec<T>,
     /// Steps aligned to the reference's near-periods (see [`Stages`]).
     stages: Stages<T>,
+    /// How many indices from the origin the tree and the stages cover.
+    tree_len: u32,
+    /// Steps of whole blocks through the densely stored orbit past those, if it is longer.
+    blocks: Option<TailSteps<T>>,
     /// Steps of whole blocks through the reference's packed tail, if it has one.
     tail: Option<TailSteps<T>>,
 }
+
+/// The tree and the stages cover at most this many iterations of a reference (the part
+/// a long orbit keeps dense, [`super::DENSE_PART`]): about 100 bytes per iteration in f64
+/// and 450 in FloatExp, so 2^25 dense iterations would take 3.4 or 15 GB. Past it, steps
+/// of whole blocks ([`TailSteps`]).
+const TREE_ITERATIONS: u32 = super::DENSE_PART;
 
 /// Steps that end where the reference dips towards 0, in stages (after Zhuoran's "LA v2").
 ///
@@ -349,11 +359,28 @@ impl BlaTable<FloatExp> {
         dc_max: FloatExp,
         escape: f64,
     ) -> Self {
+        Self::build_with_tree(orbit, origin, mandelbrot, epsilon, dc_max, escape, TREE_ITERATIONS)
+    }
+
+    /// [`BlaTable::build`] with the tree over at most `tree` iterations (tests reach the
+    /// blocks past it on short orbits).
+    fn build_with_tree(
+        orbit: &Reference,
+        origin: u32,
+        mandelbrot: bool,
+        epsilon: f64,
+        dc_max: FloatExp,
+        escape: f64,
+        tree: u32,
+    ) -> Self {
         let one = Scaled::from_f64([if mandelbrot { 1.0 } else { 0.0 }, 0.0]);
         let escape = FloatExp::from(escape);
         let single = |i: u32| Node::single(orbit.get_fe(origin + i), one, epsilon, escape);
-        let mut level: Vec<Node> = (0..orbit.last().saturating_sub(origin)).into_par_iter().map(single).collect();
-        let count = level.len() as u32;
+        let all = orbit.last().saturating_sub(origin);
+        // The whole tree over the first part; whole blocks past it.
+        let tree_len = all.min(tree);
+        let mut level: Vec<Node> = (0..tree_len).into_par_iter().map(single).collect();
+        let count = tree_len;
         let (mut levels, mut seconds, mut starts) = (Vec::new(), Vec::new(), Vec::new());
         while level.len() >= 2 {
             level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], dc_max, epsilon)).collect();
@@ -375,10 +402,10 @@ impl BlaTable<FloatExp> {
         };
         let mag2 = |i| norm2(orbit.get_fe(origin + i));
         let stages = Stages::build(count, top, mag2, tree, |x, y| merge(x, y, dc_max, epsilon));
-        let tail = orbit
-            .packed()
-            .and_then(|p| TailSteps::build(p, orbit.get_fe(p.seed_index()), one, epsilon, dc_max, escape));
-        BlaTable { origin, levels, seconds, radii, stages, tail }
+        let how = tail::Build { one, epsilon, dc_max, escape };
+        let blocks = (all > tree_len).then(|| TailSteps::dense(orbit, origin + tree_len, how)).flatten();
+        let tail = orbit.packed().and_then(|p| TailSteps::packed(p, orbit.get_fe(p.seed_index()), how));
+        BlaTable { origin, tree_len, levels, seconds, radii, stages, blocks, tail }
     }
 
     /// The same table for the f64 loop; entries f64 cannot hold are never valid.
@@ -405,8 +432,8 @@ impl BlaTable<FloatExp> {
             second.iter().zip(&s.start2).map(|(q, r)| if q.r2 < 0.0 { -1.0 } else { r.to_f64() }).collect();
         let (marked, at, len, count) = (s.marked.clone(), s.at.clone(), s.len.clone(), s.count);
         let stages = Stages { marked, at, first, second, start2, len, count };
-        let tail = self.tail.as_ref().map(TailSteps::to_f64);
-        BlaTable { origin: self.origin, levels, seconds, radii, stages, tail }
+        let (blocks, tail) = (self.blocks.as_ref().map(TailSteps::to_f64), self.tail.as_ref().map(TailSteps::to_f64));
+        BlaTable { origin: self.origin, tree_len: self.tree_len, levels, seconds, radii, stages, blocks, tail }
     }
 }
 
@@ -569,6 +596,9 @@ impl<T: Real> BlaTable<T> {
     #[inline(always)]
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32)> {
         let i = m.checked_sub(self.origin)?;
+        if i >= self.tree_len {
+            return self.blocks.as_ref()?.lookup(m, z2, budget).map(|(step, len, _)| (step, len));
+        }
         let (start, n) = column(i, self.levels.len());
         let mut best = None;
         if let Some(radii) = self.radii.get(start..start + n) {
@@ -664,7 +694,14 @@ impl<T: Real> BlaTable<T> {
             + s.start2.capacity() * std::mem::size_of::<T>()
             + (s.len.capacity() + s.at.capacity()) * 4
             + s.marked.capacity() * 8
+            + self.blocks.as_ref().map_or(0, TailSteps::bytes)
             + self.tail.as_ref().map_or(0, TailSteps::bytes)
+    }
+
+    /// The steps of whole blocks through the dense orbit past the tree, if it is longer.
+    #[inline(always)]
+    pub fn blocks(&self) -> Option<&TailSteps<T>> {
+        self.blocks.as_ref()
     }
 
     /// The steps through the reference's packed tail, if it has one.
@@ -799,6 +836,52 @@ mod tests {
         let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
         let t = BlaTable::build(&r, 1, true, eps, cabs(dc), 2.0);
         (r, t, eps, dc)
+    }
+
+    /// Steps of whole blocks past the tree, through a dense orbit and through a packed tail
+    /// cut at the same index: the same steps (the same values, folded alike), and each
+    /// matches the exact perturbed steps it skips to second order, from single blocks to
+    /// the longest the delta allows. The reference lies inside the main cardioid, near its
+    /// edge (multiplier 0.98): a long orbit that neither escapes nor dips towards 0, so that
+    /// steps hold deltas whose second-order terms count.
+    #[test]
+    fn steps_of_blocks_match_iterated_steps_dense_and_packed() {
+        let c = [Float::from(-0.7), Float::from(0.2)];
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let compute = |dense_limit| {
+            let steps = crate::orbit::reference::Stepping { dense_limit, ..Default::default() };
+            Reference::compute(&z0, &c, 4000, 2.0, 128, steps, &|_| {}, &AtomicBool::new(false)).unwrap()
+        };
+        let (dense, packed) = (compute(None), compute(Some(1000)));
+        assert!(packed.packed().is_some() && dense.last() > 3000, "a long orbit, packed after 1000");
+        let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
+        let tables = |r: &Reference| BlaTable::build_with_tree(r, 1, true, eps, cabs(dc), 2.0, 999);
+        let (td, tp) = (tables(&dense), tables(&packed));
+        let (bd, bp) = (td.blocks().expect("blocks past the tree"), tp.tail().expect("blocks in the tail"));
+        assert!(tp.blocks().is_none() && td.tail().is_none());
+        assert_eq!((bd.first(), bp.first(), bd.block()), (1000, 1000, 16));
+        let (mut longest, mut quadratic) = (0, 0);
+        for m in (1000..dense.last()).step_by(16) {
+            for d in [1e-30, 1e-20, 1e-14, 1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3] {
+                let start = [FloatExp::from(d), FloatExp::from(-0.5 * d)];
+                let (a, b) = (bd.lookup(m, norm2(start), 4000), bp.lookup(m, norm2(start), 4000));
+                assert_eq!(a.as_ref().map(|x| (x.1, x.2)), b.as_ref().map(|x| (x.1, x.2)), "at {m}");
+                let Some((step, len, end)) = a else { continue };
+                let other = b.expect("the same step").0;
+                assert_eq!(step.apply(start, dc), other.apply(start, dc), "at {m}: the same step");
+                assert_eq!(bp.reader(end).map(|r| r.index()), Some(m + len), "the tail's reader at the end");
+                // The table's own lookup past the tree gives the dense blocks' step.
+                assert_eq!(td.lookup(m, norm2(start), 4000).map(|x| x.1), Some(len));
+                let want = iterate(&dense, m, len, start, dc);
+                let err = rel_err(step.apply(start, dc), want);
+                assert!(err <= 4.0 * eps, "at {m}, |delta| {d}, {len} iterations: relative error {err}");
+                longest = longest.max(len);
+                let linear = cadd(cmul(step.first.a, start), cmul(step.first.b, dc));
+                quadratic += usize::from(rel_err(linear, want) > 100.0 * eps);
+            }
+        }
+        assert!(longest >= 256, "steps over many blocks: the longest {longest}");
+        assert!(quadratic > 10, "steps where the second order counts: {quadratic}");
     }
 
     #[test]

@@ -1600,7 +1600,7 @@ impl Perturbation {
                     self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
                 }
                 local.tail_steps += 1;
-                cursor = at;
+                cursor = t.reader(at).expect("a packed tail's blocks have readers");
             } else {
                 let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
                 if rebase || glitch {

@@ -146,11 +146,14 @@ pub struct DeepStats {
     pub aligned_steps: usize,
     /// The stages of near-periods they reach.
     pub aligned_stages: usize,
-    /// Steps over whole blocks of the primary reference's packed tail in its table (0 without
-    /// a packed tail or BLA).
-    pub tail_steps: usize,
-    /// Those blocks' length in iterations (0 without).
-    pub tail_block: u32,
+    /// Steps of whole blocks in the primary reference's table, past the part its tree of
+    /// steps covers (the first 2^20 iterations): through the rest of a dense orbit and
+    /// through a packed tail (0 without BLA or a longer orbit).
+    pub block_steps: usize,
+    /// The first of those blocks' length in iterations (0 without).
+    pub block_length: u32,
+    /// The iteration where the blocks begin (0 without).
+    pub blocks_from: u32,
     /// Perturbation steps performed one at a time.
     pub steps: u64,
     /// Of those, steps in FloatExp.
@@ -508,6 +511,7 @@ pub fn render<P: Send>(
     let c = counters.into_inner().unwrap_or_else(|e| e.into_inner());
     let deep = params.deep.as_ref().map(|d| {
         let (reference_bytes, bla_bytes) = d.bytes();
+        let blocks = || d.bla_f64[0].iter().flat_map(|t| t.blocks().into_iter().chain(t.tail()));
         DeepStats {
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
@@ -521,8 +525,9 @@ pub fn render<P: Send>(
             bla_bytes,
             aligned_steps: d.bla_f64[0].as_ref().map_or(0, |t| t.aligned_steps()),
             aligned_stages: d.bla_f64[0].as_ref().map_or(0, |t| t.stage_count()),
-            tail_steps: d.bla_f64[0].as_ref().and_then(|t| t.tail()).map_or(0, |t| t.steps()),
-            tail_block: d.bla_f64[0].as_ref().and_then(|t| t.tail()).map_or(0, |t| t.block()),
+            block_steps: blocks().map(|t| t.steps()).sum(),
+            block_length: blocks().next().map_or(0, |t| t.block()),
+            blocks_from: blocks().next().map_or(0, |t| t.first()),
             steps: c.steps,
             floatexp_steps: c.floatexp_steps,
             bla_steps: c.bla_steps,

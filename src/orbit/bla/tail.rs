@@ -29,6 +29,7 @@ use rayon::prelude::*;
 use super::{Bla, Node, Second, Step, entry_to_f64, largest_root, merge};
 use crate::num::{FloatExp, Real, Scaled};
 use crate::orbit::packed::{Cursor, Packed};
+use crate::orbit::reference::Reference;
 
 /// A tail table has at most 2^BLOCK_BITS blocks (the block length grows with the tail).
 const BLOCK_BITS: u32 = 19;
@@ -88,18 +89,29 @@ fn block_shift(len: u32) -> u32 {
     bits.saturating_sub(BLOCK_BITS).max(MIN_SHIFT)
 }
 
+/// The parts of one single step's merge that a table's builder fixes: the unit B (or zero
+/// for a Julia set), the tolerance, the largest |δc| and the escape radius.
+#[derive(Clone, Copy)]
+pub(super) struct Build {
+    pub one: Scaled,
+    pub epsilon: f64,
+    pub dc_max: FloatExp,
+    pub escape: FloatExp,
+}
+
+impl Build {
+    /// One block's step: its values' single steps folded in order.
+    fn block(&self, mut values: impl Iterator<Item = [FloatExp; 2]>) -> Node {
+        let single = |z| Node::single(z, self.one, self.epsilon, self.escape);
+        let first = values.next().map_or_else(|| single([FloatExp::ZERO; 2]), single);
+        values.fold(first, |acc, z| then_single(&acc, &single(z), self.dc_max, self.epsilon))
+    }
+}
+
 impl TailSteps<FloatExp> {
     /// The steps of `packed`'s whole blocks; `seed` is the seed's value at full range (kept
-    /// with the dense part). `one`, `epsilon`, `dc_max` and `escape` as the dense tree's
-    /// build takes them. None where the tail holds no whole block.
-    pub(super) fn build(
-        packed: &Packed,
-        seed: [FloatExp; 2],
-        one: Scaled,
-        epsilon: f64,
-        dc_max: FloatExp,
-        escape: FloatExp,
-    ) -> Option<Self> {
+    /// with the dense part). None where the tail holds no whole block.
+    pub(super) fn packed(packed: &Packed, seed: [FloatExp; 2], how: Build) -> Option<Self> {
         let shift = block_shift(packed.len());
         let blocks = (packed.len() >> shift) as usize;
         if blocks == 0 {
@@ -117,21 +129,43 @@ impl TailSteps<FloatExp> {
             }
             marks.push(cursor);
         }
-        // Each block's step, from its single steps merged pairwise.
         let first: Vec<Node> = (0..blocks)
             .into_par_iter()
             .map(|j| {
                 let mut c = marks[j];
                 // The seed's own exponent, when it is tiny, is kept with the dense part.
                 let z = if j == 0 { seed } else { c.get_fe(packed) };
-                let mut acc = Node::single(z, one, epsilon, escape);
-                for _ in 1..block {
+                let rest = (1..block).map(move |_| {
                     c.advance(packed);
-                    acc = then_single(&acc, &Node::single(c.get_fe(packed), one, epsilon, escape), dc_max, epsilon);
-                }
-                acc
+                    c.get_fe(packed)
+                });
+                how.block(std::iter::once(z).chain(rest))
             })
             .collect();
+        Some(Self::tree(packed.seed_index(), shift, marks.into(), first, how))
+    }
+
+    /// The steps of whole blocks of a densely stored orbit from index `from` to its last
+    /// (read by index: no readers). None where that holds no whole block.
+    pub(super) fn dense(orbit: &Reference, from: u32, how: Build) -> Option<Self> {
+        let len = orbit.last().checked_sub(from)?;
+        let shift = block_shift(len);
+        let blocks = (len >> shift) as usize;
+        if blocks == 0 {
+            return None;
+        }
+        let first: Vec<Node> = (0..blocks as u32)
+            .into_par_iter()
+            .map(|j| {
+                let at = from + (j << shift);
+                how.block((at..at + (1 << shift)).map(|i| orbit.get_fe(i)))
+            })
+            .collect();
+        Some(Self::tree(from, shift, Arc::new([]), first, how))
+    }
+
+    /// The tree of whole blocks above the blocks' own steps `first`.
+    fn tree(seed: u32, shift: u32, marks: Arc<[Cursor]>, first: Vec<Node>, how: Build) -> Self {
         let (mut levels, mut seconds, mut starts) = (Vec::new(), Vec::new(), Vec::new());
         let mut level = first;
         loop {
@@ -142,10 +176,9 @@ impl TailSteps<FloatExp> {
             if level.len() < 2 {
                 break;
             }
-            level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], dc_max, epsilon)).collect();
+            level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], how.dc_max, how.epsilon)).collect();
         }
-        let seed = packed.seed_index();
-        Some(TailSteps { seed, shift, marks: marks.into(), levels, seconds, starts })
+        TailSteps { seed, shift, marks, levels, seconds, starts }
     }
 
     /// The same steps for the f64 loop; steps f64 cannot hold are never valid.
@@ -166,11 +199,12 @@ impl TailSteps<FloatExp> {
 impl<T: Real> TailSteps<T> {
     /// The longest valid step from index `m` for a delta with |z|^2 = `z2` that was tested
     /// at `m` (no rebase, no escape), at most `budget` iterations long: the step, its length
-    /// and a reader standing where it ends. None where `m` is no block boundary or no step
-    /// from it is valid. A longer step from the same boundary is valid on a subset of where
-    /// a shorter one is, so the search stops at the first that fails.
+    /// and the block boundary where it ends (for [`TailSteps::reader`]). None where `m` is no
+    /// block boundary or no step from it is valid. A longer step from the same boundary is
+    /// valid on a subset of where a shorter one is, so the search stops at the first that
+    /// fails.
     #[inline]
-    pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32, Cursor)> {
+    pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32, usize)> {
         let i = m.checked_sub(self.seed)?;
         if i & ((1 << self.shift) - 1) != 0 {
             return None;
@@ -192,7 +226,14 @@ impl<T: Real> TailSteps<T> {
         }
         let k = best?;
         let step = Step { first: &self.levels[k][j >> k], second: &self.seconds[k][j >> k] };
-        Some((step, 1 << (self.shift as usize + k), self.marks[j + (1 << k)]))
+        Some((step, 1 << (self.shift as usize + k), j + (1 << k)))
+    }
+
+    /// A reader of a packed tail standing at block boundary `j`; None for a dense orbit's
+    /// blocks.
+    #[inline]
+    pub fn reader(&self, j: usize) -> Option<Cursor> {
+        self.marks.get(j).copied()
     }
 
     /// Bytes of memory the steps and readers use.
@@ -206,6 +247,11 @@ impl<T: Real> TailSteps<T> {
     /// How many block steps it holds (every level).
     pub fn steps(&self) -> usize {
         self.levels.iter().map(Vec::len).sum()
+    }
+
+    /// The index where the first block begins.
+    pub fn first(&self) -> u32 {
+        self.seed
     }
 
     /// The block length in iterations.
