@@ -201,8 +201,8 @@ fn report(
                 d.aligned_stages,
                 if d.block_steps > 0 {
                     format!(
-                        "; {} steps of {}-iteration blocks from iteration {}",
-                        d.block_steps, d.block_length, d.blocks_from
+                        "; {} steps of {}-iteration blocks from iteration {}, built in {:.3} s when samples got there",
+                        d.block_steps, d.block_length, d.blocks_from, d.blocks_seconds
                     )
                 } else {
                     String::new()

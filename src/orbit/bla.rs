@@ -45,9 +45,11 @@
 
 mod tail;
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
-pub use tail::TailSteps;
+pub use tail::{Blocks, Parts, TailSteps};
 
 use super::reference::Reference;
 use crate::num::real::{cadd, cmul, norm2};
@@ -142,10 +144,13 @@ pub struct BlaTable<T> {
     stages: Stages<T>,
     /// How many indices from the origin the tree and the stages cover.
     tree_len: u32,
-    /// Steps of whole blocks through the densely stored orbit past those, if it is longer.
-    blocks: Option<TailSteps<T>>,
-    /// Steps of whole blocks through the reference's packed tail, if it has one.
-    tail: Option<TailSteps<T>>,
+    /// What builds the tree's parts of a table: kept for the blocks past it.
+    how: tail::Build,
+    /// Steps of whole blocks past the tree (through the rest of a dense orbit and through a
+    /// packed tail), built when first needed ([`BlaTable::with_blocks`]), and this number
+    /// type's of them.
+    blocks: Option<Arc<Blocks>>,
+    pick: for<'a> fn(&'a Parts) -> &'a [Option<TailSteps<T>>; 2],
 }
 
 /// The tree and the stages cover at most this many iterations of a reference (the part
@@ -403,9 +408,17 @@ impl BlaTable<FloatExp> {
         let mag2 = |i| norm2(orbit.get_fe(origin + i));
         let stages = Stages::build(count, top, mag2, tree, |x, y| merge(x, y, dc_max, epsilon));
         let how = tail::Build { one, epsilon, dc_max, escape };
-        let blocks = (all > tree_len).then(|| TailSteps::dense(orbit, origin + tree_len, how)).flatten();
-        let tail = orbit.packed().and_then(|p| TailSteps::packed(p, orbit.get_fe(p.seed_index()), how));
-        BlaTable { origin, tree_len, levels, seconds, radii, stages, blocks, tail }
+        BlaTable { origin, tree_len, levels, seconds, radii, stages, how, blocks: None, pick: |p| &p.fe }
+    }
+
+    /// The same table with steps of whole blocks past its tree, through the rest of
+    /// `refs[k]`, the orbit it was built for (densely stored or packed), built the first
+    /// time a sample needs them ([`Blocks`]); `floatexp`: keep their FloatExp steps (a view
+    /// with FloatExp deltas), not only the f64 ones.
+    pub fn with_blocks(self, refs: Arc<Vec<Reference>>, k: usize, floatexp: bool) -> Self {
+        let from = self.origin + self.tree_len;
+        let blocks = Blocks::new(refs, k, from, self.how, floatexp).map(Arc::new);
+        BlaTable { blocks, ..self }
     }
 
     /// The same table for the f64 loop; entries f64 cannot hold are never valid.
@@ -432,8 +445,8 @@ impl BlaTable<FloatExp> {
             second.iter().zip(&s.start2).map(|(q, r)| if q.r2 < 0.0 { -1.0 } else { r.to_f64() }).collect();
         let (marked, at, len, count) = (s.marked.clone(), s.at.clone(), s.len.clone(), s.count);
         let stages = Stages { marked, at, first, second, start2, len, count };
-        let (blocks, tail) = (self.blocks.as_ref().map(TailSteps::to_f64), self.tail.as_ref().map(TailSteps::to_f64));
-        BlaTable { origin: self.origin, tree_len: self.tree_len, levels, seconds, radii, stages, blocks, tail }
+        let (origin, tree_len, how, blocks) = (self.origin, self.tree_len, self.how, self.blocks.clone());
+        BlaTable { origin, tree_len, levels, seconds, radii, stages, how, blocks, pick: |p| &p.f64 }
     }
 }
 
@@ -597,7 +610,7 @@ impl<T: Real> BlaTable<T> {
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32)> {
         let i = m.checked_sub(self.origin)?;
         if i >= self.tree_len {
-            return self.blocks.as_ref()?.lookup(m, z2, budget).map(|(step, len, _)| (step, len));
+            return self.blocks()?.lookup(m, z2, budget).map(|(step, len, _)| (step, len));
         }
         let (start, n) = column(i, self.levels.len());
         let mut best = None;
@@ -694,20 +707,32 @@ impl<T: Real> BlaTable<T> {
             + s.start2.capacity() * std::mem::size_of::<T>()
             + (s.len.capacity() + s.at.capacity()) * 4
             + s.marked.capacity() * 8
-            + self.blocks.as_ref().map_or(0, TailSteps::bytes)
-            + self.tail.as_ref().map_or(0, TailSteps::bytes)
+            + self.built().map_or(0, |b| b.iter().flatten().map(TailSteps::bytes).sum())
     }
 
-    /// The steps of whole blocks through the dense orbit past the tree, if it is longer.
-    #[inline(always)]
+    /// The steps of whole blocks through the dense orbit past the tree, if it is longer
+    /// (built now if they have not been: [`Blocks::parts`]).
+    #[inline]
     pub fn blocks(&self) -> Option<&TailSteps<T>> {
-        self.blocks.as_ref()
+        self.blocks.as_ref().and_then(|b| (self.pick)(b.parts())[0].as_ref())
     }
 
-    /// The steps through the reference's packed tail, if it has one.
-    #[inline(always)]
+    /// The steps through the reference's packed tail, if it has one (built now if they
+    /// have not been).
+    #[inline]
     pub fn tail(&self) -> Option<&TailSteps<T>> {
-        self.tail.as_ref()
+        self.blocks.as_ref().and_then(|b| (self.pick)(b.parts())[1].as_ref())
+    }
+
+    /// The steps of whole blocks past the tree if a sample has needed them, [dense, packed]
+    /// (for statistics); None where they have not been built.
+    pub fn built(&self) -> Option<&[Option<TailSteps<T>>; 2]> {
+        self.blocks.as_ref().and_then(|b| b.built()).map(self.pick)
+    }
+
+    /// Seconds the steps of whole blocks took to build, where a sample needed them.
+    pub fn blocks_seconds(&self) -> f64 {
+        self.blocks.as_ref().and_then(|b| b.built()).map_or(0.0, |p| p.seconds)
     }
 
     /// How many period-aligned steps the table holds.
@@ -855,8 +880,12 @@ mod tests {
         let (dense, packed) = (compute(None), compute(Some(1000)));
         assert!(packed.packed().is_some() && dense.last() > 3000, "a long orbit, packed after 1000");
         let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
-        let tables = |r: &Reference| BlaTable::build_with_tree(r, 1, true, eps, cabs(dc), 2.0, 999);
-        let (td, tp) = (tables(&dense), tables(&packed));
+        let tables = |r: Reference| {
+            let refs = Arc::new(vec![r]);
+            BlaTable::build_with_tree(&refs[0], 1, true, eps, cabs(dc), 2.0, 999).with_blocks(refs, 0, true)
+        };
+        let (td, tp) = (tables(dense.clone()), tables(packed.clone()));
+        assert!(td.built().is_none(), "built only when first asked for");
         let (bd, bp) = (td.blocks().expect("blocks past the tree"), tp.tail().expect("blocks in the tail"));
         assert!(tp.blocks().is_none() && td.tail().is_none());
         assert_eq!((bd.first(), bp.first(), bd.block()), (1000, 1000, 16));

@@ -211,7 +211,12 @@ pub fn prepare(
         for (k, r) in refs.iter().enumerate() {
             // Orbits of 0 step nonlinearly from Z_0 = 0: their tables start at index 1.
             let origin = if mandelbrot || k == 1 { 1 } else { 0 };
-            let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max, spec.escape_radius);
+            let floatexp = spec.numbers == Numbers::FloatExp;
+            let t = BlaTable::build(r, origin, mandelbrot, eps, dc_max, spec.escape_radius).with_blocks(
+                refs.clone(),
+                k,
+                floatexp,
+            );
             if k == 0 {
                 // The steps every sample takes first: from Z_1 (Mandelbrot, |δ_1| = |δc|) or
                 // Z_0 (Julia, |δ_0| = |offset|), bounded by the largest offset.

@@ -148,12 +148,16 @@ pub struct DeepStats {
     pub aligned_stages: usize,
     /// Steps of whole blocks in the primary reference's table, past the part its tree of
     /// steps covers (the first 2^20 iterations): through the rest of a dense orbit and
-    /// through a packed tail (0 without BLA or a longer orbit).
+    /// through a packed tail (0 without BLA or a longer orbit, or where no sample went past
+    /// the tree, so that they were never built).
     pub block_steps: usize,
     /// The first of those blocks' length in iterations (0 without).
     pub block_length: u32,
     /// The iteration where the blocks begin (0 without).
     pub blocks_from: u32,
+    /// Seconds the blocks' steps took, built during the render when a sample first needed
+    /// them (not in `tables_seconds`; 0 where none did).
+    pub blocks_seconds: f64,
     /// Perturbation steps performed one at a time.
     pub steps: u64,
     /// Of those, steps in FloatExp.
@@ -511,7 +515,7 @@ pub fn render<P: Send>(
     let c = counters.into_inner().unwrap_or_else(|e| e.into_inner());
     let deep = params.deep.as_ref().map(|d| {
         let (reference_bytes, bla_bytes) = d.bytes();
-        let blocks = || d.bla_f64[0].iter().flat_map(|t| t.blocks().into_iter().chain(t.tail()));
+        let blocks = || d.bla_f64[0].iter().flat_map(|t| t.built().into_iter().flatten().flatten());
         DeepStats {
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
@@ -528,6 +532,7 @@ pub fn render<P: Send>(
             block_steps: blocks().map(|t| t.steps()).sum(),
             block_length: blocks().next().map_or(0, |t| t.block()),
             blocks_from: blocks().next().map_or(0, |t| t.first()),
+            blocks_seconds: d.bla_f64[0].as_ref().map_or(0.0, |t| t.blocks_seconds()),
             steps: c.steps,
             floatexp_steps: c.floatexp_steps,
             bla_steps: c.bla_steps,

@@ -22,7 +22,7 @@
 //! too. The dense table's period-aligned stages have no counterpart here: a tail is long
 //! because its reference has no period to rebase at.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use rayon::prelude::*;
 
@@ -83,6 +83,91 @@ fn then_single(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
     Node { a, b, a2, ab, b2, r, r0, lin }
 }
 
+/// The steps of whole blocks past a table's tree, for the dense part past it and for a
+/// packed tail, built the first time a sample needs them ([`Blocks::parts`]): a view whose
+/// samples all end within the tree's reach never pays for them (the blocks cost about as
+/// much per iteration as the reference orbit itself). Built once for both number types'
+/// tables, which share this.
+#[derive(Debug)]
+pub struct Blocks {
+    /// The orbits; the blocks are over `refs[k]`'s.
+    refs: Arc<Vec<Reference>>,
+    k: usize,
+    /// Where the dense part's blocks begin (the tree's end).
+    from: u32,
+    how: Build,
+    /// Keep the FloatExp steps too (a view with FloatExp deltas), not only the f64 ones.
+    floatexp: bool,
+    parts: OnceLock<Parts>,
+}
+
+/// What [`Blocks`] builds: [dense part past the tree, packed tail] in both number types.
+#[derive(Debug, Default)]
+pub struct Parts {
+    /// The FloatExp steps (None unless asked for).
+    pub fe: [Option<TailSteps<FloatExp>>; 2],
+    /// The f64 steps.
+    pub f64: [Option<TailSteps<f64>>; 2],
+    /// Seconds the build took.
+    pub seconds: f64,
+}
+
+impl Blocks {
+    /// The blocks of `refs[k]` past index `from`, where its orbit goes on past it (densely
+    /// or packed); None where it does not.
+    pub(super) fn new(refs: Arc<Vec<Reference>>, k: usize, from: u32, how: Build, floatexp: bool) -> Option<Self> {
+        let r = refs.get(k)?;
+        (r.last() > from || r.packed().is_some()).then(|| Blocks {
+            refs,
+            k,
+            from,
+            how,
+            floatexp,
+            parts: OnceLock::new(),
+        })
+    }
+
+    /// The steps, built now if they have not been. A sample's thread that asks while another
+    /// builds them waits.
+    ///
+    /// The build runs in a thread pool of its own, as wide as the one asking, started from
+    /// a plain thread: the workers of the pool asking may all be waiting here, and one that
+    /// helped with other work while it waited could take a sample that asks again (a
+    /// re-entrant wait). Where no thread can be started the steps are left out and samples
+    /// take single steps past the tree, as without BLA there.
+    pub fn parts(&self) -> &Parts {
+        self.parts.get_or_init(|| {
+            let threads = rayon::current_num_threads();
+            std::thread::scope(|scope| {
+                let run = move || {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).use_current_thread().build();
+                    pool.map(|p| p.install(|| self.build())).unwrap_or_default()
+                };
+                std::thread::Builder::new()
+                    .spawn_scoped(scope, run)
+                    .ok()
+                    .and_then(|h| h.join().ok())
+                    .unwrap_or_default()
+            })
+        })
+    }
+
+    /// The steps if they have been built (for statistics, which must not build them).
+    pub fn built(&self) -> Option<&Parts> {
+        self.parts.get()
+    }
+
+    fn build(&self) -> Parts {
+        let started = std::time::Instant::now();
+        let r = &self.refs[self.k];
+        let dense = (r.last() > self.from).then(|| TailSteps::dense(r, self.from, self.how)).flatten();
+        let packed = r.packed().and_then(|p| TailSteps::packed(p, r.get_fe(p.seed_index()), self.how));
+        let f64 = [dense.as_ref().map(TailSteps::to_f64), packed.as_ref().map(TailSteps::to_f64)];
+        let fe = if self.floatexp { [dense, packed] } else { [None, None] };
+        Parts { fe, f64, seconds: started.elapsed().as_secs_f64() }
+    }
+}
+
 /// The block length's exponent for a tail of `len` values.
 fn block_shift(len: u32) -> u32 {
     let bits = u32::BITS - len.leading_zeros();
@@ -91,7 +176,7 @@ fn block_shift(len: u32) -> u32 {
 
 /// The parts of one single step's merge that a table's builder fixes: the unit B (or zero
 /// for a Julia set), the tolerance, the largest |δc| and the escape radius.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Build {
     pub one: Scaled,
     pub epsilon: f64,
