@@ -25,7 +25,9 @@
 //!
 //! Merging pairs level by level gives a binary tree: level k holds steps of 2^k iterations
 //! starting at origin + i 2^k, so at any index the loop tries the longest aligned step
-//! first. Beside the tree, steps aligned to the reference's near-periods run from one dip of
+//! first. The tree covers an orbit's first 2^20 iterations (about 100 bytes per iteration
+//! in f64, 450 in FloatExp); past them, steps of whole blocks ([`TailSteps`], built when a
+//! sample first gets there). Beside the tree, steps aligned to the reference's near-periods run from one dip of
 //! the orbit towards 0 to the next, in stages of longer near-periods (`Stages`, after
 //! Zhuoran's "LA v2"): a sample that rebases at every dip crosses from dip to dip in one
 //! step where the tree needs as many as the distance has binary digits.

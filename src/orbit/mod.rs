@@ -105,14 +105,17 @@ pub struct DeepSpec {
 }
 
 /// Iteration limits up to this store the whole reference orbit densely: 16 bytes per
-/// iteration, plus BLA tables of about 100 (f64) or 450 (FloatExp) bytes per iteration.
+/// iteration, plus BLA tables of about 100 (f64) or 450 (FloatExp) bytes per iteration over
+/// the first [`DENSE_PART`] and a few past it (steps of whole blocks, [`bla::TailSteps`]).
 pub const MAX_DENSE_ITERATIONS: u32 = 1 << 25;
 
 /// With a longer limit, the first this many iterations are stored densely (with BLA
 /// tables, under half a GB at any depth) and the rest packed (a Mandelbrot reference is
 /// held dense to [`MAX_DENSE_ITERATIONS`] first, in case it turns out to be one period of
 /// a nucleus, which then stays dense), 1.0–1.4 bytes per
-/// iteration as measured ([`packed`]): 1e9 iterations in under 2 GB.
+/// iteration as measured ([`packed`]): 1e9 iterations in under 2 GB. The steps of whole
+/// blocks past the dense part add at most 2^20 steps and 2^19 cursors: 130 MB with f64
+/// deltas, 350 MB with FloatExp (both number types' steps), by their sizes.
 pub const DENSE_PART: u32 = 1 << 20;
 
 /// How much of a reference orbit is stored densely for an iteration limit, as

@@ -29,7 +29,9 @@
 //! form keeps every result the same bits as the dense store's.
 //!
 //! The tail is read in order only ([`Cursor`]): samples reach it by single steps from the
-//! end of the dense part, and leave it by rebasing to the orbit's start.
+//! end of the dense part, cross it by single steps and by BLA steps of whole blocks (whose
+//! table keeps a cursor at each block boundary: `bla::TailSteps`), and leave it by rebasing
+//! to the orbit's start.
 
 use crate::num::FloatExp;
 

@@ -1550,7 +1550,9 @@ impl Perturbation {
 
     /// The loop through a reference's packed tail ([`Packed`]), entered at Z_last (the end
     /// of the dense part) with that pass's end tests done and (Z_last, z, z in f64) in
-    /// `at`: single steps, the values read in order, until the sample rebases (and takes
+    /// `at`: single steps, the values read in order, and at each block boundary the
+    /// longest valid step of whole blocks (`bla::TailSteps`, after which the sample reads
+    /// on from the table's cursor where the step ends), until the sample rebases (and takes
     /// the rebase's step, as [`Perturbation::op`] does), escapes, is found interior or
     /// reaches the limit. The passes are `op`'s, in its order, so a sample steps through
     /// the same bits as through a dense orbit one iteration at a time. It keeps its number
