@@ -1,26 +1,29 @@
-//! BLA steps through a packed tail ([`crate::orbit::packed`]): the part of a long reference
-//! orbit that is stored in about a byte per iteration, past its dense part, and can only be
-//! read in order.
+//! BLA steps of whole blocks, for the part of a long reference orbit past the reach of the
+//! table's tree: the rest of a densely stored orbit, and a packed tail
+//! ([`crate::orbit::packed`]), stored in about a byte per iteration and read in order only.
 //!
-//! The dense part's tree holds a step of every length 2^k at every index it can start from,
-//! about 200 bytes per iteration in its two number types: 200 GB for the 10^9 iterations
-//! that the packed store keeps in 1 GB. Its single steps are not stored at all (the loop
-//! takes them as perturbation steps from the orbit's values), and the values of a packed
-//! tail are not at hand by index. So the tail keeps only long steps: the tail is cut into
-//! blocks of 2^shift iterations from its seed (the dense part's last index), each block's
-//! step is merged from its single steps as the dense tree merges them (pairwise, level by
-//! level), and a tree of whole blocks is built over those. Beside each block boundary the
-//! table keeps a reader ([`Cursor`]) standing there, so that a sample that takes a step goes
-//! on reading the tail from where the step ends. The block length is chosen so that a
-//! table has at most 2^[`BLOCK_BITS`] blocks: 2^4 iterations for short tails, 2^11 for
-//! 10^9.
+//! The tree holds a step of every length 2^k at every index it can start from, about 100
+//! bytes per iteration in f64 and 450 in FloatExp: 3.4 or 15 GB for the 2^25 iterations an
+//! orbit may keep dense, and a hundred times the packed store's own size past them. So the
+//! tree stops at 2^20 iterations, and past it the orbit is cut into blocks of 2^shift
+//! iterations (at most 2^[`BLOCK_BITS`] of them: 2^4 iterations for short tails, 2^11 for
+//! 10^9). Each block's step is folded from its single steps one iteration at a time
+//! (`then_single`: the tree's merge with a single step), and a tree of whole blocks is
+//! merged over those. For a packed tail the table also keeps a reader ([`Cursor`]) standing
+//! at each block boundary, so that a sample that takes a step goes on reading the tail
+//! from where the step ends.
 //!
-//! A sample in the tail takes single steps (the dense loop's) until it stands at a block
-//! boundary, then the longest step from there that is valid for its delta, as the dense
-//! tree's lookup climbs its levels. A sample whose delta is too large for a block's step
-//! takes that block's iterations one at a time; near its escape it would in the dense tree
-//! too. The dense table's period-aligned stages have no counterpart here: a tail is long
-//! because its reference has no period to rebase at.
+//! A sample past the tree takes single steps (the loop's own) until it stands at a block
+//! boundary, then the longest step from there that is valid for its delta, as the tree's
+//! lookup climbs its levels. A sample whose delta is too large for a block's step takes
+//! that block's iterations one at a time; near its escape it would in the tree too. The
+//! tree's period-aligned stages have no counterpart here: an orbit is this long because it
+//! has no period to rebase at.
+//!
+//! Folding a block costs about as much per iteration as the reference orbit itself, so the
+//! blocks are built the first time a sample gets past the tree ([`Blocks`]), not with the
+//! tree: a view whose samples all end before never pays for them. They are a function of
+//! the orbit alone, so when they are built changes no bit of the output.
 
 use std::sync::{Arc, OnceLock};
 
@@ -36,15 +39,16 @@ const BLOCK_BITS: u32 = 19;
 /// Blocks are at least 2^MIN_SHIFT iterations long.
 const MIN_SHIFT: u32 = 4;
 
-/// Steps of whole blocks of a packed tail, and readers at the blocks' boundaries.
+/// Steps of whole blocks of an orbit from an index on, and for a packed tail readers at
+/// the blocks' boundaries.
 #[derive(Debug, Clone)]
 pub struct TailSteps<T> {
-    /// Index of the tail's seed, where block 0 starts.
+    /// Where block 0 starts: the tree's end, or a packed tail's seed.
     seed: u32,
     /// Blocks are 2^shift iterations long.
     shift: u32,
-    /// A reader standing at each block boundary, seed + j 2^shift, the end of the last
-    /// whole block included.
+    /// For a packed tail, a reader standing at each block boundary, seed + j 2^shift, the
+    /// end of the last whole block included (empty for a dense orbit, read by index).
     marks: Arc<[Cursor]>,
     /// levels[k][j]: the step over blocks j 2^k to (j + 1) 2^k - 1, first-order parts.
     levels: Vec<Vec<Bla<T>>>,
@@ -140,7 +144,9 @@ impl Blocks {
             let threads = rayon::current_num_threads();
             std::thread::scope(|scope| {
                 let run = move || {
-                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).use_current_thread().build();
+                    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).use_current_thread().build();
+                    // One thread (this one) where no more can be started.
+                    let pool = pool(threads).or_else(|_| pool(1));
                     pool.map(|p| p.install(|| self.build())).unwrap_or_default()
                 };
                 std::thread::Builder::new()
@@ -349,8 +355,8 @@ impl<T: Real> TailSteps<T> {
 mod tests {
     use super::*;
 
-    /// The fold's composite is `merge`'s with a single step, to rounding: over an orbit of
-    /// the period-3 bulb's edge, from offsets deep and shallow.
+    /// The fold's composite is `merge`'s with a single step, to rounding: over the orbit of
+    /// the period-3 nucleus near c = -0.1226 + 0.7449i, for offsets shallow and deep.
     #[test]
     fn a_single_step_folds_as_merge_composes_it() {
         let one = Scaled::from_f64([1.0, 0.0]);
