@@ -155,11 +155,12 @@ pub struct BlaTable<T> {
     pick: for<'a> fn(&'a Parts) -> &'a [Option<TailSteps<T>>; 2],
 }
 
-/// The tree and the stages cover at most this many iterations of a reference (the part
-/// a long orbit keeps dense, [`super::DENSE_PART`]): about 100 bytes per iteration in f64
-/// and 450 in FloatExp, so 2^25 dense iterations would take 3.4 or 15 GB. Past it, steps
-/// of whole blocks ([`TailSteps`]).
-const TREE_ITERATIONS: u32 = super::DENSE_PART;
+/// The tree and the stages end at this index of a reference at the latest: where a long
+/// orbit's dense part ends ([`super::DENSE_PART`]), so that the blocks past it begin at the
+/// same index whether the rest is stored densely or packed, and give the same steps. The
+/// tree takes about 100 bytes per iteration in f64 and 450 in FloatExp: 2^25 dense
+/// iterations would take 3.4 or 15 GB of it. Past it, steps of whole blocks ([`TailSteps`]).
+const TREE_END: u32 = super::DENSE_PART;
 
 /// Steps that end where the reference dips towards 0, in stages (after Zhuoran's "LA v2").
 ///
@@ -366,11 +367,11 @@ impl BlaTable<FloatExp> {
         dc_max: FloatExp,
         escape: f64,
     ) -> Self {
-        Self::build_with_tree(orbit, origin, mandelbrot, epsilon, dc_max, escape, TREE_ITERATIONS)
+        Self::build_with_tree(orbit, origin, mandelbrot, epsilon, dc_max, escape, TREE_END)
     }
 
-    /// [`BlaTable::build`] with the tree over at most `tree` iterations (tests reach the
-    /// blocks past it on short orbits).
+    /// [`BlaTable::build`] with the tree ending at index `tree_end` at the latest (tests
+    /// reach the blocks past it on short orbits).
     fn build_with_tree(
         orbit: &Reference,
         origin: u32,
@@ -378,14 +379,14 @@ impl BlaTable<FloatExp> {
         epsilon: f64,
         dc_max: FloatExp,
         escape: f64,
-        tree: u32,
+        tree_end: u32,
     ) -> Self {
         let one = Scaled::from_f64([if mandelbrot { 1.0 } else { 0.0 }, 0.0]);
         let escape = FloatExp::from(escape);
         let single = |i: u32| Node::single(orbit.get_fe(origin + i), one, epsilon, escape);
         let all = orbit.last().saturating_sub(origin);
         // The whole tree over the first part; whole blocks past it.
-        let tree_len = all.min(tree);
+        let tree_len = all.min(tree_end.saturating_sub(origin));
         let mut level: Vec<Node> = (0..tree_len).into_par_iter().map(single).collect();
         let count = tree_len;
         let (mut levels, mut seconds, mut starts) = (Vec::new(), Vec::new(), Vec::new());
@@ -884,7 +885,7 @@ mod tests {
         let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
         let tables = |r: Reference| {
             let refs = Arc::new(vec![r]);
-            BlaTable::build_with_tree(&refs[0], 1, true, eps, cabs(dc), 2.0, 999).with_blocks(refs, 0, true)
+            BlaTable::build_with_tree(&refs[0], 1, true, eps, cabs(dc), 2.0, 1000).with_blocks(refs, 0, true)
         };
         let (td, tp) = (tables(dense.clone()), tables(packed.clone()));
         assert!(td.built().is_none(), "built only when first asked for");

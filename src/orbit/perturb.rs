@@ -1554,10 +1554,11 @@ impl Perturbation {
     /// longest valid step of whole blocks (`bla::TailSteps`, after which the sample reads
     /// on from the table's cursor where the step ends), until the sample rebases (and takes
     /// the rebase's step, as [`Perturbation::op`] does), escapes, is found interior or
-    /// reaches the limit. The passes are `op`'s, in its order, so a sample steps through
-    /// the same bits as through a dense orbit one iteration at a time. It keeps its number
-    /// type and leaves the vector lanes aside until it is back in the dense part, which
-    /// is the only part they and the BLA tables read by index.
+    /// reaches the limit. The passes are `op`'s, in its order, and the blocks begin where
+    /// a dense orbit's blocks past the tree would (`bla::TailSteps`), so a sample steps
+    /// through the same bits as through the same orbit stored densely. It keeps its number
+    /// type and leaves the vector lanes aside until it is back in the dense part, which is
+    /// the only part they read by index.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
     fn tail<D: Real, const DER: bool, const INT: bool>(
@@ -1595,6 +1596,7 @@ impl Perturbation {
             let bla = !(rebase || glitch) && (full_range || (!s.single && d2.to_f64() <= self.single_d2));
             if let Some(t) = steps.filter(|_| bla)
                 && let Some((e, len, at)) = t.lookup(s.m, d2, self.max_iter - s.n)
+                && let Some(reader) = t.reader(at)
             {
                 if INT && s.probe.plain {
                     self.apply_bla::<D, DER, false>((e, len), s, d2, der, ctx.add_fe, local);
@@ -1602,7 +1604,7 @@ impl Perturbation {
                     self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
                 }
                 local.tail_steps += 1;
-                cursor = t.reader(at).expect("a packed tail's blocks have readers");
+                cursor = reader;
             } else {
                 let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
                 if rebase || glitch {

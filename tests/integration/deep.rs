@@ -341,6 +341,18 @@ fn through_packed_reference_tails() {
     check("julia 1e40, packed after 200", v, "perturb-f64");
 }
 
+/// Past the first 2^20 iterations of an orbit, samples take BLA steps of whole blocks
+/// (`orbit::bla::TailSteps`): by the cusp of the main cardioid (c = 1/4 + 5e-12, where every
+/// orbit lingers near z = 1/2 and escapes after about 1.4 million iterations), with the
+/// orbit past 2^20 stored densely and packed.
+#[test]
+fn past_two_to_the_twenty_by_steps_of_blocks() {
+    const CUSP: [&str; 2] = ["0.250000000005", "0"];
+    check("cusp 1e18, dense", View::mandelbrot(CUSP, "1e-18", 2_000_000, 4), "perturb-f64");
+    let v = View { dense_orbit: Some(1 << 20), ..View::mandelbrot(CUSP, "1e-18", 2_000_000, 4) };
+    check("cusp 1e18, packed past 2^20", v, "perturb-f64");
+}
+
 /// BLA off: every iteration is a perturbation step, in FloatExp while deltas are tiny and
 /// in f64 after; the switch points are what this checks (a too-early switch to f64 once
 /// put N off by one on 5% of these pixels).
