@@ -326,26 +326,54 @@ fn largest_root(p: FloatExp, q: FloatExp, s: FloatExp) -> Option<FloatExp> {
 /// x then y, with the radius of the composite (see the module docs); `gamma` is the largest
 /// |c|, `eps` the tolerance.
 fn merge(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
+    compose::<false>(x, y, gamma, eps)
+}
+
+/// [`merge`] of `x` then `y`, a single step ([`Node::single`]: A2 = 1, AB = B2 = 0): the
+/// same composite, with those coefficients' products left out, for the steps of whole
+/// blocks folded one iteration at a time ([`TailSteps`], whose whole cost this is).
+fn then_single(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
+    compose::<true>(x, y, gamma, eps)
+}
+
+/// [`merge`], and where `SINGLE` says y is a single step, [`then_single`].
+#[inline(always)]
+fn compose<const SINGLE: bool>(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
     let a = y.a * x.a;
     let b = y.a * x.b + y.b;
-    let a2 = y.a * x.a2 + y.a2 * x.a.square();
-    let ab = y.a * x.ab + (y.a2 * (x.a * x.b)).ldexp(1) + y.ab * x.a;
-    let b2 = y.a * x.b2 + y.a2 * x.b.square() + (y.ab * x.b + y.b2);
+    let (a2, ab, b2) = if SINGLE {
+        (y.a * x.a2 + x.a.square(), y.a * x.ab + (x.a * x.b).ldexp(1), y.a * x.b2 + x.b.square())
+    } else {
+        (
+            y.a * x.a2 + y.a2 * x.a.square(),
+            y.a * x.ab + (y.a2 * (x.a * x.b)).ldexp(1) + y.ab * x.a,
+            y.a * x.b2 + y.a2 * x.b.square() + (y.ab * x.b + y.b2),
+        )
+    };
     let [ax, bx, a2x, abx, b2x] = [x.a, x.b, x.a2, x.ab, x.b2].map(Scaled::abs);
-    let [ay, a2y, aby] = [y.a, y.a2, y.ab].map(Scaled::abs);
     let g = gamma;
     // |Q| <= a2x ρ^2 + abx g ρ + b2x g^2, |L| <= ax ρ + bx g.
     let (qp, qq, qs) = (a2x, abx * g, b2x * g * g);
     let quarter = FloatExp::from(eps / 4.0);
+    let gap = if SINGLE {
+        // The third bound holds everywhere where AB_y = 0, and |A2_y| = 1 in the fourth.
+        [None, largest_root(qp, qq, qs - quarter * y.a.abs())]
+    } else {
+        let [ay, a2y, aby] = [y.a, y.a2, y.ab].map(Scaled::abs);
+        [
+            // |AB_y| g |Q| <= ε/4 |A_y| |L|.
+            largest_root(aby * g * qp, aby * g * qq - quarter * ay * ax, aby * g * qs - quarter * ay * bx * g),
+            // |Q| <= ε |A_y| / (4 |A2_y|) (no bound where y has no quadratic term).
+            if a2y.is_zero() { None } else { largest_root(qp, qq, qs - quarter * ay / a2y) },
+        ]
+    };
     let bounds = [
         // x's image within y's radius.
         largest_root(qp, ax + qq, bx * g + qs - y.r),
         // |Q| <= |L|.
         largest_root(qp, qq - ax, qs - bx * g),
-        // |AB_y| g |Q| <= ε/4 |A_y| |L|.
-        largest_root(aby * g * qp, aby * g * qq - quarter * ay * ax, aby * g * qs - quarter * ay * bx * g),
-        // |Q| <= ε |A_y| / (4 |A2_y|) (no bound where y has no quadratic term).
-        if a2y.is_zero() { None } else { largest_root(qp, qq, qs - quarter * ay / a2y) },
+        gap[0],
+        gap[1],
     ];
     let r = bounds.into_iter().flatten().fold(x.r, FloatExp::min);
     let r0 = bounds.into_iter().flatten().fold(x.r0, FloatExp::min);
@@ -367,22 +395,13 @@ impl BlaTable<FloatExp> {
         dc_max: FloatExp,
         escape: f64,
     ) -> Self {
-        Self::build_with_tree(orbit, origin, mandelbrot, epsilon, dc_max, escape, TREE_END)
+        Self::build_with_tree(orbit, origin, tail::Build::new(mandelbrot, epsilon, dc_max, escape), TREE_END)
     }
 
     /// [`BlaTable::build`] with the tree ending at index `tree_end` at the latest (tests
     /// reach the blocks past it on short orbits).
-    fn build_with_tree(
-        orbit: &Reference,
-        origin: u32,
-        mandelbrot: bool,
-        epsilon: f64,
-        dc_max: FloatExp,
-        escape: f64,
-        tree_end: u32,
-    ) -> Self {
-        let one = Scaled::from_f64([if mandelbrot { 1.0 } else { 0.0 }, 0.0]);
-        let escape = FloatExp::from(escape);
+    fn build_with_tree(orbit: &Reference, origin: u32, how: tail::Build, tree_end: u32) -> Self {
+        let tail::Build { one, epsilon, dc_max, escape } = how;
         let single = |i: u32| Node::single(orbit.get_fe(origin + i), one, epsilon, escape);
         let all = orbit.last().saturating_sub(origin);
         // The whole tree over the first part; whole blocks past it.
@@ -410,7 +429,6 @@ impl BlaTable<FloatExp> {
         };
         let mag2 = |i| norm2(orbit.get_fe(origin + i));
         let stages = Stages::build(count, top, mag2, tree, |x, y| merge(x, y, dc_max, epsilon));
-        let how = tail::Build { one, epsilon, dc_max, escape };
         BlaTable { origin, tree_len, levels, seconds, radii, stages, how, blocks: None, pick: |p| &p.fe }
     }
 
@@ -885,7 +903,8 @@ mod tests {
         let (eps, dc) = (1e-8, [FloatExp::from(1e-14), FloatExp::from(2e-14)]);
         let tables = |r: Reference| {
             let refs = Arc::new(vec![r]);
-            BlaTable::build_with_tree(&refs[0], 1, true, eps, cabs(dc), 2.0, 1000).with_blocks(refs, 0, true)
+            let how = tail::Build::new(true, eps, cabs(dc), 2.0);
+            BlaTable::build_with_tree(&refs[0], 1, how, 1000).with_blocks(refs, 0, true)
         };
         let (td, tp) = (tables(dense.clone()), tables(packed.clone()));
         assert!(td.built().is_none(), "built only when first asked for");

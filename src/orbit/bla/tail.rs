@@ -8,7 +8,7 @@
 //! tree stops at 2^20 iterations, and past it the orbit is cut into blocks of 2^shift
 //! iterations (at most 2^[`BLOCK_BITS`] of them: 2^4 iterations for short tails, 2^11 for
 //! 10^9). Each block's step is folded from its single steps one iteration at a time
-//! (`then_single`: the tree's merge with a single step), and a tree of whole blocks is
+//! (the tree's merge with a single step, its zero and unit coefficients left out), and a tree of whole blocks is
 //! merged over those. For a packed tail the table also keeps a reader ([`Cursor`]) standing
 //! at each block boundary, so that a sample that takes a step goes on reading the tail
 //! from where the step ends.
@@ -29,7 +29,7 @@ use std::sync::{Arc, OnceLock};
 
 use rayon::prelude::*;
 
-use super::{Bla, Node, Second, Step, entry_to_f64, largest_root, merge};
+use super::{Bla, Node, Second, Step, entry_to_f64, merge, then_single};
 use crate::num::{FloatExp, Real, Scaled};
 use crate::orbit::packed::{Cursor, Packed};
 use crate::orbit::reference::Reference;
@@ -57,34 +57,6 @@ pub struct TailSteps<T> {
     /// Their squared start radii (a delta tested at the step's first index, as
     /// [`super::BlaTable::lookup`] takes them); negative where never valid.
     starts: Vec<Vec<T>>,
-}
-
-/// [`merge`] of `x` then `y`, a single step ([`Node::single`]: a2 = 1, ab = b2 = 0), with
-/// those coefficients' products left out: the same composite, for a block's steps folded
-/// one iteration at a time (the whole cost of building a tail's steps).
-fn then_single(x: &Node, y: &Node, gamma: FloatExp, eps: f64) -> Node {
-    let a = y.a * x.a;
-    let b = y.a * x.b + y.b;
-    let a2 = y.a * x.a2 + x.a.square();
-    let ab = y.a * x.ab + (x.a * x.b).ldexp(1);
-    let b2 = y.a * x.b2 + x.b.square();
-    let [ax, bx, a2x, abx, b2x] = [x.a, x.b, x.a2, x.ab, x.b2].map(Scaled::abs);
-    let ay = y.a.abs();
-    let g = gamma;
-    let (qp, qq, qs) = (a2x, abx * g, b2x * g * g);
-    let quarter = FloatExp::from(eps / 4.0);
-    // The bounds of `merge`; the third (|AB_y| g |Q| <= ε/4 |A_y| |L|) holds everywhere
-    // where AB_y = 0, and |A2_y| = 1 in the fourth.
-    let bounds = [
-        largest_root(qp, ax + qq, bx * g + qs - y.r),
-        largest_root(qp, qq - ax, qs - bx * g),
-        largest_root(qp, qq, qs - quarter * ay),
-    ];
-    let r = bounds.into_iter().flatten().fold(x.r, FloatExp::min);
-    let r0 = bounds.into_iter().flatten().fold(x.r0, FloatExp::min);
-    let through = (y.lin - bx * g).max(FloatExp::ZERO);
-    let lin = x.lin.min(if ax.is_zero() { y.lin.max(FloatExp::ZERO) } else { through / ax });
-    Node { a, b, a2, ab, b2, r, r0, lin }
 }
 
 /// The steps of whole blocks past a table's tree, for the dense part past it and for a
@@ -191,6 +163,13 @@ pub(super) struct Build {
 }
 
 impl Build {
+    /// What a table is built for: `mandelbrot` sets B = 1 (else 0), `epsilon` is the
+    /// relative tolerance, `dc_max` the largest |c offset|, `escape` the escape radius.
+    pub(super) fn new(mandelbrot: bool, epsilon: f64, dc_max: FloatExp, escape: f64) -> Build {
+        let one = Scaled::from_f64([if mandelbrot { 1.0 } else { 0.0 }, 0.0]);
+        Build { one, epsilon, dc_max, escape: FloatExp::from(escape) }
+    }
+
     /// One block's step: its values' single steps folded in order.
     fn block(&self, mut values: impl Iterator<Item = [FloatExp; 2]>) -> Node {
         let single = |z| Node::single(z, self.one, self.epsilon, self.escape);
