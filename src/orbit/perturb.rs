@@ -1379,19 +1379,14 @@ impl Perturbation {
             if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
                 return Some(Exit::Switch(*s));
             }
-        } else if !full_range && (s.single || d2.to_f64() > self.single_d2) {
-            s.single = true;
+        } else if self.goes_single(s, d2) {
             if ctx.vector {
                 return Some(Exit::Vector(*s));
             }
         } else if let Some(t) = ctx.tables[s.which]
             && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
         {
-            if INT && s.probe.plain {
-                self.apply_bla::<D, DER, false>((e, len), s, d2, der, ctx.add_fe, local);
-            } else {
-                self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
-            }
+            self.apply_step::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
             if self.turn_loop
                 && !full_range
                 && traps.is_empty()
@@ -1593,16 +1588,12 @@ impl Perturbation {
             }
             // A block's step where one starts here and is valid (in the f64 phase, for a
             // delta that `op` would still look a step up for).
-            let bla = !(rebase || glitch) && (full_range || (!s.single && d2.to_f64() <= self.single_d2));
+            let bla = !(rebase || glitch || self.goes_single(s, d2));
             if let Some(t) = steps.filter(|_| bla)
                 && let Some((e, len, at)) = t.lookup(s.m, d2, self.max_iter - s.n)
                 && let Some(reader) = t.reader(at)
             {
-                if INT && s.probe.plain {
-                    self.apply_bla::<D, DER, false>((e, len), s, d2, der, ctx.add_fe, local);
-                } else {
-                    self.apply_bla::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
-                }
+                self.apply_step::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
                 local.tail_steps += 1;
                 cursor = reader;
             } else {
@@ -1625,6 +1616,36 @@ impl Perturbation {
             if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
                 return Some(exit);
             }
+        }
+    }
+
+    /// Whether a sample takes single steps rather than looking a BLA step up, in the f64
+    /// phase: its delta went above `single_d2` since its last rebase (which clears it), where
+    /// BLA steps are rarely valid and the vector lanes take single steps faster. The dense
+    /// loop and a packed tail's decide alike, so that a sample steps the same either way.
+    #[inline(always)]
+    fn goes_single<D: Real>(&self, s: &mut Sample<D>, d2: D) -> bool {
+        let single = D::NAME != FloatExp::NAME && (s.single || d2.to_f64() > self.single_d2);
+        s.single |= single;
+        single
+    }
+
+    /// [`Perturbation::apply_bla`], without interior detection's products for a sample that
+    /// left detection at its start ([`Probe::plain`]).
+    #[inline(always)]
+    fn apply_step<D: Real, const DER: bool, const INT: bool>(
+        &self,
+        step: (Step<'_, D>, u32),
+        s: &mut Sample<D>,
+        d2: D,
+        der: &mut Der,
+        add_fe: FloatExp,
+        local: &mut Counters,
+    ) {
+        if INT && s.probe.plain {
+            self.apply_bla::<D, DER, false>(step, s, d2, der, add_fe, local);
+        } else {
+            self.apply_bla::<D, DER, INT>(step, s, d2, der, add_fe, local);
         }
     }
 
