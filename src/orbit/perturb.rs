@@ -38,6 +38,7 @@
 //! to Z_p): those passes run in a loop of their own (`Perturbation::turns`) that does the
 //! same operations in the same order without searching the table at Z_1 each time.
 
+mod batch_models;
 mod disks;
 mod lanes;
 mod model;
@@ -618,6 +619,13 @@ struct Lane {
     dc_fe: [FloatExp; 2],
 }
 
+/// The quadratic model's parameter c' = K origin + K spacing × offset of the sample at
+/// `offset`, from [`Perturbation::model_map`]'s `(ko, ks)`.
+fn model_parameter((ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> [f64; 2] {
+    let d = cmul(ks, offset);
+    [ko[0] + d[0], ko[1] + d[1]]
+}
+
 /// A point z of the quadratic model's coordinate z = Λ w as the full value w near 0 at a
 /// period end (`Perturbation::model_cycle`); None where it is not a finite f64.
 fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
@@ -881,18 +889,20 @@ impl Perturbation {
     /// without detection, vector lanes' bursts included. One whose model has an attracting
     /// cycle keeps its period, and at its first period end Newton's method finds the cycle
     /// of the model at its own value ([`Perturbation::model_cycle`]), a start for the test.
-    fn start_model(&self, (ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
-        let d = cmul(ks, offset);
-        let c = [ko[0] + d[0], ko[1] + d[1]];
+    fn start_model(&self, map: ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
+        let c = model_parameter(map, offset);
         Some(model::fixed_point(c).map_or_else(|| model::settled_cycle(c), |z| Model::Cycle(z, 1)))
     }
 
     /// [`Perturbation::start_model`] of every sample of a batch (None where the view has no
     /// model): worked out before the disks, which then look only among the samples whose
     /// model has a short attracting cycle.
-    fn sample_models(&self, offsets: &[[f64; 2]]) -> Option<Vec<Model>> {
+    fn sample_models(&self, offsets: &[[f64; 2]], simd: SimdLevel) -> Option<Vec<Model>> {
         let map = self.model_map()?;
-        offsets.iter().map(|&o| self.start_model(map, o)).collect()
+        let cs: Vec<[f64; 2]> = offsets.iter().map(|&o| model_parameter(map, o)).collect();
+        // A batch is whole rows: the first sample of the second row ends the first.
+        let width = offsets.iter().position(|o| o[1] != offsets[0][1]).unwrap_or(offsets.len());
+        Some(batch_models::models(&cs, width, simd))
     }
 
     /// A point of the attracting cycle of period k turns of the quadratic model
@@ -1038,7 +1048,7 @@ impl Perturbation {
     /// (`Perturbation::certified_disks`): the same N as iterating them, since each is
     /// interior.
     pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
-        let models = self.sample_models(offsets);
+        let models = self.sample_models(offsets, simd);
         let Some(done) = self.certified_disks(offsets, models.as_deref(), counters) else {
             return self.orbits_each(offsets, models.as_deref(), out, counters, simd);
         };

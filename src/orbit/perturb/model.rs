@@ -19,7 +19,7 @@ use crate::num::real::{cmul, norm2};
 /// [`super::MODEL_TURNS_SPARE`] such tests.
 pub(super) const MAX_PERIODS: u32 = 1024;
 /// Iterations of the quadratic model's orbit at most ([`super::Perturbation::model_cycle`]).
-const ITERATIONS: u32 = 8192;
+pub(super) const ITERATIONS: u32 = 8192;
 /// The Newton search for a period n found at a new minimum of |z_n| waits until iteration
 /// n times this, for an orbit that escapes by then (most outside the set) to cost nothing.
 const NEWTON_DELAY: u32 = 4;
@@ -41,16 +41,22 @@ const NEWTON_BACK2: f64 = 1e-18;
 /// 1 - sqrt(1 - 4c); None where that is not below 1 in modulus (c outside the main cardioid)
 /// or not a number (an overflowed c).
 pub(super) fn fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
+    let (z, mult2) = fixed_point_of(c);
+    // Not a number compares false: refused.
+    (mult2 < 1.0).then_some(z)
+}
+
+/// [`fixed_point`] as a point and its multiplier's squared modulus, branch-free (a loop of
+/// these is vectorised).
+#[inline(always)]
+pub(super) fn fixed_point_of(c: [f64; 2]) -> ([f64; 2], f64) {
     let (x, y) = (1.0 - 4.0 * c[0], -4.0 * c[1]);
     // Not hypot (a libm call): an |x| or |y| past 1e154 makes r infinite and the multiplier
     // not a number, which is refused below as it should be.
     let r = (x * x + y * y).sqrt();
     let sq = [((r + x) / 2.0).sqrt(), ((r - x) / 2.0).sqrt().copysign(y)];
     let mult = [1.0 - sq[0], -sq[1]];
-    if (mult[0] * mult[0] + mult[1] * mult[1]).partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
-        return None;
-    }
-    Some([mult[0] / 2.0, mult[1] / 2.0])
+    ([mult[0] / 2.0, mult[1] / 2.0], mult[0] * mult[0] + mult[1] * mult[1])
 }
 
 /// What the orbit of 0 under the quadratic model z -> z^2 + c does.
@@ -121,8 +127,14 @@ pub(super) fn cycle_within(c: [f64; 2], iterations: u32) -> Model {
 /// converged within [`NEWTON_STEPS`], or converges on a repelling cycle, which it
 /// takes for one as soon as a step is below [`NEWTON_JUDGE2`] with |f^n'| >= 1.
 pub(super) fn attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
-    let mut w = [0.0, 0.0];
-    for _ in 0..NEWTON_STEPS {
+    attractor_from(c, n, [0.0, 0.0], NEWTON_STEPS)
+}
+
+/// [`attractor`] from `w` rather than 0, within `steps` Newton steps: from a point of a
+/// neighbouring parameter's attracting n-cycle, a few steps reach this parameter's, where
+/// it has one of that period.
+pub(super) fn attractor_from(c: [f64; 2], n: u32, mut w: [f64; 2], steps: u32) -> Option<([f64; 2], u32)> {
+    for _ in 0..steps {
         let (mut z, mut d) = (w, [1.0, 0.0]);
         for _ in 0..n {
             d = cmul([2.0 * z[0], 2.0 * z[1]], d);
