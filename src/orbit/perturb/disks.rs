@@ -7,8 +7,11 @@
 //! The batch is halved across its bounding box's longer side while its disk fails; the
 //! quadratic model ([`super::model`]) gates each try, so that a certificate is computed only
 //! where the model puts the disk well inside a component, and the halving stops where its
-//! distance estimate puts a disk far outside. A certified sample gets the value of one that
-//! reached the iteration limit, so the disks change no pixel, only the time.
+//! distance estimate puts a disk far outside. A part whose samples' own models
+//! (`Perturbation::sample_models`) do not all have the same period lies across a
+//! component's edge: it is halved without a try (on the 1e102 minibrot view, the tries at
+//! such parts had cost as much as all the certificates). A certified sample gets the value
+//! of one that reached the iteration limit, so the disks change no pixel, only the time.
 
 use super::model::{self, Model};
 use super::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation, delta_c, from_model};
@@ -20,6 +23,9 @@ use crate::orbit::interior;
 /// of period up to [`MAX_CYCLE_PERIODS`] are found within this where a disk can be
 /// certified).
 const DISK_MODEL_ITERATIONS: u32 = 256;
+/// Newton's steps for the model's cycle at a disk's centre from a sample's, and at its edge
+/// from the centre's ([`model::attractor_from`]), before the search from 0.
+const HINT_STEPS: u32 = 8;
 /// The fewest samples `Perturbation::certified_disks` tries a disk for.
 const DISK_MIN: usize = 4;
 
@@ -44,8 +50,9 @@ impl Perturbation {
     ///
     /// The batch is tried as one disk, the one around its samples' bounding box, and halved
     /// across the box's longer side (so that the parts tend to squares) while it fails, down
-    /// to [`DISK_MIN`] samples. A disk is tried where the quadratic model puts it well inside
-    /// the minibrot's cardioid or one of its bulbs (`Perturbation::disk_interior`); then
+    /// to [`DISK_MIN`] samples. A disk is tried where every sample's model has a cycle of the
+    /// same period, and where the quadratic model puts the disk well inside the minibrot's
+    /// cardioid or one of its bulbs (`Perturbation::disk_interior`); then
     /// Newton's method finds the cycle at the disk's centre from the model's, and the disk
     /// certificate decides. What no disk covers is iterated as before.
     pub(super) fn certified_disks(
@@ -61,9 +68,10 @@ impl Perturbation {
         let scale = self.model_scale?;
         let mut done = vec![false; offsets.len()];
         // Disks are tried among the samples whose model has a short attracting cycle.
-        let cycle = |k: usize| models.is_none_or(|m| matches!(m[k], Model::Cycle(_, n) if n <= MAX_CYCLE_PERIODS));
-        let mut idx: Vec<usize> = (0..offsets.len()).filter(|&k| cycle(k)).collect();
-        let found = self.disks_in(offsets, &mut idx, &mut done, (p, lam, scale));
+        let models = models?;
+        let mut idx: Vec<usize> =
+            (0..offsets.len()).filter(|&k| matches!(models[k], Model::Cycle(_, n) if n <= MAX_CYCLE_PERIODS)).collect();
+        let found = self.disks_in(offsets, models, &mut idx, &mut done, (p, lam, scale));
         counters.interior += found;
         counters.newton += found;
         counters.disks += found;
@@ -74,6 +82,7 @@ impl Perturbation {
     fn disks_in(
         &self,
         offsets: &[[f64; 2]],
+        models: &[Model],
         idx: &mut [usize],
         done: &mut [bool],
         model: (u32, [FloatExp; 2], [FloatExp; 2]),
@@ -88,7 +97,10 @@ impl Perturbation {
         let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         // Half the box's diagonal, a little more for the rounding of the centre.
         let r = ((hi[0] - lo[0]) / 2.0).hypot((hi[1] - lo[1]) / 2.0) * (1.0 + 1e-9);
-        match self.disk_interior(centre, r, model) {
+        let Model::Cycle(hint, period) = models[idx[0]] else { return 0 };
+        let uniform = idx.iter().all(|&k| matches!(models[k], Model::Cycle(_, n) if n == period));
+        let verdict = if uniform { self.disk_interior(centre, r, (hint, period), model) } else { Disk::Failed };
+        match verdict {
             Disk::Interior => {
                 for &k in idx.iter() {
                     done[k] = true;
@@ -107,7 +119,7 @@ impl Perturbation {
         let h = idx.len() / 2;
         idx.select_nth_unstable_by(h, |&a, &b| offsets[a][axis].total_cmp(&offsets[b][axis]));
         let (a, b) = idx.split_at_mut(h);
-        self.disks_in(offsets, a, done, model) + self.disks_in(offsets, b, done, model)
+        self.disks_in(offsets, models, a, done, model) + self.disks_in(offsets, models, b, done, model)
     }
 
     /// Whether the disk of radius `r` about `centre` (offsets, in spacings) is certified
@@ -116,8 +128,15 @@ impl Perturbation {
     /// the cardioid the model's multiplier is μ = 1 - sqrt(1 - 4 c') and the certificate's
     /// bounds come to what is tested below; in a bulb of period k up to
     /// [`MAX_CYCLE_PERIODS`], the multiplier of the model's k-cycle at the centre and at the
-    /// disk's edge stand in for them.
-    fn disk_interior(&self, centre: [f64; 2], r: f64, (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2])) -> Disk {
+    /// disk's edge stand in for them. `hint`: a point of a sample's model cycle, of period
+    /// `period`, where Newton's method looks for the centre's first.
+    fn disk_interior(
+        &self,
+        centre: [f64; 2],
+        r: f64,
+        (hint, period): ([f64; 2], u32),
+        (p, lam, scale): (u32, [FloatExp; 2], [FloatExp; 2]),
+    ) -> Disk {
         let dc_fe = delta_c::<FloatExp>(self.spacing, self.origin, centre);
         let dc = cto_f64(dc_fe);
         let rho = self.spacing.mul_f64(r).to_f64();
@@ -143,13 +162,17 @@ impl Perturbation {
             // A bulb's k-cycle: its multiplier at the centre, and its change across the disk
             // as the model's cycle at the disk's edge has it, taken 4.5 times (as the
             // cardioid's bounds take theirs about 3 times, with room for Kantorovich's h).
-            let (z, k) = match model::cycle_within(cm, DISK_MODEL_ITERATIONS) {
+            let near = |c: [f64; 2], z: [f64; 2], k: u32| {
+                model::attractor_from(c, k, z, HINT_STEPS)
+                    .map_or_else(|| model::cycle_within(c, DISK_MODEL_ITERATIONS), |(z, k)| Model::Cycle(z, k))
+            };
+            let (z, k) = match near(cm, hint, period) {
                 Model::Cycle(z, k) => (z, k),
                 Model::Escapes if model::far(cm, 2.0 * rm, DISK_MODEL_ITERATIONS) => return Disk::Outside,
                 _ => return Disk::Failed,
             };
             let edge = [cm[0] + rm, cm[1]];
-            let Model::Cycle(z_edge, k_edge) = model::cycle_within(edge, DISK_MODEL_ITERATIONS) else {
+            let Model::Cycle(z_edge, k_edge) = near(edge, z, k) else {
                 return Disk::Failed;
             };
             if k > MAX_CYCLE_PERIODS || k_edge != k {
