@@ -900,7 +900,9 @@ impl Perturbation {
     fn sample_models(&self, offsets: &[[f64; 2]], simd: SimdLevel) -> Option<Vec<Model>> {
         let map = self.model_map()?;
         let cs: Vec<[f64; 2]> = offsets.iter().map(|&o| model_parameter(map, o)).collect();
-        // A batch is whole rows: the first sample of the second row ends the first.
+        // A batch is whole rows: the first sample of the second row ends the first. (On a
+        // rotated grid every sample's y differs: the "row" is then one sample, and the one
+        // before serves as the one above; the models only ever cost time.)
         let width = offsets.iter().position(|o| o[1] != offsets[0][1]).unwrap_or(offsets.len());
         Some(batch_models::models(&cs, width, simd))
     }
