@@ -131,6 +131,9 @@ pub fn show(bar: &Option<ProgressBar>, p: render::Progress) {
     if let Some(b) = bar {
         match p {
             render::Progress::Reference { done, total } => b.set_message(format!("reference orbit {done}/{total}")),
+            render::Progress::Blocks { done, total } => {
+                b.set_message(format!("steps of blocks {:.0}%", 100.0 * done as f64 / total as f64));
+            }
             render::Progress::Rows(rows) => {
                 b.set_message("");
                 b.set_position(rows);

@@ -751,6 +751,17 @@ impl<T: Real> BlaTable<T> {
         self.blocks.as_ref().and_then(|b| b.built()).map(self.pick)
     }
 
+    /// Whether the table has steps of whole blocks to build (an orbit past the tree).
+    pub fn has_blocks(&self) -> bool {
+        self.blocks.is_some()
+    }
+
+    /// While the steps of whole blocks are being built, the iterations folded so far and of
+    /// how many ([`Blocks::progress`]).
+    pub fn blocks_progress(&self) -> Option<(u64, u64)> {
+        self.blocks.as_ref().and_then(|b| b.progress())
+    }
+
     /// Seconds the steps of whole blocks took to build, where a sample needed them.
     pub fn blocks_seconds(&self) -> f64 {
         self.blocks.as_ref().and_then(|b| b.built()).map_or(0.0, |p| p.seconds)

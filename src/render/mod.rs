@@ -114,7 +114,19 @@ pub enum Progress {
     },
     /// Output rows finished.
     Rows(u64),
+    /// Iterations of a long reference orbit folded into steps of whole blocks, of `total`:
+    /// built when a sample first gets past BLA's tree, while no row finishes (seconds, for
+    /// 10^8 iterations).
+    Blocks {
+        /// Done so far.
+        done: u64,
+        /// Of this many.
+        total: u64,
+    },
 }
+
+/// How often a render looks at the blocks' build for [`Progress::Blocks`].
+const BLOCKS_LOOK: std::time::Duration = std::time::Duration::from_millis(200);
 
 /// What the deep engine did (absent for the direct kernels).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -454,7 +466,19 @@ pub fn render<P: Send>(
     let local = Context { simd: options.simd, ..Context::default() };
 
     let (tx, rx) = mpsc::sync_channel::<(RenderedStrip, P)>(threads);
+    let finished = AtomicBool::new(false);
     let result = std::thread::scope(|s| {
+        // While samples may wait on the blocks' build, a look at it every BLOCKS_LOOK.
+        let watcher = params.deep.as_ref().filter(|d| d.builds_blocks()).map(|deep| {
+            s.spawn(|| {
+                while !finished.load(Ordering::Relaxed) {
+                    std::thread::park_timeout(BLOCKS_LOOK);
+                    if let Some((done, total)) = deep.blocks_progress() {
+                        progress(Progress::Blocks { done, total });
+                    }
+                }
+            })
+        });
         let writer = s.spawn(move || -> Result<(), String> {
             for (strip, prepared) in rx {
                 sink(strip, prepared)?;
@@ -505,6 +529,10 @@ pub fn render<P: Send>(
             Ok(())
         });
         drop(tx);
+        finished.store(true, Ordering::Relaxed);
+        if let Some(w) = watcher {
+            w.thread().unpark();
+        }
         let written = writer.join().unwrap_or_else(|_| Err("output writer panicked".into()));
         computed.and(written.map_err(RenderError::Sink))
     });

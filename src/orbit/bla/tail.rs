@@ -25,6 +25,7 @@
 //! tree: a view whose samples all end before never pays for them. They are a function of
 //! the orbit alone, so when they are built changes no bit of the output.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 
 use rayon::prelude::*;
@@ -75,6 +76,10 @@ pub struct Blocks {
     /// Keep the FloatExp steps too (a view with FloatExp deltas), not only the f64 ones.
     floatexp: bool,
     parts: OnceLock<Parts>,
+    /// Iterations folded into blocks so far, of `total` (while they are built: a render
+    /// reports them, [`Blocks::progress`]).
+    done: AtomicU64,
+    total: AtomicU64,
 }
 
 /// What [`Blocks`] builds: [dense part past the tree, packed tail] in both number types.
@@ -100,7 +105,17 @@ impl Blocks {
             how,
             floatexp,
             parts: OnceLock::new(),
+            done: AtomicU64::new(0),
+            total: AtomicU64::new(0),
         })
+    }
+
+    /// While the steps are being built, the iterations folded so far and of how many; None
+    /// before the build starts and once it is done. Read by a render's progress display
+    /// (the build can take seconds, during which no row finishes).
+    pub fn progress(&self) -> Option<(u64, u64)> {
+        let total = self.total.load(Ordering::Relaxed);
+        (self.parts.get().is_none() && total > 0).then(|| (self.done.load(Ordering::Relaxed).min(total), total))
     }
 
     /// The steps, built now if they have not been. A sample's thread that asks while another
@@ -138,8 +153,12 @@ impl Blocks {
     fn build(&self) -> Parts {
         let started = std::time::Instant::now();
         let r = &self.refs[self.k];
-        let dense = (r.last() > self.from).then(|| TailSteps::dense(r, self.from, self.how)).flatten();
-        let packed = r.packed().and_then(|p| TailSteps::packed(p, r.get_fe(p.seed_index()), self.how));
+        let dense_len = r.last().saturating_sub(self.from);
+        let total = u64::from(dense_len) + r.packed().map_or(0, |p| u64::from(p.len()));
+        self.total.store(total.max(1), Ordering::Relaxed);
+        let done = &self.done;
+        let dense = (dense_len > 0).then(|| TailSteps::dense(r, self.from, self.how, done)).flatten();
+        let packed = r.packed().and_then(|p| TailSteps::packed(p, r.get_fe(p.seed_index()), self.how, done));
         let f64 = [dense.as_ref().map(TailSteps::to_f64), packed.as_ref().map(TailSteps::to_f64)];
         let fe = if self.floatexp { [dense, packed] } else { [None, None] };
         Parts { fe, f64, seconds: started.elapsed().as_secs_f64() }
@@ -181,7 +200,8 @@ impl Build {
 impl TailSteps<FloatExp> {
     /// The steps of `packed`'s whole blocks; `seed` is the seed's value at full range (kept
     /// with the dense part). None where the tail holds no whole block.
-    pub(super) fn packed(packed: &Packed, seed: [FloatExp; 2], how: Build) -> Option<Self> {
+    /// `done` counts the iterations folded.
+    pub(super) fn packed(packed: &Packed, seed: [FloatExp; 2], how: Build, done: &AtomicU64) -> Option<Self> {
         let shift = block_shift(packed.len());
         let blocks = (packed.len() >> shift) as usize;
         if blocks == 0 {
@@ -209,15 +229,18 @@ impl TailSteps<FloatExp> {
                     c.advance(packed);
                     c.get_fe(packed)
                 });
-                how.block(std::iter::once(z).chain(rest))
+                let node = how.block(std::iter::once(z).chain(rest));
+                done.fetch_add(u64::from(block), Ordering::Relaxed);
+                node
             })
             .collect();
         Some(Self::tree(packed.seed_index(), shift, marks.into(), first, how))
     }
 
     /// The steps of whole blocks of a densely stored orbit from index `from` to its last
-    /// (read by index: no readers). None where that holds no whole block.
-    pub(super) fn dense(orbit: &Reference, from: u32, how: Build) -> Option<Self> {
+    /// (read by index: no readers). None where that holds no whole block. `done` counts the
+    /// iterations folded.
+    pub(super) fn dense(orbit: &Reference, from: u32, how: Build, done: &AtomicU64) -> Option<Self> {
         let len = orbit.last().checked_sub(from)?;
         let shift = block_shift(len);
         let blocks = (len >> shift) as usize;
@@ -228,7 +251,9 @@ impl TailSteps<FloatExp> {
             .into_par_iter()
             .map(|j| {
                 let at = from + (j << shift);
-                how.block((at..at + (1 << shift)).map(|i| orbit.get_fe(i)))
+                let node = how.block((at..at + (1 << shift)).map(|i| orbit.get_fe(i)));
+                done.fetch_add(1 << shift, Ordering::Relaxed);
+                node
             })
             .collect();
         Some(Self::tree(from, shift, Arc::new([]), first, how))
@@ -364,6 +389,33 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The build's progress ([`Blocks::progress`]): none before it starts and none once it
+    /// is done; it counted every iteration of the whole blocks it folded, dense past the
+    /// tree and packed, of a total that also holds the remainder past the last whole block.
+    #[test]
+    fn the_blocks_build_counts_what_it_folds() {
+        use malachite_float::Float;
+        let c = [Float::from(-0.7), Float::from(0.2)];
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let how = Build::new(true, 1e-8, FloatExp::from(1e-14), 2.0);
+        for dense_limit in [None, Some(1500)] {
+            let steps = crate::orbit::reference::Stepping { dense_limit, ..Default::default() };
+            let cancel = std::sync::atomic::AtomicBool::new(false);
+            let r = Reference::compute(&z0, &c, 4005, 2.0, 128, steps, &|_| {}, &cancel).unwrap();
+            let (last, tail) = (r.last(), r.packed().map_or(0, |p| p.len()));
+            let blocks = Blocks::new(Arc::new(vec![r]), 0, 1000, how, false).expect("an orbit past 1000");
+            assert_eq!(blocks.progress(), None, "not begun");
+            let parts = blocks.parts();
+            assert_eq!(blocks.progress(), None, "done");
+            let whole: u64 = parts.f64.iter().flatten().map(|t| t.levels[0].len() as u64 * u64::from(t.block())).sum();
+            let total = u64::from(last - 1000) + u64::from(tail);
+            assert_eq!(blocks.done.load(Ordering::Relaxed), whole, "{dense_limit:?}");
+            assert_eq!(blocks.total.load(Ordering::Relaxed), total, "{dense_limit:?}");
+            assert!(whole > total * 9 / 10 && whole <= total, "{whole} of {total}");
+            assert_eq!(parts.f64[1].is_some(), dense_limit.is_some());
         }
     }
 
