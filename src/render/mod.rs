@@ -128,6 +128,19 @@ pub enum Progress {
 /// How often a render looks at the blocks' build for [`Progress::Blocks`].
 const BLOCKS_LOOK: std::time::Duration = std::time::Duration::from_millis(200);
 
+/// Raises its flag and wakes its thread when dropped: stops a watching thread however the
+/// work it watches ends.
+struct Stop<'a>(&'a AtomicBool, Option<std::thread::Thread>);
+
+impl Drop for Stop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+        if let Some(t) = &self.1 {
+            t.unpark();
+        }
+    }
+}
+
 /// What the deep engine did (absent for the direct kernels).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct DeepStats {
@@ -479,6 +492,9 @@ pub fn render<P: Send>(
                 }
             })
         });
+        // Stops it when the strips are done, or when they unwind (the scope would wait
+        // for it forever).
+        let stop = Stop(&finished, watcher.as_ref().map(|w| w.thread().clone()));
         let writer = s.spawn(move || -> Result<(), String> {
             for (strip, prepared) in rx {
                 sink(strip, prepared)?;
@@ -529,10 +545,7 @@ pub fn render<P: Send>(
             Ok(())
         });
         drop(tx);
-        finished.store(true, Ordering::Relaxed);
-        if let Some(w) = watcher {
-            w.thread().unpark();
-        }
+        drop(stop);
         let written = writer.join().unwrap_or_else(|_| Err("output writer panicked".into()));
         computed.and(written.map_err(RenderError::Sink))
     });
