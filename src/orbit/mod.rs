@@ -281,16 +281,15 @@ impl Perturbation {
 
     /// Whether a sample may have the steps of whole blocks built during the render (the
     /// reference goes on past BLA's tree): a render then watches their build's progress.
+    /// (The f64 tables are there wherever BLA is, and the FloatExp ones share their blocks.)
     pub fn builds_blocks(&self) -> bool {
         self.bla_f64.iter().flatten().any(BlaTable::has_blocks)
-            || self.bla_fe.iter().flatten().any(BlaTable::has_blocks)
     }
 
     /// While the steps of whole blocks are being built, the iterations folded so far and of
-    /// how many (the tables share one build).
+    /// how many (one build for every table of an orbit).
     pub fn blocks_progress(&self) -> Option<(u64, u64)> {
-        let f64 = self.bla_f64.iter().flatten().find_map(BlaTable::blocks_progress);
-        f64.or_else(|| self.bla_fe.iter().flatten().find_map(BlaTable::blocks_progress))
+        self.bla_f64.iter().flatten().find_map(BlaTable::blocks_progress)
     }
 
     /// Precision of the reference orbit, in bits.
