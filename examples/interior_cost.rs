@@ -54,7 +54,7 @@ fn iterate(p: &Perturbation, offsets: &[[f64; 2]]) -> (Vec<Orbit>, Counters, f64
         .map(|chunk| {
             let mut out = vec![Orbit::interior(); chunk.len()];
             let mut c = Counters::default();
-            p.orbits(chunk, &mut out, &mut c, simd);
+            p.orbits(chunk, &mut out, &mut c, simd, &deepfield::cancel::NEVER);
             (out, c)
         })
         .collect();

@@ -274,7 +274,7 @@ fn deep_strip(
             }
             let offsets: Vec<[f64; 2]> =
                 chunk.iter().flat_map(|&j| (0..grid.width).map(move |i| grid.offset(i, j))).collect();
-            deep.orbits(&offsets, out, &mut counters, params.orbit.simd);
+            deep.orbits(&offsets, out, &mut counters, params.orbit.simd, cancel);
         }
     } else {
         // Traps see every iteration: one sample at a time, row by row.
@@ -287,12 +287,17 @@ fn deep_strip(
                 for (state, trap) in states.iter_mut().zip(traps) {
                     *state = trap.initial();
                 }
-                *orbit = deep.orbit(grid.offset(i as u32, j), traps, &mut states, &mut counters);
+                *orbit = deep.orbit(grid.offset(i as u32, j), traps, &mut states, &mut counters, cancel);
                 for (plane, state) in planes.traps.iter_mut().zip(&states) {
                     plane.store(row_start + i, state);
                 }
             }
         }
+    }
+    // Raised during the last samples, the flag may have abandoned some of them (the engine
+    // cuts short those that waited on a cancelled build): none is kept.
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Cancelled);
     }
     fill_quantities(&params.needs, &orbits, params.orbit.escape_radius.ln(), 1.0, planes);
     if traps.iter().any(|t| !t.observes_orbit()) {

@@ -48,12 +48,14 @@
 mod tail;
 
 use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
 
 pub use tail::{Blocks, Parts, TailSteps};
 
 use super::reference::Reference;
+use crate::cancel::{self, Cancelled};
 use crate::num::real::{cadd, cmul, norm2};
 use crate::num::{FloatExp, Real, Scaled};
 
@@ -629,9 +631,27 @@ impl<T: Real> BlaTable<T> {
     /// the common case.
     #[inline(always)]
     pub fn lookup(&self, m: u32, z2: T, budget: u32) -> Option<(Step<'_, T>, u32)> {
+        self.lookup_in(m, z2, budget, &cancel::NEVER).and_then(Result::ok)
+    }
+
+    /// [`BlaTable::lookup`] for a sample of a render that `cancel` may stop: past the tree,
+    /// where the steps of whole blocks are built when first needed ([`Blocks::parts`]),
+    /// `Err(Cancelled)` where their build was cancelled (the sample is then abandoned: a
+    /// cancelled render keeps none of its samples).
+    #[inline(always)]
+    pub fn lookup_in(
+        &self,
+        m: u32,
+        z2: T,
+        budget: u32,
+        cancel: &AtomicBool,
+    ) -> Option<Result<(Step<'_, T>, u32), Cancelled>> {
         let i = m.checked_sub(self.origin)?;
         if i >= self.tree_len {
-            return self.blocks()?.lookup(m, z2, budget).map(|(step, len, _)| (step, len));
+            return match self.blocks(cancel) {
+                Ok(b) => b?.lookup(m, z2, budget).map(|(step, len, _)| Ok((step, len))),
+                Err(e) => Some(Err(e)),
+            };
         }
         let (start, n) = column(i, self.levels.len());
         let mut best = None;
@@ -648,7 +668,12 @@ impl<T: Real> BlaTable<T> {
                 best = Some((Step { first: &self.levels[k - 1][j], second: &self.seconds[k - 1][j] }, 1u32 << k));
             }
         }
-        if self.stages.marked(i) { self.stages.climb(i, z2, budget, best, |s| self.stages.start2[s]) } else { best }
+        let step = if self.stages.marked(i) {
+            self.stages.climb(i, z2, budget, best, |s| self.stages.start2[s])
+        } else {
+            best
+        };
+        step.map(Ok)
     }
 
     /// [`BlaTable::lookup`] for a delta not tested at `m` (steps composed for every sample
@@ -732,17 +757,24 @@ impl<T: Real> BlaTable<T> {
     }
 
     /// The steps of whole blocks through the dense orbit past the tree, if it is longer
-    /// (built now if they have not been: [`Blocks::parts`]).
+    /// (built now if they have not been: [`Blocks::parts`], which `cancel` may stop).
     #[inline]
-    pub fn blocks(&self) -> Option<&TailSteps<T>> {
-        self.blocks.as_ref().and_then(|b| (self.pick)(b.parts())[0].as_ref())
+    pub fn blocks(&self, cancel: &AtomicBool) -> Result<Option<&TailSteps<T>>, Cancelled> {
+        self.part(0, cancel)
     }
 
     /// The steps through the reference's packed tail, if it has one (built now if they
     /// have not been).
     #[inline]
-    pub fn tail(&self) -> Option<&TailSteps<T>> {
-        self.blocks.as_ref().and_then(|b| (self.pick)(b.parts())[1].as_ref())
+    pub fn tail(&self, cancel: &AtomicBool) -> Result<Option<&TailSteps<T>>, Cancelled> {
+        self.part(1, cancel)
+    }
+
+    fn part(&self, k: usize, cancel: &AtomicBool) -> Result<Option<&TailSteps<T>>, Cancelled> {
+        match &self.blocks {
+            Some(b) => Ok((self.pick)(b.parts(cancel)?)[k].as_ref()),
+            None => Ok(None),
+        }
     }
 
     /// The steps of whole blocks past the tree if a sample has needed them, [dense, packed]
@@ -919,8 +951,12 @@ mod tests {
         };
         let (td, tp) = (tables(dense.clone()), tables(packed.clone()));
         assert!(td.built().is_none(), "built only when first asked for");
-        let (bd, bp) = (td.blocks().expect("blocks past the tree"), tp.tail().expect("blocks in the tail"));
-        assert!(tp.blocks().is_none() && td.tail().is_none());
+        let never = &cancel::NEVER;
+        let (bd, bp) = (
+            td.blocks(never).unwrap().expect("blocks past the tree"),
+            tp.tail(never).unwrap().expect("blocks in the tail"),
+        );
+        assert!(tp.blocks(never).unwrap().is_none() && td.tail(never).unwrap().is_none());
         assert_eq!((bd.first(), bp.first(), bd.block()), (1000, 1000, 16));
         let (mut longest, mut quadratic) = (0, 0);
         for m in (1000..dense.last()).step_by(16) {

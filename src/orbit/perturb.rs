@@ -43,10 +43,13 @@ mod disks;
 mod lanes;
 mod model;
 
+use std::sync::atomic::AtomicBool;
+
 use super::bla::{BlaTable, Step};
 use super::interior::{self, Check, Contraction, Decision, Detection};
 use super::packed::Packed;
 use super::reference::Reference;
+use crate::cancel::Cancelled;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real, Scaled};
@@ -607,6 +610,9 @@ struct Ctx<'a, D> {
     hybrid: bool,
     /// Hand samples above `single_d2` to the vector lanes.
     vector: bool,
+    /// The render's cancel flag, for the build of the steps of whole blocks past the BLA
+    /// tree ([`BlaTable::lookup_in`]): a sample whose build was cancelled is abandoned.
+    cancel: &'a AtomicBool,
 }
 
 /// A sample in flight in the interleaved f64 loop.
@@ -1024,19 +1030,34 @@ impl Perturbation {
         self.numbers == Numbers::FloatExp && big < FloatExp::from(DOWN)
     }
 
-    fn ctx<'a, D: Real>(&'a self, tables: &'a [Option<BlaTable<D>>; 2], bla: bool, add_fe: FloatExp) -> Ctx<'a, D> {
+    fn ctx<'a, D: Real>(
+        &'a self,
+        tables: &'a [Option<BlaTable<D>>; 2],
+        bla: bool,
+        add_fe: FloatExp,
+        cancel: &'a AtomicBool,
+    ) -> Ctx<'a, D> {
         let tables = if bla { [tables[0].as_ref(), tables[1].as_ref()] } else { [None, None] };
-        Ctx { tables, add_fe, hybrid: self.numbers == Numbers::FloatExp, vector: false }
+        Ctx { tables, add_fe, hybrid: self.numbers == Numbers::FloatExp, vector: false, cancel }
     }
 
     /// Iterates the sample at `offset` (in units of the spacing, from the reference point),
     /// letting traps observe every z_k, k >= 1. Returns the orbit's end; z_n is exact to f64
-    /// and dz_n is the derivative times the spacing.
-    pub fn orbit(&self, offset: [f64; 2], traps: &[Trap], states: &mut [TrapState], counters: &mut Counters) -> Orbit {
+    /// and dz_n is the derivative times the spacing. `cancel`: the render's flag; once it is
+    /// raised the orbit may be cut short (a cancelled render keeps no sample), though only
+    /// where the steps of whole blocks past the BLA tree were to be built for it.
+    pub fn orbit(
+        &self,
+        offset: [f64; 2],
+        traps: &[Trap],
+        states: &mut [TrapState],
+        counters: &mut Counters,
+        cancel: &AtomicBool,
+    ) -> Orbit {
         let (start, mut der, add_fe) = self.start(offset, None, traps.is_empty(), counters);
         let fe = self.starts_in_floatexp(&start);
         let phase = if fe { Phase::Fe(start) } else { Phase::F64(start.convert()) };
-        self.finish(phase, start.dc, &mut der, add_fe, traps, states, counters)
+        self.finish(phase, start.dc, &mut der, add_fe, traps, states, counters, cancel)
     }
 
     /// Iterates many samples without traps. Same results as [`Perturbation::orbit`], bit for
@@ -1049,16 +1070,25 @@ impl Perturbation {
     /// in the minibrot's cardioid or bulbs are first found interior together
     /// (`Perturbation::certified_disks`): the same N as iterating them, since each is
     /// interior.
-    pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, simd: SimdLevel) {
+    ///
+    /// `cancel` as for [`Perturbation::orbit`].
+    pub fn orbits(
+        &self,
+        offsets: &[[f64; 2]],
+        out: &mut [Orbit],
+        counters: &mut Counters,
+        simd: SimdLevel,
+        cancel: &AtomicBool,
+    ) {
         let models = self.sample_models(offsets, simd);
         let Some(done) = self.certified_disks(offsets, models.as_deref(), counters) else {
-            return self.orbits_each(offsets, models.as_deref(), out, counters, simd);
+            return self.orbits_each(offsets, models.as_deref(), out, counters, simd, cancel);
         };
         let rest: Vec<usize> = (0..offsets.len()).filter(|&k| !done[k]).collect();
         let at: Vec<[f64; 2]> = rest.iter().map(|&k| offsets[k]).collect();
         let known: Option<Vec<Model>> = models.map(|m| rest.iter().map(|&k| m[k]).collect());
         let mut each = vec![Orbit::interior(); at.len()];
-        self.orbits_each(&at, known.as_deref(), &mut each, counters, simd);
+        self.orbits_each(&at, known.as_deref(), &mut each, counters, simd, cancel);
         for (k, d) in done.iter().enumerate() {
             if *d {
                 out[k] = Orbit::interior();
@@ -1078,15 +1108,16 @@ impl Perturbation {
         out: &mut [Orbit],
         counters: &mut Counters,
         simd: SimdLevel,
+        cancel: &AtomicBool,
     ) {
-        if lanes::orbits(self, offsets, known, out, counters, simd) {
+        if lanes::orbits(self, offsets, known, out, counters, simd, cancel) {
             return;
         }
         match (self.derivative, self.interior.is_some()) {
-            (false, false) => self.orbits_with::<false, false>(offsets, known, out, counters),
-            (true, false) => self.orbits_with::<true, false>(offsets, known, out, counters),
-            (false, true) => self.orbits_with::<false, true>(offsets, known, out, counters),
-            (true, true) => self.orbits_with::<true, true>(offsets, known, out, counters),
+            (false, false) => self.orbits_with::<false, false>(offsets, known, out, counters, cancel),
+            (true, false) => self.orbits_with::<true, false>(offsets, known, out, counters, cancel),
+            (false, true) => self.orbits_with::<false, true>(offsets, known, out, counters, cancel),
+            (true, true) => self.orbits_with::<true, true>(offsets, known, out, counters, cancel),
         }
     }
 
@@ -1099,9 +1130,10 @@ impl Perturbation {
         known: Option<&[Model]>,
         out: &mut [Orbit],
         counters: &mut Counters,
+        cancel: &AtomicBool,
     ) {
         let add_fe = self.add_fe();
-        let c64 = self.ctx(&self.bla_f64, true, add_fe);
+        let c64 = self.ctx(&self.bla_f64, true, add_fe, cancel);
         let mut lanes: [Option<Lane>; LANES] = [None; LANES];
         let mut next = 0;
         let mut local = Counters::default();
@@ -1112,7 +1144,7 @@ impl Perturbation {
                     next += 1;
                     let (start, mut der, _) = self.start(offsets[k], known.map(|m| m[k]), true, counters);
                     let s = if self.starts_in_floatexp(&start) {
-                        let cfe = self.ctx(&self.bla_fe, true, add_fe);
+                        let cfe = self.ctx(&self.bla_fe, true, add_fe, cancel);
                         match self.run::<FloatExp>(start, &mut der, cfe, &[], &mut [], counters) {
                             Exit::Done(o) => {
                                 out[k] = o;
@@ -1159,7 +1191,7 @@ impl Perturbation {
                     Exit::Done(o) => o,
                     Exit::Switch(s) => {
                         let fe = Sample { dc: lane.dc_fe, ..s.convert() };
-                        self.finish(Phase::Fe(fe), lane.dc_fe, &mut lane.der, add_fe, &[], &mut [], counters)
+                        self.finish(Phase::Fe(fe), lane.dc_fe, &mut lane.der, add_fe, &[], &mut [], counters, cancel)
                     }
                     Exit::Vector(_) => unreachable!("the two-lane loop never asks for the vector lanes"),
                 };
@@ -1183,10 +1215,11 @@ impl Perturbation {
         known: Option<Model>,
         out: &mut [Orbit],
         counters: &mut Counters,
+        cancel: &AtomicBool,
     ) -> Option<Held> {
         let (start, der, _) = self.start(offset, known, true, counters);
         let phase = if self.starts_in_floatexp(&start) { Phase::Fe(start) } else { Phase::F64(start.convert()) };
-        self.hand_over(phase, k, start.dc, der, out, counters)
+        self.hand_over(phase, k, start.dc, der, out, counters, cancel)
     }
 
     /// Runs a sample (output index `k`) from `phase` with the lanes in use: writes its orbit
@@ -1199,8 +1232,9 @@ impl Perturbation {
         mut der: Der,
         out: &mut [Orbit],
         counters: &mut Counters,
+        cancel: &AtomicBool,
     ) -> Option<Held> {
-        match self.drive(phase, dc_fe, &mut der, self.add_fe(), &[], &mut [], true, counters) {
+        match self.drive(phase, dc_fe, &mut der, self.add_fe(), &[], &mut [], true, counters, cancel) {
             Ended::Done(o) => {
                 out[k] = o;
                 None
@@ -1220,8 +1254,9 @@ impl Perturbation {
         traps: &[Trap],
         states: &mut [TrapState],
         counters: &mut Counters,
+        cancel: &AtomicBool,
     ) -> Orbit {
-        match self.drive(phase, dc_fe, der, add_fe, traps, states, false, counters) {
+        match self.drive(phase, dc_fe, der, add_fe, traps, states, false, counters, cancel) {
             Ended::Done(o) => o,
             Ended::Vector(_) => unreachable!("drive hands samples to the lanes only when asked"),
         }
@@ -1232,13 +1267,13 @@ impl Perturbation {
     /// iteration limit, a rebase or glitch, the reference's end, |dz/dz|^2 out of its
     /// window or below the threshold), which one full pass of the scalar loop takes care of
     /// before the sample runs on as [`Perturbation::begin`]'s do.
-    fn resume(&self, mut h: Held, out: &mut [Orbit], counters: &mut Counters) -> Option<Held> {
+    fn resume(&self, mut h: Held, out: &mut [Orbit], counters: &mut Counters, cancel: &AtomicBool) -> Option<Held> {
         let add_fe = self.add_fe();
         let phase = if h.renorm {
             h.der.renormalise(add_fe);
             Phase::F64(h.s)
         } else {
-            let c64 = self.ctx(&self.bla_f64, true, add_fe);
+            let c64 = self.ctx(&self.bla_f64, true, add_fe, cancel);
             let n0 = h.s.n;
             let mut local = Counters::default();
             let (s, der, l) = (&mut h.s, &mut h.der, &mut local);
@@ -1260,7 +1295,7 @@ impl Perturbation {
                 Some(Exit::Vector(s)) => Phase::F64(s),
             }
         };
-        self.hand_over(phase, h.k, h.dc_fe, h.der, out, counters)
+        self.hand_over(phase, h.k, h.dc_fe, h.der, out, counters, cancel)
     }
 
     /// Runs a sample from `phase` to its end, switching number types as its delta asks (with
@@ -1276,10 +1311,11 @@ impl Perturbation {
         states: &mut [TrapState],
         vector: bool,
         counters: &mut Counters,
+        cancel: &AtomicBool,
     ) -> Ended {
         let bla = traps.is_empty();
-        let cfe = self.ctx(&self.bla_fe, bla, add_fe);
-        let c64 = Ctx { vector, ..self.ctx(&self.bla_f64, bla, add_fe) };
+        let cfe = self.ctx(&self.bla_fe, bla, add_fe, cancel);
+        let c64 = Ctx { vector, ..self.ctx(&self.bla_f64, bla, add_fe, cancel) };
         loop {
             phase = match phase {
                 Phase::Fe(s) => match self.run::<FloatExp>(s, der, cfe, traps, states, counters) {
@@ -1396,8 +1432,9 @@ impl Perturbation {
                 return Some(Exit::Vector(*s));
             }
         } else if let Some(t) = ctx.tables[s.which]
-            && let Some((e, len)) = t.lookup(s.m, d2, self.max_iter - s.n)
+            && let Some(found) = t.lookup_in(s.m, d2, self.max_iter - s.n, ctx.cancel)
         {
+            let Ok((e, len)) = found else { return Some(Exit::Done(Orbit::interior())) };
             self.apply_step::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
             if self.turn_loop
                 && !full_range
@@ -1584,7 +1621,11 @@ impl Perturbation {
         // Entered at the seed only: the cursor starts there.
         debug_assert_eq!(s.m, packed.seed_index());
         let mut cursor = packed.cursor();
-        let steps = ctx.tables[s.which].and_then(BlaTable::tail);
+        let steps = match ctx.tables[s.which].map(|t| t.tail(ctx.cancel)) {
+            Some(Err(Cancelled)) => return Some(Exit::Done(Orbit::interior())),
+            Some(Ok(steps)) => steps,
+            None => None,
+        };
         loop {
             let d2 = norm2(s.dz);
             let f2 = norm2(full);
@@ -1706,6 +1747,7 @@ mod tests {
     use std::sync::atomic::AtomicBool;
 
     use super::*;
+    use crate::cancel::NEVER;
     use crate::num::Decimal;
     use crate::orbit::{DeepSpec, Scale, prepare};
 
@@ -1880,6 +1922,57 @@ mod tests {
         [Decimal::parse(v[0]).unwrap(), Decimal::parse(v[1]).unwrap()]
     }
 
+    /// A render cancelled while its samples wait on the build of the steps of whole blocks
+    /// (here through a packed tail): the build stops and keeps nothing, the samples are
+    /// abandoned rather than single-stepped to the limit, and a later call that is not
+    /// cancelled builds the steps and gets the same samples as an engine that was never
+    /// cancelled.
+    #[test]
+    fn a_cancelled_build_of_blocks_abandons_its_samples_and_keeps_nothing() {
+        let (w, h) = (8i32, 6i32);
+        let max_iter = 400_000;
+        let spec = DeepSpec {
+            // Inside the main cardioid: every sample runs to the limit, through the tail.
+            center: dec(["-0.1", "0.1"]),
+            julia: None,
+            spacing: Scale::Radius(Decimal::parse("1e-6").unwrap()).spacing(h as u32),
+            max_offset: ((w * w + h * h) as f64).sqrt() / 2.0,
+            max_iter,
+            escape_radius: 2.0,
+            derivative: false,
+            bla: Some(1e-12),
+            interior: Detection::Off,
+            numbers: Numbers::F64,
+            simd: SimdLevel::detect(),
+            references: None,
+            dense_orbit: Some(2000),
+        };
+        let engine = || prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+        let offsets: Vec<[f64; 2]> =
+            (0..h).flat_map(|j| (0..w).map(move |i| [f64::from(i - w / 2), f64::from(j - h / 2)])).collect();
+        let run = |p: &Perturbation, cancel: &AtomicBool| {
+            let mut out = vec![Orbit::interior(); offsets.len()];
+            let mut c = Counters::default();
+            p.orbits(&offsets, &mut out, &mut c, SimdLevel::detect(), cancel);
+            (out, c)
+        };
+        let built = |p: &Perturbation| p.bla_f64[0].as_ref().and_then(|t| t.built()).is_some();
+        let p = engine();
+        assert!(p.refs[0].packed().is_some() && !built(&p), "a packed tail, its blocks not built yet");
+        let (_, c) = run(&p, &AtomicBool::new(true));
+        assert!(!built(&p), "a cancelled build keeps nothing");
+        assert_eq!(p.blocks_progress(), None, "and shows no progress");
+        let abandoned = offsets.len() as u64 * u64::from(max_iter);
+        assert!(c.iterations < abandoned / 10, "the samples were abandoned: {} iterations", c.iterations);
+        let (again, c) = run(&p, &NEVER);
+        assert!(built(&p), "built when not cancelled");
+        let (fresh, c_fresh) = run(&engine(), &NEVER);
+        assert_eq!(c, c_fresh, "the same counts as never cancelled");
+        assert!(c.iterations > abandoned / 10 * 9, "every sample to about the limit: {}", c.iterations);
+        let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits));
+        assert!(again.iter().zip(&fresh).all(|(a, b)| bits(a) == bits(b)), "the same samples as never cancelled");
+    }
+
     /// Every sample of a 32x24 view through `orbits` with every instruction set this CPU
     /// runs (the vector lanes of each width, and the two-sample scalar loop) and one at a
     /// time through `orbit`, with interior detection off and on: bit for bit the same
@@ -1926,7 +2019,8 @@ mod tests {
                     .collect();
                 let mut c_one = Counters::default();
                 let mut escaped = 0;
-                let one: Vec<Orbit> = offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one)).collect();
+                let one: Vec<Orbit> =
+                    offsets.iter().map(|off| p.orbit(*off, &[], &mut [], &mut c_one, &NEVER)).collect();
                 let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
                 let what = format!("{radius} derivative {derivative} interior {interior:?}");
                 // The turns of a nucleus's reference in their own loop and in the general
@@ -1940,7 +2034,7 @@ mod tests {
                 };
                 let mut c_general = Counters::default();
                 for (k, off) in offsets.iter().enumerate() {
-                    let o = general.orbit(*off, &[], &mut [], &mut c_general);
+                    let o = general.orbit(*off, &[], &mut [], &mut c_general, &NEVER);
                     assert_eq!(bits(&o), bits(&one[k]), "{what}: sample {k} differs through the general loop");
                 }
                 assert_eq!(c_general, c_one, "{what}: counts through the general loop");
@@ -1958,7 +2052,7 @@ mod tests {
                     let run = |engine: &Perturbation, how: &str| {
                         let mut many = vec![Orbit::interior(); offsets.len()];
                         let mut c = Counters::default();
-                        engine.orbits(&offsets, &mut many, &mut c, simd);
+                        engine.orbits(&offsets, &mut many, &mut c, simd, &NEVER);
                         for k in 0..offsets.len() {
                             assert_eq!(bits(&many[k]), bits(&one[k]), "{what} {simd}{how}: sample {k}");
                         }

@@ -23,14 +23,17 @@
 //! Folding a block costs about as much per iteration as the reference orbit itself, so the
 //! blocks are built the first time a sample gets past the tree ([`Blocks`]), not with the
 //! tree: a view whose samples all end before never pays for them. They are a function of
-//! the orbit alone, so when they are built changes no bit of the output.
+//! the orbit alone, so when they are built changes no bit of the output. The build looks at
+//! the asking render's cancel flag between blocks: a cancelled build keeps nothing, and the
+//! next sample to ask (of a render not cancelled) builds them again.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use rayon::prelude::*;
 
 use super::{Bla, Node, Second, Step, entry_to_f64, merge, then_single};
+use crate::cancel::Cancelled;
 use crate::num::{FloatExp, Real, Scaled};
 use crate::orbit::packed::{Cursor, Packed};
 use crate::orbit::reference::Reference;
@@ -76,6 +79,9 @@ pub struct Blocks {
     /// Keep the FloatExp steps too (a view with FloatExp deltas), not only the f64 ones.
     floatexp: bool,
     parts: OnceLock<Parts>,
+    /// Held while a build runs: a second asker waits for it (and builds again if it was
+    /// cancelled).
+    building: Mutex<()>,
     /// Iterations folded into blocks so far, of `total` (while they are built: a render
     /// reports them, [`Blocks::progress`]).
     done: AtomicU64,
@@ -105,6 +111,7 @@ impl Blocks {
             how,
             floatexp,
             parts: OnceLock::new(),
+            building: Mutex::new(()),
             done: AtomicU64::new(0),
             total: AtomicU64::new(0),
         })
@@ -119,30 +126,47 @@ impl Blocks {
     }
 
     /// The steps, built now if they have not been. A sample's thread that asks while another
-    /// builds them waits.
+    /// builds them waits. `cancel` is the asking render's flag: raised during the build, the
+    /// build stops between blocks, keeps nothing and gives `Cancelled` (so do the askers
+    /// waiting on it whose own flag is raised; one whose flag is not builds them again).
     ///
     /// The build runs in a thread pool of its own, as wide as the one asking, started from
     /// a plain thread: the workers of the pool asking may all be waiting here, and one that
     /// helped with other work while it waited could take a sample that asks again (a
     /// re-entrant wait). Where no thread can be started the steps are left out and samples
     /// take single steps past the tree, as without BLA there.
-    pub fn parts(&self) -> &Parts {
-        self.parts.get_or_init(|| {
-            let threads = rayon::current_num_threads();
-            std::thread::scope(|scope| {
-                let run = move || {
-                    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).use_current_thread().build();
-                    // One thread (this one) where no more can be started.
-                    let pool = pool(threads).or_else(|_| pool(1));
-                    pool.map(|p| p.install(|| self.build())).unwrap_or_default()
-                };
-                std::thread::Builder::new()
-                    .spawn_scoped(scope, run)
-                    .ok()
-                    .and_then(|h| h.join().ok())
-                    .unwrap_or_default()
-            })
-        })
+    pub fn parts(&self, cancel: &AtomicBool) -> Result<&Parts, Cancelled> {
+        if let Some(p) = self.parts.get() {
+            return Ok(p);
+        }
+        let _building = self.building.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some(p) = self.parts.get() {
+            return Ok(p);
+        }
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Cancelled);
+        }
+        let threads = rayon::current_num_threads();
+        let built = std::thread::scope(|scope| {
+            let run = move || {
+                let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).use_current_thread().build();
+                // One thread (this one) where no more can be started.
+                let pool = pool(threads).or_else(|_| pool(1));
+                pool.map_or_else(|_| Ok(Parts::default()), |p| p.install(|| self.build(cancel)))
+            };
+            std::thread::Builder::new()
+                .spawn_scoped(scope, run)
+                .ok()
+                .and_then(|h| h.join().ok())
+                .unwrap_or_else(|| Ok(Parts::default()))
+        });
+        match built {
+            Ok(parts) => Ok(self.parts.get_or_init(|| parts)),
+            Err(Cancelled) => {
+                self.total.store(0, Ordering::Relaxed);
+                Err(Cancelled)
+            }
+        }
     }
 
     /// The steps if they have been built (for statistics, which must not build them).
@@ -150,18 +174,43 @@ impl Blocks {
         self.parts.get()
     }
 
-    fn build(&self) -> Parts {
+    fn build(&self, cancel: &AtomicBool) -> Result<Parts, Cancelled> {
         let started = std::time::Instant::now();
         let r = &self.refs[self.k];
         let dense_len = r.last().saturating_sub(self.from);
         let total = u64::from(dense_len) + r.packed().map_or(0, |p| u64::from(p.len()));
+        self.done.store(0, Ordering::Relaxed);
         self.total.store(total.max(1), Ordering::Relaxed);
-        let done = &self.done;
-        let dense = (dense_len > 0).then(|| TailSteps::dense(r, self.from, self.how, done)).flatten();
-        let packed = r.packed().and_then(|p| TailSteps::packed(p, r.get_fe(p.seed_index()), self.how, done));
+        let fold = Fold { how: self.how, done: &self.done, cancel };
+        let dense = if dense_len > 0 { TailSteps::dense(r, self.from, fold)? } else { None };
+        let packed = match r.packed() {
+            Some(p) => TailSteps::packed(p, r.get_fe(p.seed_index()), fold)?,
+            None => None,
+        };
         let f64 = [dense.as_ref().map(TailSteps::to_f64), packed.as_ref().map(TailSteps::to_f64)];
         let fe = if self.floatexp { [dense, packed] } else { [None, None] };
-        Parts { fe, f64, seconds: started.elapsed().as_secs_f64() }
+        Ok(Parts { fe, f64, seconds: started.elapsed().as_secs_f64() })
+    }
+}
+
+/// What a build of whole blocks folds with: the steps' settings, the count of iterations
+/// folded, and the asking render's cancel flag (looked at once per block).
+#[derive(Clone, Copy)]
+pub(super) struct Fold<'a> {
+    how: Build,
+    done: &'a AtomicU64,
+    cancel: &'a AtomicBool,
+}
+
+impl Fold<'_> {
+    /// Counts a block of `len` iterations folded; Cancelled where the flag is raised.
+    fn folded(&self, len: u32) -> Result<(), Cancelled> {
+        self.done.fetch_add(u64::from(len), Ordering::Relaxed);
+        self.go_on()
+    }
+
+    fn go_on(&self) -> Result<(), Cancelled> {
+        if self.cancel.load(Ordering::Relaxed) { Err(Cancelled) } else { Ok(()) }
     }
 }
 
@@ -200,12 +249,12 @@ impl Build {
 impl TailSteps<FloatExp> {
     /// The steps of `packed`'s whole blocks; `seed` is the seed's value at full range (kept
     /// with the dense part). None where the tail holds no whole block.
-    /// `done` counts the iterations folded.
-    pub(super) fn packed(packed: &Packed, seed: [FloatExp; 2], how: Build, done: &AtomicU64) -> Option<Self> {
+    /// `fold` counts the iterations folded and stops the build when it is cancelled.
+    pub(super) fn packed(packed: &Packed, seed: [FloatExp; 2], fold: Fold<'_>) -> Result<Option<Self>, Cancelled> {
         let shift = block_shift(packed.len());
         let blocks = (packed.len() >> shift) as usize;
         if blocks == 0 {
-            return None;
+            return Ok(None);
         }
         let block = 1u32 << shift;
         // One pass in order for the readers at the boundaries.
@@ -218,7 +267,9 @@ impl TailSteps<FloatExp> {
                 debug_assert!(more, "whole blocks lie within the tail");
             }
             marks.push(cursor);
+            fold.go_on()?;
         }
+        let how = fold.how;
         let first: Vec<Node> = (0..blocks)
             .into_par_iter()
             .map(|j| {
@@ -230,33 +281,32 @@ impl TailSteps<FloatExp> {
                     c.get_fe(packed)
                 });
                 let node = how.block(std::iter::once(z).chain(rest));
-                done.fetch_add(u64::from(block), Ordering::Relaxed);
-                node
+                fold.folded(block).map(|()| node)
             })
-            .collect();
-        Some(Self::tree(packed.seed_index(), shift, marks.into(), first, how))
+            .collect::<Result<_, _>>()?;
+        Ok(Some(Self::tree(packed.seed_index(), shift, marks.into(), first, how)))
     }
 
     /// The steps of whole blocks of a densely stored orbit from index `from` to its last
-    /// (read by index: no readers). None where that holds no whole block. `done` counts the
-    /// iterations folded.
-    pub(super) fn dense(orbit: &Reference, from: u32, how: Build, done: &AtomicU64) -> Option<Self> {
-        let len = orbit.last().checked_sub(from)?;
+    /// (read by index: no readers). None where that holds no whole block. `fold` counts the
+    /// iterations folded and stops the build when it is cancelled.
+    pub(super) fn dense(orbit: &Reference, from: u32, fold: Fold<'_>) -> Result<Option<Self>, Cancelled> {
+        let Some(len) = orbit.last().checked_sub(from) else { return Ok(None) };
         let shift = block_shift(len);
         let blocks = (len >> shift) as usize;
         if blocks == 0 {
-            return None;
+            return Ok(None);
         }
+        let how = fold.how;
         let first: Vec<Node> = (0..blocks as u32)
             .into_par_iter()
             .map(|j| {
                 let at = from + (j << shift);
                 let node = how.block((at..at + (1 << shift)).map(|i| orbit.get_fe(i)));
-                done.fetch_add(1 << shift, Ordering::Relaxed);
-                node
+                fold.folded(1 << shift).map(|()| node)
             })
-            .collect();
-        Some(Self::tree(from, shift, Arc::new([]), first, how))
+            .collect::<Result<_, _>>()?;
+        Ok(Some(Self::tree(from, shift, Arc::new([]), first, how)))
     }
 
     /// The tree of whole blocks above the blocks' own steps `first`.
@@ -408,7 +458,7 @@ mod tests {
             let (last, tail) = (r.last(), r.packed().map_or(0, |p| p.len()));
             let blocks = Blocks::new(Arc::new(vec![r]), 0, 1000, how, false).expect("an orbit past 1000");
             assert_eq!(blocks.progress(), None, "not begun");
-            let parts = blocks.parts();
+            let parts = blocks.parts(&crate::cancel::NEVER).expect("not cancelled");
             assert_eq!(blocks.progress(), None, "done");
             let whole: u64 = parts.f64.iter().flatten().map(|t| t.levels[0].len() as u64 * u64::from(t.block())).sum();
             let total = u64::from(last - 1000) + u64::from(tail);
@@ -417,6 +467,31 @@ mod tests {
             assert!(whole > total * 9 / 10 && whole <= total, "{whole} of {total}");
             assert_eq!(parts.f64[1].is_some(), dense_limit.is_some());
         }
+    }
+
+    /// A build whose cancel flag is raised stops (`Cancelled`, from the fold of the blocks
+    /// as from the start), keeps nothing and shows no progress; the next ask with a flag
+    /// not raised builds the steps whole.
+    #[test]
+    fn a_cancelled_build_keeps_nothing() {
+        use malachite_float::Float;
+        let c = [Float::from(-0.7), Float::from(0.2)];
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let how = Build::new(true, 1e-8, FloatExp::from(1e-14), 2.0);
+        let steps = crate::orbit::reference::Stepping { dense_limit: Some(1500), ..Default::default() };
+        let never = AtomicBool::new(false);
+        let r = Reference::compute(&z0, &c, 4005, 2.0, 128, steps, &|_| {}, &never).unwrap();
+        let raised = AtomicBool::new(true);
+        let (done, packed) = (AtomicU64::new(0), r.packed().expect("a packed tail"));
+        let fold = Fold { how, done: &done, cancel: &raised };
+        assert_eq!(TailSteps::dense(&r, 1000, fold).err(), Some(Cancelled), "dense");
+        assert_eq!(TailSteps::packed(packed, r.get_fe(packed.seed_index()), fold).err(), Some(Cancelled), "packed");
+        let blocks = Blocks::new(Arc::new(vec![r]), 0, 1000, how, false).expect("an orbit past 1000");
+        assert_eq!(blocks.parts(&raised).err(), Some(Cancelled));
+        assert!(blocks.built().is_none() && blocks.progress().is_none(), "nothing kept, no progress");
+        let parts = blocks.parts(&never).expect("built");
+        assert!(parts.f64.iter().all(Option::is_some), "both parts");
+        assert!(blocks.built().is_some() && blocks.parts(&raised).is_ok(), "kept once built");
     }
 
     #[test]

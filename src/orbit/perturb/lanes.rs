@@ -47,6 +47,8 @@
 //! implemented for proves present.
 #![allow(unsafe_code)]
 
+use std::sync::atomic::AtomicBool;
+
 use pulp::Simd;
 
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Model, Numbers, Perturbation};
@@ -270,18 +272,19 @@ pub(super) fn orbits(
     out: &mut [Orbit],
     counters: &mut Counters,
     level: SimdLevel,
+    cancel: &AtomicBool,
 ) -> bool {
     let mut next = 0;
     let mut feed = |back: Option<Held>, counters: &mut Counters| -> Option<Held> {
         if let Some(h) = back
-            && let Some(h) = p.resume(h, out, counters)
+            && let Some(h) = p.resume(h, out, counters, cancel)
         {
             return Some(h);
         }
         while next < offsets.len() {
             let k = next;
             next += 1;
-            if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), out, counters) {
+            if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), out, counters, cancel) {
                 return Some(h);
             }
         }
