@@ -25,7 +25,7 @@ use toml::Spanned;
 use super::export::{Export, ExportRequest};
 use super::nav::{History, Nav};
 use super::palette_editor::PaletteEditor;
-use super::worker::{Job, Report, Worker};
+use super::worker::{Job, Report, Stage, Worker};
 use crate::field::{Needs, Planes};
 use crate::orbit::saved::SavedReferences;
 use crate::palette::{self, Palette};
@@ -124,6 +124,9 @@ pub struct ViewerApp {
     size_px: [u32; 2],
     job: u64,
     progress: (u64, u64),
+    /// Work of the current job that takes seconds before or between its rows (a long
+    /// reference orbit, the steps of whole blocks), while it runs: shown instead of rows.
+    stage: Option<(Stage, u64, u64)>,
     last_seconds: f64,
     engine: String,
     julia: Option<(TextureHandle, [f64; 2])>,
@@ -204,6 +207,7 @@ impl ViewerApp {
             size_px: [0, 0],
             job: 0,
             progress: (0, 0),
+            stage: None,
             last_seconds: 0.0,
             engine: String::new(),
             julia: None,
@@ -383,6 +387,7 @@ impl ViewerApp {
         let passes = if scene.width * scene.height > 64 * 64 { vec![8, 2, 1] } else { vec![1] };
         self.job = self.worker.submit(Job { scene: scene.clone(), nav: self.nav.clone(), passes });
         self.progress = (0, scene.height as u64);
+        self.stage = None;
         self.scene = Some(scene);
     }
 
@@ -406,10 +411,17 @@ impl ViewerApp {
                         self.planes = p.planes;
                         self.progress = (self.progress.1, self.progress.1);
                     }
+                    self.stage = None;
                     self.last_seconds = p.seconds;
                     self.engine = p.engine;
                 }
-                Report::Progress { id, rows, total } if id == self.job => self.progress = (rows, total),
+                Report::Progress { id, rows, total } if id == self.job => {
+                    self.progress = (rows, total);
+                    self.stage = None;
+                }
+                Report::Stage { id, stage, done, total } if id == self.job => {
+                    self.stage = (done < total).then_some((stage, done, total));
+                }
                 Report::Failed { id, message } if id == self.job => self.error = Some(message),
                 _ => {}
             }

@@ -70,6 +70,18 @@ pub enum Report {
         /// Rows in the pass.
         total: u64,
     },
+    /// Work before a pass's rows, or between them, that takes seconds on long orbits while
+    /// no row finishes: `done` of `total` of [`Stage`].
+    Stage {
+        /// The job.
+        id: u64,
+        /// What is being computed.
+        stage: Stage,
+        /// Done so far.
+        done: u64,
+        /// Of this many.
+        total: u64,
+    },
     /// The job failed (a view no engine can address, ...).
     Failed {
         /// The job.
@@ -77,6 +89,26 @@ pub enum Report {
         /// Why.
         message: String,
     },
+}
+
+/// What a [`Report::Stage`] counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The reference orbit's iterations (of at most the limit).
+    Reference,
+    /// The iterations of a long reference folded into steps of whole blocks past its BLA
+    /// tree (built when a sample first gets past the tree).
+    Blocks,
+}
+
+impl Stage {
+    /// How the status bar names it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Stage::Reference => "reference orbit",
+            Stage::Blocks => "steps of blocks",
+        }
+    }
 }
 
 type Wake = Arc<dyn Fn() + Send + Sync>;
@@ -236,6 +268,7 @@ fn deep_engine(
     scene: &Scene,
     cache: &DeepCache,
     cancel: &AtomicBool,
+    progress: &(dyn Fn(render::Progress) + Sync),
 ) -> Result<Option<Arc<Perturbation>>, RenderError> {
     let key = deep_key(scene);
     let cached = cache.engine.lock().unwrap_or_else(|e| e.into_inner()).clone().filter(|(k, _, _)| *k == key);
@@ -251,7 +284,7 @@ fn deep_engine(
     if let (Some(saved), Some(spec)) = (&cache.saved, render::deep_spec(scene, &plan, &options).1) {
         options.references = saved.serves(&spec).is_ok().then(|| saved.clone());
     }
-    let Some(engine) = render::prepare_deep(scene, &options, cancel, &|_| {})? else { return Ok(None) };
+    let Some(engine) = render::prepare_deep(scene, &options, cancel, progress)? else { return Ok(None) };
     let reused = moved.as_ref().is_some_and(|c| Arc::ptr_eq(&c.refs, &engine.refs));
     if !reused {
         if cache.saved.as_ref().is_some_and(|s| Arc::ptr_eq(&s.refs, &engine.refs)) {
@@ -273,7 +306,9 @@ fn run_job(
     let start = Instant::now();
     // Deep views: one reference orbit and one set of BLA tables, for the final pass's
     // raster, serve every pass (a coarse pass covers the same extent at a larger spacing).
-    let deep = match deep_engine(&job.scene, cache, cancel) {
+    let rows = u64::from(job.scene.height);
+    let progress = |p| report(progress_report(id, rows, p));
+    let deep = match deep_engine(&job.scene, cache, cancel, &progress) {
         Ok(d) => d,
         Err(RenderError::Cancelled) => return,
         Err(e) => {
@@ -316,6 +351,17 @@ fn run_job(
 
 type PassOutput = (Vec<u8>, Option<Vec<Planes>>, String);
 
+/// The report of a render's progress (`rows`: the pass's rows): rows done, the reference
+/// orbit's iterations, and the build of the steps of whole blocks.
+fn progress_report(id: u64, rows: u64, p: render::Progress) -> Report {
+    let stage = |stage, done, total| Report::Stage { id, stage, done, total };
+    match p {
+        render::Progress::Rows(done) => Report::Progress { id, rows: done, total: rows },
+        render::Progress::Reference { done, total } => stage(Stage::Reference, done, total),
+        render::Progress::Blocks { done, total } => stage(Stage::Blocks, done, total),
+    }
+}
+
 fn render_pass(
     id: u64,
     scene: &Scene,
@@ -327,11 +373,7 @@ fn render_pass(
     let rows = Mutex::new(Vec::new());
     let planes = Mutex::new(Vec::new());
     let total = scene.height as u64;
-    let progress = |p: render::Progress| {
-        if let render::Progress::Rows(r) = p {
-            report(Report::Progress { id, rows: r, total });
-        }
-    };
+    let progress = |p: render::Progress| report(progress_report(id, total, p));
     let prepare = |strip: &render::RenderedStrip| -> Result<Vec<u8>, String> {
         Ok(strip.rgb.iter().flat_map(|p| p.map(linear_to_srgb8)).collect())
     };
@@ -351,4 +393,46 @@ fn render_pass(
     )?;
     let planes = planes.into_inner().unwrap_or_else(|e| e.into_inner());
     Ok((rows.into_inner().unwrap_or_else(|e| e.into_inner()), keep_planes.then_some(planes), stats.engine))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_kind_of_progress_is_reported() {
+        let stage = |p| match progress_report(7, 600, p) {
+            Report::Stage { id: 7, stage, done, total } => Some((stage, done, total)),
+            _ => None,
+        };
+        assert_eq!(stage(render::Progress::Blocks { done: 3, total: 9 }), Some((Stage::Blocks, 3, 9)));
+        assert_eq!(stage(render::Progress::Reference { done: 4, total: 8 }), Some((Stage::Reference, 4, 8)));
+        assert!(matches!(
+            progress_report(7, 600, render::Progress::Rows(5)),
+            Report::Progress { id: 7, rows: 5, total: 600 }
+        ));
+    }
+
+    /// A deep view's job reports its reference orbit's progress before its passes (the
+    /// reference here runs to the limit: its centre is inside the main cardioid).
+    #[test]
+    fn a_deep_job_reports_its_reference_orbit() {
+        let text = "version = 1\n[formula]\nkind = \"mandelbrot\"\n[view]\ncenter = [\"-0.1\", \"0.1\"]\n\
+                    zoom = \"1e30\"\nwidth = 16\nheight = 12\n[iteration]\nmax = 20000\n\
+                    [[layer]]\nkind = \"smooth\"\npalette = \"twilight\"\n";
+        let file = Scene::parse_file("deep", text).unwrap();
+        let scene = Scene::validate(file, "deep", text, std::path::Path::new("."), &crate::io::load_bitmap).unwrap();
+        let mut worker = Worker::inline(None);
+        let id = worker.submit(Job { scene, nav: Nav::home(), passes: vec![1] });
+        let reports = worker.poll();
+        let reference: Vec<u64> = reports
+            .iter()
+            .filter_map(|r| match r {
+                Report::Stage { id: i, stage: Stage::Reference, done, total: 20000 } if *i == id => Some(*done),
+                _ => None,
+            })
+            .collect();
+        assert!(reference.len() >= 4 && reference.windows(2).all(|w| w[0] < w[1]), "{reference:?}");
+        assert!(reports.iter().any(|r| matches!(r, Report::Pass(p) if p.id == id && p.last)), "the pass");
+    }
 }

@@ -69,10 +69,10 @@ impl ViewerApp {
             }
             ui.separator();
             let (done, total) = self.progress;
-            if done < total {
-                ui.add(
-                    egui::ProgressBar::new(done as f32 / total.max(1) as f32).desired_width(120.0).show_percentage(),
-                );
+            if let (true, Some((stage, d, t))) = (done < total, self.stage) {
+                ui.add(egui::ProgressBar::new(fraction(d, t)).desired_width(160.0).text(stage_text(stage, d, t)));
+            } else if done < total {
+                ui.add(egui::ProgressBar::new(fraction(done, total)).desired_width(120.0).show_percentage());
             } else {
                 ui.label(format!("{:.2} s", self.last_seconds));
             }
@@ -252,11 +252,33 @@ impl ViewerApp {
 }
 
 /// Formats a zoom given as log10.
+/// `done` of `total` as a progress bar's fraction.
+fn fraction(done: u64, total: u64) -> f32 {
+    (done as f64 / total.max(1) as f64) as f32
+}
+
+/// The status bar's text for a [`Stage`] in progress: "steps of blocks 45%".
+fn stage_text(stage: Stage, done: u64, total: u64) -> String {
+    format!("{} {:.0}%", stage.label(), 100.0 * f64::from(fraction(done, total)))
+}
+
 fn fmt_zoom(log10: f64) -> String {
     if log10.abs() < 6.0 {
         format!("{:.3}", 10f64.powf(log10))
     } else {
         let e = log10.floor();
         format!("{:.3}e{}", 10f64.powf(log10 - e), e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stages_are_named_with_their_share_done() {
+        assert_eq!(stage_text(Stage::Blocks, 45, 100), "steps of blocks 45%");
+        assert_eq!(stage_text(Stage::Reference, 1, 3), "reference orbit 33%");
+        assert_eq!(stage_text(Stage::Reference, 0, 0), "reference orbit 0%");
     }
 }
