@@ -28,7 +28,7 @@
 //! next sample to ask (of a render not cancelled) builds them again.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::sync::{Arc, Mutex, OnceLock, TryLockError};
 
 use rayon::prelude::*;
 
@@ -42,6 +42,8 @@ use crate::orbit::reference::Reference;
 const BLOCK_BITS: u32 = 19;
 /// Blocks are at least 2^MIN_SHIFT iterations long.
 const MIN_SHIFT: u32 = 4;
+/// How often a sample waiting on another's build of the blocks looks at its cancel flag.
+const WAIT_LOOK: std::time::Duration = std::time::Duration::from_millis(5);
 
 /// Steps of whole blocks of an orbit from an index on, and for a packed tail readers at
 /// the blocks' boundaries.
@@ -79,8 +81,8 @@ pub struct Blocks {
     /// Keep the FloatExp steps too (a view with FloatExp deltas), not only the f64 ones.
     floatexp: bool,
     parts: OnceLock<Parts>,
-    /// Held while a build runs: a second asker waits for it (and builds again if it was
-    /// cancelled).
+    /// Held while a build runs: a second asker waits for it, or until its own cancel flag is
+    /// raised (and builds again if the build it waited on was cancelled).
     building: Mutex<()>,
     /// Iterations folded into blocks so far, of `total` (while they are built: a render
     /// reports them, [`Blocks::progress`]).
@@ -127,8 +129,9 @@ impl Blocks {
 
     /// The steps, built now if they have not been. A sample's thread that asks while another
     /// builds them waits. `cancel` is the asking render's flag: raised during the build, the
-    /// build stops between blocks, keeps nothing and gives `Cancelled` (so do the askers
-    /// waiting on it whose own flag is raised; one whose flag is not builds them again).
+    /// build stops between blocks, keeps nothing and gives `Cancelled`; an asker waiting
+    /// on a build gives `Cancelled` as soon as its own flag is raised, and one whose flag is
+    /// not raised builds them again where the build it waited on was cancelled.
     ///
     /// The build runs in a thread pool of its own, as wide as the one asking, started from
     /// a plain thread: the workers of the pool asking may all be waiting here, and one that
@@ -139,7 +142,16 @@ impl Blocks {
         if let Some(p) = self.parts.get() {
             return Ok(p);
         }
-        let _building = self.building.lock().unwrap_or_else(PoisonError::into_inner);
+        // Waits for a build in flight (another sample's, perhaps another render's) while its
+        // own flag is not raised.
+        let _building = loop {
+            match self.building.try_lock() {
+                Ok(guard) => break guard,
+                Err(TryLockError::Poisoned(e)) => break e.into_inner(),
+                Err(TryLockError::WouldBlock) if cancel.load(Ordering::Relaxed) => return Err(Cancelled),
+                Err(TryLockError::WouldBlock) => std::thread::sleep(WAIT_LOOK),
+            }
+        };
         if let Some(p) = self.parts.get() {
             return Ok(p);
         }
@@ -470,8 +482,8 @@ mod tests {
     }
 
     /// A build whose cancel flag is raised stops (`Cancelled`, from the fold of the blocks
-    /// as from the start), keeps nothing and shows no progress; the next ask with a flag
-    /// not raised builds the steps whole.
+    /// as from the start, and while it waits on another build), keeps nothing and shows no
+    /// progress; the next ask with a flag not raised builds the steps whole.
     #[test]
     fn a_cancelled_build_keeps_nothing() {
         use malachite_float::Float;
@@ -487,6 +499,11 @@ mod tests {
         assert_eq!(TailSteps::dense(&r, 1000, fold).err(), Some(Cancelled), "dense");
         assert_eq!(TailSteps::packed(packed, r.get_fe(packed.seed_index()), fold).err(), Some(Cancelled), "packed");
         let blocks = Blocks::new(Arc::new(vec![r]), 0, 1000, how, false).expect("an orbit past 1000");
+        {
+            // Another build in flight: a waiter whose flag is raised stops waiting.
+            let _held = blocks.building.lock().unwrap();
+            assert_eq!(blocks.parts(&raised).err(), Some(Cancelled), "waiting");
+        }
         assert_eq!(blocks.parts(&raised).err(), Some(Cancelled));
         assert!(blocks.built().is_none() && blocks.progress().is_none(), "nothing kept, no progress");
         let parts = blocks.parts(&never).expect("built");
