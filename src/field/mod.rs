@@ -19,6 +19,8 @@ pub mod transform;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use rayon::prelude::*;
+
 pub use grid::{SampleGrid, image_offset};
 pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
 pub use projection::Projection;
@@ -265,17 +267,29 @@ fn deep_strip(
     let mut orbits = vec![Orbit::interior(); width * rows.len()];
     if traps.iter().all(|t| !t.observes_orbit()) {
         // Several rows at a time (at least DEEP_CHUNK samples): the vector lanes run partly
-        // empty only while a call drains, and Ctrl-C is looked at between calls.
+        // empty only while a call drains, and Ctrl-C is looked at between calls. The calls
+        // of a strip run in parallel, so that threads left idle by too few strips (an 800 x
+        // 600 image is 7 strips) take them; each call's samples, and so every bit and
+        // count, are the same whichever thread runs it and in whatever order.
         let chunk_rows = DEEP_CHUNK.div_ceil(width.max(1)).max(1);
         let row_list: Vec<u32> = rows.clone().collect();
-        for (out, chunk) in orbits.chunks_mut(width * chunk_rows).zip(row_list.chunks(chunk_rows)) {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(Cancelled);
-            }
-            let offsets: Vec<[f64; 2]> =
-                chunk.iter().flat_map(|&j| (0..grid.width).map(move |i| grid.offset(i, j))).collect();
-            deep.orbits(&offsets, out, &mut counters, params.orbit.simd, cancel);
-        }
+        counters = orbits
+            .par_chunks_mut(width * chunk_rows)
+            .zip(row_list.par_chunks(chunk_rows))
+            .map(|(out, chunk)| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                let offsets: Vec<[f64; 2]> =
+                    chunk.iter().flat_map(|&j| (0..grid.width).map(move |i| grid.offset(i, j))).collect();
+                let mut c = Counters::default();
+                deep.orbits(&offsets, out, &mut c, params.orbit.simd, cancel);
+                Ok(c)
+            })
+            .try_reduce(Counters::default, |mut a, b| {
+                a.add(&b);
+                Ok(a)
+            })?;
     } else {
         // Traps see every iteration: one sample at a time, row by row.
         for (row, j) in orbits.chunks_mut(width).zip(rows.clone()) {
