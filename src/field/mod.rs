@@ -162,7 +162,11 @@ fn compute_plane_strip(
     let n = &params.needs;
     if orbit_free && !params.single && !(n.nf || n.t || n.de || params.orbit.derivative) {
         // N alone: straight into its plane.
-        let iterations = simd::iterate_n(&params.orbit, &points, &mut planes.n, cancel)?;
+        let iterations = points
+            .par_chunks(DIRECT_CHUNK)
+            .zip(planes.n.par_chunks_mut(DIRECT_CHUNK))
+            .map(|(points, n)| simd::iterate_n(&params.orbit, points, n, cancel))
+            .try_reduce(|| 0, |a, b| Ok(a + b))?;
         fill_ifs(&params.needs.traps, &points, &mut planes);
         return Ok(Strip { planes, iterations, counters: Counters::default() });
     }
@@ -181,7 +185,12 @@ fn compute_plane_strip(
         }
         _ if orbit_free => {
             let n = &params.needs;
-            simd::iterate(&params.orbit, &points, &mut orbits, n.nf || n.t || n.de, cancel)?
+            let final_z = n.nf || n.t || n.de;
+            points
+                .par_chunks(DIRECT_CHUNK)
+                .zip(orbits.par_chunks_mut(DIRECT_CHUNK))
+                .map(|(points, out)| simd::iterate(&params.orbit, points, out, final_z, cancel))
+                .try_reduce(|| 0, |a, b| Ok(a + b))?
         }
         // One geometric trap (the common case) runs vectorised; several traps or a bitmap
         // (a texture lookup per step) run in the scalar kernel.
@@ -245,6 +254,11 @@ fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, pla
         }
     }
 }
+
+/// Samples per call of the direct kernels without traps: the calls of a strip run in
+/// parallel (an 800 x 600 image is only 7 strips), each sample's result the same in any
+/// call.
+const DIRECT_CHUNK: usize = 4096;
 
 /// Samples per call of the deep engine's many-sample loop (whole rows, at least this many).
 const DEEP_CHUNK: usize = 8192;
