@@ -30,11 +30,11 @@ for pair in $pairs; do
         s=$(date +%s.%N)
         "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" -q
         e=$(date +%s.%N)
-        echo "d $(echo "$e - $s" | bc -l)"
+        echo "d $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
         s=$(date +%s.%N)
         (cd "$rfc_dir" && ./target/release/main "benchmarks/$bench.toml" -o "$settings" > /dev/null 2>&1)
         e=$(date +%s.%N)
-        echo "r $(echo "$e - $s" | bc -l)"
+        echo "r $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
     done | sort -k1,1 -k2,2n | awk -v name="$scene" '
         {t[$1 "," (++n[$1])] = $2}
         END {
