@@ -260,8 +260,23 @@ fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, pla
 /// call.
 const DIRECT_CHUNK: usize = 4096;
 
-/// Samples per call of the deep engine's many-sample loop (whole rows, at least this many).
+/// Samples per call of the deep engine's many-sample loop (whole rows, at least this many),
+/// in images of at least [`DEEP_CHUNKS`] such calls.
 const DEEP_CHUNK: usize = 8192;
+/// Calls of the deep engine a smaller image is cut into at least (of at least
+/// [`DEEP_CHUNK_MIN`] samples each): the viewer's coarse pass (an eighth of the size, about
+/// 12000 samples) was two calls, so at most two threads on any machine.
+const DEEP_CHUNKS: usize = 32;
+/// The fewest samples per call of the deep engine (the lanes drain at each call's end).
+const DEEP_CHUNK_MIN: usize = 1024;
+
+/// Rows per call of the deep engine for a grid of `width` x `height` samples: a function of
+/// the image alone, so that every batch, and so every bit and count, is the same on any
+/// number of threads.
+fn deep_chunk_rows(width: usize, height: usize) -> usize {
+    let samples = (width * height / DEEP_CHUNKS).clamp(DEEP_CHUNK_MIN, DEEP_CHUNK);
+    samples.div_ceil(width.max(1)).max(1)
+}
 
 /// Computes sample rows `rows` with the perturbation engine (many samples at once, or one
 /// at a time when traps observe z = Z + δ). The derivative it returns is already scaled by
@@ -285,7 +300,7 @@ fn deep_strip(
         // of a strip run in parallel, so that threads left idle by too few strips (an 800 x
         // 600 image is 7 strips) take them; each call's samples, and so every bit and
         // count, are the same whichever thread runs it and in whatever order.
-        let chunk_rows = DEEP_CHUNK.div_ceil(width.max(1)).max(1);
+        let chunk_rows = deep_chunk_rows(width, grid.height as usize);
         let row_list: Vec<u32> = rows.clone().collect();
         counters = orbits
             .par_chunks_mut(width * chunk_rows)
