@@ -350,3 +350,26 @@ fn deep_strip(
     }
     Ok(counters)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The deep engine's calls: whole rows of at least DEEP_CHUNK samples in large images (an
+    /// 800 x 600 render keeps its 11-row batches), and small images (the viewer's coarse
+    /// pass) cut into many calls for the threads to share, none below DEEP_CHUNK_MIN samples
+    /// where the image holds that many.
+    #[test]
+    fn small_images_are_cut_into_many_calls_of_the_deep_engine() {
+        assert_eq!(deep_chunk_rows(800, 600), 11);
+        assert_eq!(deep_chunk_rows(1100, 680), 8);
+        for (w, h) in [(137, 85), (275, 170), (160, 120), (64, 48), (550, 340)] {
+            let rows = deep_chunk_rows(w, h);
+            let calls = h.div_ceil(rows);
+            assert!(rows * w >= DEEP_CHUNK_MIN.min(w * h), "{w}x{h}: {rows} rows");
+            assert!(calls >= 8 || w * h < 8 * DEEP_CHUNK_MIN, "{w}x{h}: {calls} calls");
+        }
+        assert!(deep_chunk_rows(5, 1) >= 1 && deep_chunk_rows(0, 0) >= 1, "a row at least");
+        assert_eq!(deep_chunk_rows(100_000, 10), 1);
+    }
+}
