@@ -295,8 +295,9 @@ fn deep_strip(
     let width = grid.width as usize;
     let mut orbits = vec![Orbit::interior(); width * rows.len()];
     if traps.iter().all(|t| !t.observes_orbit()) {
-        // Several rows at a time (at least DEEP_CHUNK samples): the vector lanes run partly
-        // empty only while a call drains, and Ctrl-C is looked at between calls. The calls
+        // Several rows at a time (`deep_chunk_rows`: at least DEEP_CHUNK samples, fewer in
+        // small images): the vector lanes run partly empty only while a call drains, and
+        // Ctrl-C is looked at between calls. The calls
         // of a strip run in parallel, so that threads left idle by too few strips (an 800 x
         // 600 image is 7 strips) take them; each call's samples, and so every bit and
         // count, are the same whichever thread runs it and in whatever order.
