@@ -130,9 +130,9 @@ pub fn install_ctrlc() -> Arc<AtomicBool> {
 pub fn show(bar: &Option<ProgressBar>, p: render::Progress) {
     if let Some(b) = bar {
         match p {
-            render::Progress::Reference { done, total } => b.set_message(format!("reference orbit {done}/{total}")),
+            render::Progress::Reference { done, total } => b.set_message(format!("{} {done}/{total}", p.name())),
             render::Progress::Blocks { done, total } => {
-                b.set_message(format!("steps of blocks {:.0}%", 100.0 * done as f64 / total as f64));
+                b.set_message(format!("{} {:.0}%", p.name(), 100.0 * done as f64 / total as f64));
             }
             render::Progress::Rows(rows) => {
                 b.set_message("");

@@ -125,6 +125,18 @@ pub enum Progress {
     },
 }
 
+impl Progress {
+    /// What it counts, as progress displays name it: "reference orbit", "rows", "steps of
+    /// blocks".
+    pub fn name(self) -> &'static str {
+        match self {
+            Progress::Reference { .. } => "reference orbit",
+            Progress::Rows(_) => "rows",
+            Progress::Blocks { .. } => "steps of blocks",
+        }
+    }
+}
+
 /// How often a render looks at the blocks' build for [`Progress::Blocks`].
 const BLOCKS_LOOK: std::time::Duration = std::time::Duration::from_millis(200);
 

@@ -25,7 +25,7 @@ use toml::Spanned;
 use super::export::{Export, ExportRequest};
 use super::nav::{History, Nav};
 use super::palette_editor::PaletteEditor;
-use super::worker::{Job, Report, Stage, Worker};
+use super::worker::{Job, Report, Worker};
 use crate::field::{Needs, Planes};
 use crate::orbit::saved::SavedReferences;
 use crate::palette::{self, Palette};
@@ -126,7 +126,7 @@ pub struct ViewerApp {
     progress: (u64, u64),
     /// Work of the current job that takes seconds before or between its rows (a long
     /// reference orbit, the steps of whole blocks), while it runs: shown instead of rows.
-    stage: Option<(Stage, u64, u64)>,
+    stage: Option<(&'static str, u64, u64)>,
     last_seconds: f64,
     engine: String,
     julia: Option<(TextureHandle, [f64; 2])>,
@@ -419,8 +419,8 @@ impl ViewerApp {
                     self.progress = (rows, total);
                     self.stage = None;
                 }
-                Report::Stage { id, stage, done, total } if id == self.job => {
-                    self.stage = (done < total).then_some((stage, done, total));
+                Report::Stage { id, name, done, total } if id == self.job => {
+                    self.stage = (done < total).then_some((name, done, total));
                 }
                 Report::Failed { id, message } if id == self.job => self.error = Some(message),
                 _ => {}

@@ -71,12 +71,12 @@ pub enum Report {
         total: u64,
     },
     /// Work before a pass's rows, or between them, that takes seconds on long orbits while
-    /// no row finishes: `done` of `total` of [`Stage`].
+    /// no row finishes (the reference orbit, the steps of whole blocks): `done` of `total`.
     Stage {
         /// The job.
         id: u64,
-        /// What is being computed.
-        stage: Stage,
+        /// What is being computed ([`render::Progress::name`]).
+        name: &'static str,
         /// Done so far.
         done: u64,
         /// Of this many.
@@ -89,26 +89,6 @@ pub enum Report {
         /// Why.
         message: String,
     },
-}
-
-/// What a [`Report::Stage`] counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    /// The reference orbit's iterations (of at most the limit).
-    Reference,
-    /// The iterations of a long reference folded into steps of whole blocks past its BLA
-    /// tree (built when a sample first gets past the tree).
-    Blocks,
-}
-
-impl Stage {
-    /// How the status bar names it.
-    pub fn label(self) -> &'static str {
-        match self {
-            Stage::Reference => "reference orbit",
-            Stage::Blocks => "steps of blocks",
-        }
-    }
 }
 
 type Wake = Arc<dyn Fn() + Send + Sync>;
@@ -354,11 +334,11 @@ type PassOutput = (Vec<u8>, Option<Vec<Planes>>, String);
 /// The report of a render's progress (`rows`: the pass's rows): rows done, the reference
 /// orbit's iterations, and the build of the steps of whole blocks.
 fn progress_report(id: u64, rows: u64, p: render::Progress) -> Report {
-    let stage = |stage, done, total| Report::Stage { id, stage, done, total };
     match p {
         render::Progress::Rows(done) => Report::Progress { id, rows: done, total: rows },
-        render::Progress::Reference { done, total } => stage(Stage::Reference, done, total),
-        render::Progress::Blocks { done, total } => stage(Stage::Blocks, done, total),
+        render::Progress::Reference { done, total } | render::Progress::Blocks { done, total } => {
+            Report::Stage { id, name: p.name(), done, total }
+        }
     }
 }
 
@@ -402,11 +382,11 @@ mod tests {
     #[test]
     fn each_kind_of_progress_is_reported() {
         let stage = |p| match progress_report(7, 600, p) {
-            Report::Stage { id: 7, stage, done, total } => Some((stage, done, total)),
+            Report::Stage { id: 7, name, done, total } => Some((name, done, total)),
             _ => None,
         };
-        assert_eq!(stage(render::Progress::Blocks { done: 3, total: 9 }), Some((Stage::Blocks, 3, 9)));
-        assert_eq!(stage(render::Progress::Reference { done: 4, total: 8 }), Some((Stage::Reference, 4, 8)));
+        assert_eq!(stage(render::Progress::Blocks { done: 3, total: 9 }), Some(("steps of blocks", 3, 9)));
+        assert_eq!(stage(render::Progress::Reference { done: 4, total: 8 }), Some(("reference orbit", 4, 8)));
         assert!(matches!(
             progress_report(7, 600, render::Progress::Rows(5)),
             Report::Progress { id: 7, rows: 5, total: 600 }
@@ -428,7 +408,7 @@ mod tests {
         let reference: Vec<u64> = reports
             .iter()
             .filter_map(|r| match r {
-                Report::Stage { id: i, stage: Stage::Reference, done, total: 20000 } if *i == id => Some(*done),
+                Report::Stage { id: i, name: "reference orbit", done, total: 20000 } if *i == id => Some(*done),
                 _ => None,
             })
             .collect();

@@ -69,8 +69,8 @@ impl ViewerApp {
             }
             ui.separator();
             let (done, total) = self.progress;
-            if let (true, Some((stage, d, t))) = (done < total, self.stage) {
-                ui.add(egui::ProgressBar::new(fraction(d, t)).desired_width(160.0).text(stage_text(stage, d, t)));
+            if let (true, Some((name, d, t))) = (done < total, self.stage) {
+                ui.add(egui::ProgressBar::new(fraction(d, t)).desired_width(160.0).text(stage_text(name, d, t)));
             } else if done < total {
                 ui.add(egui::ProgressBar::new(fraction(done, total)).desired_width(120.0).show_percentage());
             } else {
@@ -251,17 +251,18 @@ impl ViewerApp {
     }
 }
 
-/// Formats a zoom given as log10.
 /// `done` of `total` as a progress bar's fraction.
 fn fraction(done: u64, total: u64) -> f32 {
     (done as f64 / total.max(1) as f64) as f32
 }
 
-/// The status bar's text for a [`Stage`] in progress: "steps of blocks 45%".
-fn stage_text(stage: Stage, done: u64, total: u64) -> String {
-    format!("{} {:.0}%", stage.label(), 100.0 * f64::from(fraction(done, total)))
+/// The status bar's text for a stage in progress (`name`: [`render::Progress::name`]):
+/// "steps of blocks 45%".
+fn stage_text(name: &str, done: u64, total: u64) -> String {
+    format!("{name} {:.0}%", 100.0 * f64::from(fraction(done, total)))
 }
 
+/// Formats a zoom given as log10.
 fn fmt_zoom(log10: f64) -> String {
     if log10.abs() < 6.0 {
         format!("{:.3}", 10f64.powf(log10))
@@ -277,8 +278,12 @@ mod tests {
 
     #[test]
     fn stages_are_named_with_their_share_done() {
-        assert_eq!(stage_text(Stage::Blocks, 45, 100), "steps of blocks 45%");
-        assert_eq!(stage_text(Stage::Reference, 1, 3), "reference orbit 33%");
-        assert_eq!(stage_text(Stage::Reference, 0, 0), "reference orbit 0%");
+        let (blocks, reference) = (
+            render::Progress::Blocks { done: 0, total: 0 }.name(),
+            render::Progress::Reference { done: 0, total: 0 }.name(),
+        );
+        assert_eq!(stage_text(blocks, 45, 100), "steps of blocks 45%");
+        assert_eq!(stage_text(reference, 1, 3), "reference orbit 33%");
+        assert_eq!(stage_text(reference, 0, 0), "reference orbit 0%");
     }
 }
