@@ -1950,27 +1950,33 @@ mod tests {
         let engine = || prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
         let offsets: Vec<[f64; 2]> =
             (0..h).flat_map(|j| (0..w).map(move |i| [f64::from(i - w / 2), f64::from(j - h / 2)])).collect();
-        let run = |p: &Perturbation, cancel: &AtomicBool| {
+        let run = |p: &Perturbation, cancel: &AtomicBool, simd: SimdLevel| {
             let mut out = vec![Orbit::interior(); offsets.len()];
             let mut c = Counters::default();
-            p.orbits(&offsets, &mut out, &mut c, SimdLevel::detect(), cancel);
+            p.orbits(&offsets, &mut out, &mut c, simd, cancel);
             (out, c)
         };
         let built = |p: &Perturbation| p.bla_f64[0].as_ref().and_then(|t| t.built()).is_some();
-        let p = engine();
-        assert!(p.refs[0].packed().is_some() && !built(&p), "a packed tail, its blocks not built yet");
-        let (_, c) = run(&p, &AtomicBool::new(true));
-        assert!(!built(&p), "a cancelled build keeps nothing");
-        assert_eq!(p.blocks_progress(), None, "and shows no progress");
-        let abandoned = offsets.len() as u64 * u64::from(max_iter);
-        assert!(c.iterations < abandoned / 10, "the samples were abandoned: {} iterations", c.iterations);
-        let (again, c) = run(&p, &NEVER);
-        assert!(built(&p), "built when not cancelled");
-        let (fresh, c_fresh) = run(&engine(), &NEVER);
-        assert_eq!(c, c_fresh, "the same counts as never cancelled");
-        assert!(c.iterations > abandoned / 10 * 9, "every sample to about the limit: {}", c.iterations);
         let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits));
-        assert!(again.iter().zip(&fresh).all(|(a, b)| bits(a) == bits(b)), "the same samples as never cancelled");
+        // Never cancelled, in the scalar loop: what every level must give.
+        let (fresh, c_fresh) = run(&engine(), &NEVER, SimdLevel::Scalar);
+        let abandoned = offsets.len() as u64 * u64::from(max_iter);
+        assert!(c_fresh.iterations > abandoned / 10 * 9, "every sample to about the limit: {}", c_fresh.iterations);
+        // The scalar loop and every level's lanes (which hand their samples back to it for
+        // the tail's steps) stop alike.
+        for simd in SimdLevel::usable() {
+            let p = engine();
+            assert!(p.refs[0].packed().is_some() && !built(&p), "a packed tail, its blocks not built yet");
+            let (_, c) = run(&p, &AtomicBool::new(true), simd);
+            assert!(!built(&p), "{simd}: a cancelled build keeps nothing");
+            assert_eq!(p.blocks_progress(), None, "{simd}: and shows no progress");
+            assert!(c.iterations < abandoned / 10, "{simd}: the samples were abandoned: {} iterations", c.iterations);
+            let (again, c) = run(&p, &NEVER, simd);
+            assert!(built(&p), "{simd}: built when not cancelled");
+            assert_eq!(c, c_fresh, "{simd}: the same counts as never cancelled");
+            let same = again.iter().zip(&fresh).all(|(a, b)| bits(a) == bits(b));
+            assert!(same, "{simd}: the same samples as never cancelled");
+        }
     }
 
     /// Every sample of a 32x24 view through `orbits` with every instruction set this CPU
