@@ -2069,6 +2069,12 @@ mod tests {
                     assert_eq!(counts(&c_disks), counts(&c_one), "{what} {simd} with disks");
                     disks += c_disks.disks;
                     let c_many = run(&each, "");
+                    // A vector level runs its own lanes, never the scalar loop in their place
+                    // (which would pass every comparison above without testing them).
+                    let mut lanes_out = vec![Orbit::interior(); offsets.len()];
+                    let mut c_lanes = Counters::default();
+                    let ran = lanes::orbits(&each, &offsets, None, &mut lanes_out, &mut c_lanes, simd, &NEVER);
+                    assert_eq!(ran, simd != SimdLevel::Scalar, "{what} {simd}: its lanes ran");
                     escaped += one.iter().filter(|o| o.n != crate::formula::end::INTERIOR).count() as u32;
                     assert_eq!(c_many.iterations, c_one.iterations, "{what} {simd}: iteration counts");
                     let steps = |c: &Counters| c.steps + c.bla_steps;
