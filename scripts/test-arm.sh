@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The aarch64 build, NEON lanes included, run on this x86-64 machine under QEMU's user-mode
-# emulation: the library's whole test suite (every SIMD test runs each level the CPU has,
+# emulation: clippy for the target (its cfg(target_arch) code is linted nowhere else), the
+# library's whole test suite (every SIMD test runs each level the CPU has,
 # here scalar and NEON, against the scalar loop, bit for bit), then shipped scenes rendered
 # by the aarch64 binary with --simd neon and --simd scalar, whose PNG bytes must equal each
 # other and the native x86-64 build's.
@@ -32,6 +33,12 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
 # The headless build: the viewer's window system has nothing to show under emulation.
 flags=(--locked --release --target "$target" --no-default-features)
+
+if [ $# -eq 0 ]; then
+    # The code behind cfg(target_arch = "aarch64") is linted nowhere else.
+    echo "== clippy for $target"
+    cargo clippy --locked --target "$target" --all-targets -- -D warnings
+fi
 
 echo "== library tests on $target (emulated)"
 cargo test "${flags[@]}" --lib -- --test-threads 2 "$@"
