@@ -24,13 +24,15 @@
 //! other's, and both join the parts exactly and finish the same step: the same bits as one
 //! thread, with one hand-over each way per step, made at the same moment (a request and an
 //! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step).
+//! Where the machine is busier than its cores, the helper is often descheduled and every
+//! step would wait for it: there the caller steps alone for stretches ([`super::handover`]).
 //! `cargo bench --bench reference` compares this with malachite-float (and MPFR through
 //! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits. Below the widths where
 //! sharing a step pays, a helper thread instead steps the orbit ahead in batches while the
 //! caller keeps the values ([`FixedOrbit::for_each_value`]): the same values, in order.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 
 use malachite_base::num::conversion::traits::RoundingFrom;
 use malachite_base::rounding_modes::RoundingMode;
@@ -38,6 +40,7 @@ use malachite_float::Float;
 use malachite_nz::integer::Integer;
 
 use super::comba;
+use super::handover::{self, Contention, Shared, StopOnDrop};
 use super::square::{self, Layout};
 use crate::num::FloatExp;
 use crate::simd_level::SimdLevel;
@@ -327,7 +330,14 @@ impl FixedOrbit {
         if share && self.n >= THREADED_LIMBS && two_threads() {
             self.with_helper(body)
         } else {
-            body(&mut Stepper { orbit: self, shared: None, seq: 0 })
+            body(&mut Stepper {
+                orbit: self,
+                shared: None,
+                seq: 0,
+                epoch: 0,
+                alone: 0,
+                policy: Policy::Adaptive(Contention::default()),
+            })
         }
     }
 
@@ -400,24 +410,37 @@ impl FixedOrbit {
         })
     }
 
-    /// Runs `body` with a stepper that always shares each step with a helper thread.
+    /// Runs `body` with a stepper that shares each step with a helper thread, except while
+    /// the machine is too busy for that to pay ([`super::handover`]).
     pub fn with_helper<R>(&mut self, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        let shared = Shared::new(self.n, self.kernel);
+        self.with_helper_as(Policy::Adaptive(Contention::default()), body)
+    }
+
+    /// [`FixedOrbit::with_helper`] with the caller's rule for when to step alone.
+    fn with_helper_as<R>(&mut self, policy: Policy, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
+        // A box holds a thread's whole square (n + 1 words) and its part of (x + y)^2.
+        let shared = Shared::new(self.n + 1 + self.kernel.part_len());
         let mut twin = self.clone();
         std::thread::scope(|s| {
             s.spawn(|| {
-                let mut seq = 0;
+                let (mut epoch, mut seq) = (0, 0);
                 loop {
                     seq += 1;
-                    if !twin.shared_step(&shared, Role::Helper, seq) {
-                        return;
+                    if twin.shared_step(&shared, Role::Helper, epoch, seq).is_none() {
+                        // The caller paused or stopped: sleep until it resumes, from its value.
+                        let Some(e) = shared.rejoin(epoch, |r| {
+                            twin.x.copy_from_slice(&r.x);
+                            twin.y.copy_from_slice(&r.y);
+                            seq = r.seq;
+                        }) else {
+                            return;
+                        };
+                        epoch = e;
                     }
                 }
             });
-            // Stops the helper however `body` ends (a panic too: the scope would otherwise
-            // wait for a helper waiting for a step that never comes).
-            let _stop = StopOnDrop(&shared.stop);
-            body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0 })
+            let _stop = StopOnDrop(&shared);
+            body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0, epoch: 0, alone: 0, policy })
         })
     }
 
@@ -425,9 +448,10 @@ impl FixedOrbit {
     /// copy of the orbit: this thread squares its real (x for the caller, y for the helper)
     /// and its part of (x + y)^2, publishes them, takes the other's, and both finish the step
     /// from the same squares, so the two copies stay the same bits. One hand-over each way
-    /// per step, both at once: no thread waits for a request before it starts. False when
-    /// the caller has stopped before this step.
-    fn shared_step(&mut self, sh: &Shared, role: Role, seq: u64) -> bool {
+    /// per step, both at once: no thread waits for a request before it starts. Returns
+    /// whether the wait for the other was slow ([`super::handover::wait`]); None for a helper
+    /// whose caller has paused or stopped meanwhile (`epoch` is no longer the caller's).
+    fn shared_step(&mut self, sh: &Shared, role: Role, epoch: u64, seq: u64) -> Option<bool> {
         self.inputs();
         let (k, simd, w) = (self.kernel, self.simd, &mut self.w);
         let (me, other) = (role as usize, 1 - role as usize);
@@ -449,10 +473,11 @@ impl FixedOrbit {
         for (b, &v) in sh.boxes[me][slot].iter().zip(own_square.iter().chain(&own_part[mine])) {
             b.store(v, Ordering::Relaxed);
         }
-        sh.done[me].0.store(seq, Ordering::Release);
-        wait(|| sh.done[other].0.load(Ordering::Acquire) >= seq || sh.stop.load(Ordering::Acquire));
-        if sh.done[other].0.load(Ordering::Acquire) < seq {
-            return false;
+        sh.publish(me, epoch, seq);
+        let helper = role == Role::Helper;
+        let slow = handover::wait(|| sh.has(other, epoch, seq) || (helper && sh.left(epoch)));
+        if !sh.has(other, epoch, seq) || (helper && sh.left(epoch)) {
+            return None;
         }
         for (v, b) in other_square.iter_mut().chain(&mut other_part[theirs]).zip(sh.boxes[other][slot].iter()) {
             *v = b.load(Ordering::Relaxed);
@@ -460,7 +485,7 @@ impl FixedOrbit {
         let [lower, upper] = &w.parts;
         k.join(lower, upper, &w.asum, &mut w.scratch, &mut w.s2);
         self.finish();
-        true
+        Some(slow)
     }
 }
 
@@ -470,6 +495,35 @@ pub struct Stepper<'a> {
     shared: Option<&'a Shared>,
     /// Steps taken, when shared.
     seq: u64,
+    /// The sharing's epoch ([`super::handover`]).
+    epoch: u64,
+    /// Steps still to take alone before sharing again.
+    alone: u32,
+    policy: Policy,
+}
+
+/// When a shared stepper steps alone.
+#[derive(Debug, Clone, Copy)]
+enum Policy {
+    /// While the machine is busy ([`Contention`]).
+    Adaptive(Contention),
+    /// A fixed rhythm: `shared` steps shared, then `alone` alone, and again (tests).
+    #[cfg(test)]
+    Rhythm { shared: u32, alone: u32, count: u32 },
+}
+
+impl Policy {
+    /// After a shared step: the steps to take alone now, if any.
+    fn after(&mut self, slow: bool) -> Option<u32> {
+        match self {
+            Policy::Adaptive(c) => c.after(slow),
+            #[cfg(test)]
+            Policy::Rhythm { shared, alone, count } => {
+                *count += 1;
+                (*count % *shared == 0).then_some(*alone)
+            }
+        }
+    }
 }
 
 impl Stepper<'_> {
@@ -480,13 +534,23 @@ impl Stepper<'_> {
 
     /// One step, z <- z^2 + c.
     pub fn step(&mut self) {
-        match self.shared {
-            None => self.orbit.step(),
-            Some(sh) => {
-                self.seq += 1;
-                let stepped = self.orbit.shared_step(sh, Role::Caller, self.seq);
-                debug_assert!(stepped, "only the caller stops the helper");
+        self.seq += 1;
+        let Some(sh) = self.shared else {
+            return self.orbit.step();
+        };
+        if self.alone > 0 {
+            self.orbit.step();
+            self.alone -= 1;
+            if self.alone == 0 {
+                self.epoch = sh.resume(self.seq, &self.orbit.x, &self.orbit.y);
             }
+            return;
+        }
+        let slow = self.orbit.shared_step(sh, Role::Caller, self.epoch, self.seq);
+        debug_assert!(slow.is_some(), "only the caller pauses or stops the helper");
+        if let Some(alone) = self.policy.after(slow.unwrap_or(false)) {
+            self.epoch = sh.pause();
+            self.alone = alone.max(1);
         }
     }
 }
@@ -498,58 +562,6 @@ enum Role {
     Caller = 0,
     /// The helper: squares y and the upper part.
     Helper = 1,
-}
-
-/// Spins until `ready` (the other thread answers within a microsecond or two when both have
-/// a core), then yields the core between looks: where the machine is busier than its cores
-/// (another job, a fuzzer), spinning against a descheduled partner would cost whole time
-/// slices per step. 1024 spins (tens of microseconds) before the first yield: with 16384,
-/// the e1086 orbit beside two busy loops took 5–12 s against 6–8 s (alternating runs).
-fn wait(ready: impl Fn() -> bool) {
-    const SPINS: u32 = 1 << 10;
-    let mut spins = 0;
-    while !ready() {
-        if spins < SPINS {
-            spins += 1;
-            std::hint::spin_loop();
-        } else {
-            std::thread::yield_now();
-        }
-    }
-}
-
-/// Sets its flag when dropped.
-struct StopOnDrop<'a>(&'a AtomicBool);
-
-impl Drop for StopOnDrop<'_> {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Release);
-    }
-}
-
-/// A value alone on its cache lines (the two threads' step counters would otherwise share
-/// one, and every store to either would take it from the reader of the other).
-#[repr(align(128))]
-struct Line<T>(T);
-
-/// What the two threads exchange: each publishes its whole square (n + 1 words) and its part
-/// of (x + y)^2 ([`Kernel::part`]) in one of two boxes, and the last step it published.
-struct Shared {
-    /// By role, then by the step's parity.
-    boxes: [[Vec<AtomicU64>; 2]; 2],
-    done: [Line<AtomicU64>; 2],
-    stop: AtomicBool,
-}
-
-impl Shared {
-    fn new(n: usize, kernel: Kernel) -> Shared {
-        let words = || (0..n + 1 + kernel.part_len()).map(|_| AtomicU64::new(0)).collect();
-        Shared {
-            boxes: [[words(), words()], [words(), words()]],
-            done: [Line(AtomicU64::new(0)), Line(AtomicU64::new(0))],
-            stop: AtomicBool::new(false),
-        }
-    }
 }
 
 /// v in fixed point with n limbs (round to nearest), or None beyond [`MAX_MAGNITUDE`].
@@ -691,6 +703,20 @@ mod tests {
                     assert_eq!(s.get().map(FloatExp::to_f64), *want, "{bits} bits: shared step {k}");
                 }
             });
+            // Sharing paused and resumed (as on a busy machine), in rhythms that put every
+            // step parity at a switch: the same bits.
+            for (shared, alone) in [(1, 1), (3, 2), (7, 5)] {
+                let mut orbit =
+                    FixedOrbit::new(&[big(0.0, bits), big(0.0, bits)], &c, bits, 65536.0, SimdLevel::detect())
+                        .expect("in range");
+                orbit.with_helper_as(Policy::Rhythm { shared, alone, count: 0 }, |s| {
+                    for (k, want) in mine.iter().enumerate() {
+                        s.step();
+                        let what = format!("{bits} bits: step {k}, {shared} shared and {alone} alone");
+                        assert_eq!(s.get().map(FloatExp::to_f64), *want, "{what}");
+                    }
+                });
+            }
         }
     }
 

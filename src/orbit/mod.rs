@@ -9,6 +9,7 @@ pub mod bigfloat;
 pub mod bla;
 pub mod comba;
 pub mod fixed;
+pub mod handover;
 pub mod interior;
 #[cfg(feature = "mpfr")]
 pub mod mpfr;
