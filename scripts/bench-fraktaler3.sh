@@ -27,6 +27,7 @@ if [ $# -lt 2 ]; then
 fi
 f3=$(realpath "$1") wisdom=$(realpath "$2") rounds=${3:-3}
 here=$(cd "$(dirname "$0")/.." && pwd)
+source "$here/scripts/common.sh"
 df=${4:-$here/target/release/deepfield}
 [ -x "$df" ] || (cd "$here" && cargo build --release --locked)
 out=$(mktemp -d)
@@ -60,22 +61,10 @@ echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //');
 printf '%-12s %22s %22s %8s\n' location "deepfield (fast/med)" "Fraktaler-3" ratio
 for scene in $scenes; do
     for _ in $(seq "$rounds"); do
-        s=$(date +%s.%N)
-        "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" --exr "$out/d.exr" -q
-        e=$(date +%s.%N)
-        echo "d $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
-        s=$(date +%s.%N)
-        "$f3" --batch --quiet --no-persistence --wisdom "$wisdom" "$out/$scene.f3.toml" > /dev/null 2>&1
-        e=$(date +%s.%N)
+        timed d "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" --exr "$out/d.exr" -q
+        timed p "$f3" --batch --quiet --no-persistence --wisdom "$wisdom" "$out/$scene.f3.toml"
         [ -s "$out/$scene.exr" ] || { echo "Fraktaler-3 wrote no $scene.exr" >&2; exit 1; }
         rm -f "$out/$scene.exr"
-        echo "f $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
-    done | sort -k1,1 -k2,2n | awk -v name="$scene" '
-        {t[$1 "," (++n[$1])] = $2}
-        END {
-            df = t["d,1"]; dm = t["d," int((n["d"] + 1) / 2)]
-            ff = t["f,1"]; fm = t["f," int((n["f"] + 1) / 2)]
-            printf "%-12s %10.2f /%7.2f s %10.2f /%7.2f s %8.2f\n", name, df, dm, ff, fm, dm / fm
-        }'
+    done | medians "$scene"
 done
 echo "ratio: deepfield median / Fraktaler-3 median (below 1: deepfield faster)"

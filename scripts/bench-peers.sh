@@ -16,6 +16,7 @@ if [ $# -lt 2 ]; then
 fi
 rfc_dir=$(cd "$1" && pwd) settings=$2 rounds=${3:-3}
 here=$(cd "$(dirname "$0")/.." && pwd)
+source "$here/scripts/common.sh"
 df=${4:-$here/target/release/deepfield}
 [ -x "$df" ] || (cd "$here" && cargo build --release --locked)
 out=$(mktemp -d)
@@ -27,20 +28,9 @@ printf '%-12s %22s %22s %8s\n' location "deepfield (fast/med)" "rust-fractal-cor
 for pair in $pairs; do
     scene=${pair%%:*} bench=${pair##*:}
     for _ in $(seq "$rounds"); do
-        s=$(date +%s.%N)
-        "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" -q
-        e=$(date +%s.%N)
-        echo "d $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
-        s=$(date +%s.%N)
-        (cd "$rfc_dir" && ./target/release/main "benchmarks/$bench.toml" -o "$settings" > /dev/null 2>&1)
-        e=$(date +%s.%N)
-        echo "r $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
-    done | sort -k1,1 -k2,2n | awk -v name="$scene" '
-        {t[$1 "," (++n[$1])] = $2}
-        END {
-            df = t["d,1"]; dm = t["d," int((n["d"] + 1) / 2)]
-            rf = t["r,1"]; rm = t["r," int((n["r"] + 1) / 2)]
-            printf "%-12s %10.2f /%7.2f s %10.2f /%7.2f s %8.2f\n", name, df, dm, rf, rm, dm / rm
-        }'
+        timed d "$df" render "$here/scenes/$scene.toml" -o "$out/d.png" -q
+        # rust-fractal-core reads its files relative to its own folder.
+        timed p sh -c 'cd "$1" && ./target/release/main "benchmarks/$2.toml" -o "$3" 2> /dev/null' sh "$rfc_dir" "$bench" "$settings"
+    done | medians "$scene"
 done
 echo "ratio: deepfield median / rust-fractal-core median (below 1: deepfield faster)"

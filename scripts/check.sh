@@ -7,16 +7,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+source scripts/common.sh
 need=()
 command -v xvfb-run > /dev/null || need+=(xvfb xauth)
 ls /usr/share/vulkan/icd.d/lvp_icd*.json > /dev/null 2>&1 || need+=(mesa-vulkan-drivers libvulkan1)
-if [ ${#need[@]} -gt 0 ]; then
-    echo "== installing ${need[*]} (for the viewer and GPU tests)"
-    sudo=""
-    [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" > /dev/null
-fi
+apt_install "for the viewer and GPU tests" "${need[@]}"
 # Tests run headless: no user session, so give the window system a runtime folder.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 # A fresh clone gains nothing from incremental compilation and pays for writing its state

@@ -14,6 +14,7 @@
 #   scripts/test-arm.sh simd lanes # only the library tests whose names contain these
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/common.sh
 target=aarch64-unknown-linux-gnu
 sysroot=/usr/aarch64-linux-gnu
 
@@ -22,13 +23,7 @@ need=()
 command -v qemu-aarch64 > /dev/null || need+=(qemu-user)
 command -v aarch64-linux-gnu-gcc > /dev/null || need+=(gcc-aarch64-linux-gnu)
 [ -d "$sysroot/lib" ] || need+=(libc6-dev-arm64-cross)
-if [ ${#need[@]} -gt 0 ]; then
-    echo "== installing ${need[*]}"
-    sudo=""
-    [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" > /dev/null
-fi
+apt_install "to build for aarch64 and run it here" "${need[@]}"
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
 # The headless build: the viewer's window system has nothing to show under emulation.
