@@ -26,12 +26,11 @@ if [ $# -lt 2 ]; then
     exit 2
 fi
 f3=$(realpath "$1") wisdom=$(realpath "$2") rounds=${3:-3}
+[ -x "$f3" ] || { echo "no Fraktaler-3 binary at $1" >&2; exit 2; }
+[ -f "$wisdom" ] || { echo "no wisdom file at $2" >&2; exit 2; }
 here=$(cd "$(dirname "$0")/.." && pwd)
 source "$here/scripts/common.sh"
-df=${4:-$here/target/release/deepfield}
-[ -x "$df" ] || (cd "$here" && cargo build --release --locked)
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+peer_setup "$here" "${4:-}"
 scenes="bench-e14 bench-e50 bench-e113 bench-e227 bench-e533 bench-e1086"
 for scene in $scenes; do
     python3 - "$here/scenes/$scene.toml" "$out/$scene" > "$out/$scene.f3.toml" << 'EOF'
@@ -57,7 +56,6 @@ render.filename = "{sys.argv[2]}"
 power = 2''')
 EOF
 done
-echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'); deepfield SIMD: $("$df" render "$here/scenes/bench-e14.toml" --size 8x6 -o "$out/s.png" --stats -q | awk '/^simd/ {$1=""; print substr($0, 2)}')"
 printf '%-12s %22s %22s %8s\n' location "deepfield (fast/med)" "Fraktaler-3" ratio
 for scene in $scenes; do
     for _ in $(seq "$rounds"); do

@@ -17,13 +17,9 @@ fi
 rfc_dir=$(cd "$1" && pwd) settings=$2 rounds=${3:-3}
 here=$(cd "$(dirname "$0")/.." && pwd)
 source "$here/scripts/common.sh"
-df=${4:-$here/target/release/deepfield}
-[ -x "$df" ] || (cd "$here" && cargo build --release --locked)
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+peer_setup "$here" "${4:-}"
 # deepfield scene : rust-fractal-core benchmark file (the same location, 800x600).
 pairs="bench-e14:1e14 bench-e50:1e50 bench-e113:5e113 bench-e227:5e227 bench-e533:4e533 bench-e1086:1e1086"
-echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'); deepfield SIMD: $("$df" render "$here/scenes/bench-e14.toml" --size 8x6 -o "$out/s.png" --stats -q | awk '/^simd/ {$1=""; print substr($0, 2)}')"
 printf '%-12s %22s %22s %8s\n' location "deepfield (fast/med)" "rust-fractal-core" ratio
 for pair in $pairs; do
     scene=${pair%%:*} bench=${pair##*:}

@@ -21,7 +21,7 @@ timed() {
     shift
     local s e
     s=$(date +%s.%N)
-    "$@" > /dev/null
+    "$@" > /dev/null || { echo "failed: $*" >&2; return 1; }
     e=$(date +%s.%N)
     echo "$tag $(awk -v s="$s" -v e="$e" 'BEGIN { print e - s }')"
 }
@@ -36,4 +36,17 @@ medians() {
             pf = t["p,1"]; pm = t["p," int((n["p"] + 1) / 2)]
             printf "%-12s %10.2f /%7.2f s %10.2f /%7.2f s %8.2f\n", name, df, dm, pf, pm, dm / pm
         }'
+}
+
+# peer_setup HERE [DEEPFIELD]: for a side-by-side benchmark, sets df (the deepfield binary,
+# the release build by default, built if missing) and out (a scratch folder removed on
+# exit), and prints the CPU and the SIMD level deepfield runs with.
+peer_setup() {
+    df=${2:-$1/target/release/deepfield}
+    [ -x "$df" ] || (cd "$1" && cargo build --release --locked)
+    out=$(mktemp -d)
+    trap 'rm -rf "$out"' EXIT
+    local simd
+    simd=$("$df" render "$1/scenes/bench-e14.toml" --size 8x6 -o "$out/s.png" --stats -q | awk '/^simd/ {$1=""; print substr($0, 2)}')
+    echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'); deepfield SIMD: $simd"
 }
