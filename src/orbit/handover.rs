@@ -6,12 +6,12 @@
 //! have a core the other answers within a microsecond or two, so the wait spins; but where
 //! the machine is busier than its cores (another render, a compiler, a fuzzer), the partner
 //! is often descheduled, and every step then waits for it to be scheduled again: the e1086
-//! benchmark's orbit took 5.5 s shared against 1.1 s on one thread beside a 2-thread job on
-//! the 2-core VM. So the caller watches its waits ([`Contention`]): when several steps in a
-//! short window had to give up the core before the helper answered, it sends the helper to
-//! sleep and steps alone for a while (doubling the while each time sharing fails again,
-//! back to its shortest after a long clean stretch), then wakes it with its current value
-//! ([`Resync`]). The steps are the same bits on one thread or two, so neither the switch
+//! benchmark's orbit took 17–22 s shared against 1.7 s on one thread beside Fraktaler-3
+//! rendering on both cores of the 2-core VM. So the caller watches its waits
+//! ([`Contention`]): when a few steps in a short window had to give up the core before the
+//! helper answered, it sends the helper to sleep and steps alone for a while (four times
+//! longer each time sharing fails again, shorter again after clean stretches of sharing),
+//! then wakes it with its current value ([`Resync`]). The steps are the same bits on one thread or two, so neither the switch
 //! nor its timing changes the orbit.
 //!
 //! Every switch starts a new epoch. A step's publication carries the epoch with the step
