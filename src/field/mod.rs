@@ -162,11 +162,8 @@ fn compute_plane_strip(
     let n = &params.needs;
     if orbit_free && !params.single && !(n.nf || n.t || n.de || params.orbit.derivative) {
         // N alone: straight into its plane.
-        let iterations = points
-            .par_chunks(DIRECT_CHUNK)
-            .zip(planes.n.par_chunks_mut(DIRECT_CHUNK))
-            .map(|(points, n)| simd::iterate_n(&params.orbit, points, n, cancel))
-            .try_reduce(|| 0, |a, b| Ok(a + b))?;
+        let iterations =
+            in_direct_chunks(&points, &mut planes.n, |points, n| simd::iterate_n(&params.orbit, points, n, cancel))?;
         fill_ifs(&params.needs.traps, &points, &mut planes);
         return Ok(Strip { planes, iterations, counters: Counters::default() });
     }
@@ -186,11 +183,9 @@ fn compute_plane_strip(
         _ if orbit_free => {
             let n = &params.needs;
             let final_z = n.nf || n.t || n.de;
-            points
-                .par_chunks(DIRECT_CHUNK)
-                .zip(orbits.par_chunks_mut(DIRECT_CHUNK))
-                .map(|(points, out)| simd::iterate(&params.orbit, points, out, final_z, cancel))
-                .try_reduce(|| 0, |a, b| Ok(a + b))?
+            in_direct_chunks(&points, &mut orbits, |points, out| {
+                simd::iterate(&params.orbit, points, out, final_z, cancel)
+            })?
         }
         // One geometric trap (the common case) runs vectorised; several traps or a bitmap
         // (a texture lookup per step) run in the scalar kernel.
@@ -209,6 +204,20 @@ fn compute_plane_strip(
     fill_quantities(&params.needs, &orbits, ln_r, spacing, &mut planes);
     fill_ifs(&params.needs.traps, &points, &mut planes);
     Ok(Strip { planes, iterations, counters: Counters::default() })
+}
+
+/// Runs a direct kernel `f` over `points` and their outputs `out` in calls of
+/// [`DIRECT_CHUNK`] samples, in parallel; the iterations summed.
+fn in_direct_chunks<T: Send>(
+    points: &[[f64; 2]],
+    out: &mut [T],
+    f: impl Fn(&[[f64; 2]], &mut [T]) -> Result<u64, Cancelled> + Sync,
+) -> Result<u64, Cancelled> {
+    points
+        .par_chunks(DIRECT_CHUNK)
+        .zip(out.par_chunks_mut(DIRECT_CHUNK))
+        .map(|(p, o)| f(p, o))
+        .try_reduce(|| 0, |a, b| Ok(a + b))
 }
 
 /// Writes the IFS density of each sample's point into the IFS planes.

@@ -330,14 +330,7 @@ impl FixedOrbit {
         if share && self.n >= THREADED_LIMBS && two_threads() {
             self.with_helper(body)
         } else {
-            body(&mut Stepper {
-                orbit: self,
-                shared: None,
-                seq: 0,
-                epoch: 0,
-                alone: 0,
-                policy: Policy::Adaptive(Contention::default()),
-            })
+            body(&mut Stepper { orbit: self, sharing: None })
         }
     }
 
@@ -440,7 +433,8 @@ impl FixedOrbit {
                 }
             });
             let _stop = StopOnDrop(&shared);
-            body(&mut Stepper { orbit: self, shared: Some(&shared), seq: 0, epoch: 0, alone: 0, policy })
+            let sharing = Sharing { shared: &shared, seq: 0, epoch: 0, alone: 0, policy };
+            body(&mut Stepper { orbit: self, sharing: Some(sharing) })
         })
     }
 
@@ -492,8 +486,14 @@ impl FixedOrbit {
 /// Steps a [`FixedOrbit`], on one thread or two.
 pub struct Stepper<'a> {
     orbit: &'a mut FixedOrbit,
-    shared: Option<&'a Shared>,
-    /// Steps taken, when shared.
+    /// Where a helper thread shares the steps.
+    sharing: Option<Sharing<'a>>,
+}
+
+/// The caller's side of steps shared with a helper thread.
+struct Sharing<'a> {
+    shared: &'a Shared,
+    /// Steps taken.
     seq: u64,
     /// The sharing's epoch ([`super::handover`]).
     epoch: u64,
@@ -534,23 +534,23 @@ impl Stepper<'_> {
 
     /// One step, z <- z^2 + c.
     pub fn step(&mut self) {
-        self.seq += 1;
-        let Some(sh) = self.shared else {
+        let Some(sh) = &mut self.sharing else {
             return self.orbit.step();
         };
-        if self.alone > 0 {
+        sh.seq += 1;
+        if sh.alone > 0 {
             self.orbit.step();
-            self.alone -= 1;
-            if self.alone == 0 {
-                self.epoch = sh.resume(self.seq, &self.orbit.x, &self.orbit.y);
+            sh.alone -= 1;
+            if sh.alone == 0 {
+                sh.epoch = sh.shared.resume(sh.seq, &self.orbit.x, &self.orbit.y);
             }
             return;
         }
-        let slow = self.orbit.shared_step(sh, Role::Caller, self.epoch, self.seq);
+        let slow = self.orbit.shared_step(sh.shared, Role::Caller, sh.epoch, sh.seq);
         debug_assert!(slow.is_some(), "only the caller pauses or stops the helper");
-        if let Some(alone) = self.policy.after(slow.unwrap_or(false)) {
-            self.epoch = sh.pause();
-            self.alone = alone.max(1);
+        if let Some(alone) = sh.policy.after(slow.unwrap_or(false)) {
+            sh.epoch = sh.shared.pause();
+            sh.alone = alone.max(1);
         }
     }
 }
