@@ -65,11 +65,43 @@ pub fn size(c: &BigC, period: u32) -> [FloatExp; 2] {
     }))
 }
 
+/// Newton's steps from a start before [`minibrot`] gives up.
+const NEWTON_STEPS: u32 = 200;
+
+/// The smallest proper divisor n of `period` for which `c`, a root of z_period = 0 to
+/// Newton's tolerance, is a root of z_n = 0 as well: a nucleus of the lower period n. Newton's
+/// method for period p converges to any nucleus whose period divides p (z_n = 0 makes
+/// z_kn = 0), 0 itself (the main cardioid's) for every p, and from a start near a cusp or
+/// a bulb's root it often does. Told by Newton's step for period n at c, |z_n / z_n'|: at
+/// a nucleus of period n it is of the size of the rounding that [`newton`] converged to
+/// (allowed 2^16 times that), at a nucleus of period exactly p the first-order distance to
+/// a nucleus of period n, many orders of magnitude larger. None where c's period is
+/// `period` itself.
+pub fn lower_period(c: &BigC, period: u32) -> Option<u32> {
+    let bits = c.bits;
+    let one = BigC::from_f64(1.0, 0.0, bits);
+    let tolerance = FloatExp::new(1.0, 32 - bits as i32) * FloatExp::ONE.max(c.abs());
+    let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
+    for n in 1..period {
+        dz = z.mul(&dz).ldexp(1).add(&one);
+        z = z.square().add(c);
+        if period.is_multiple_of(n) && z.abs() <= tolerance * dz.abs() {
+            return Some(n);
+        }
+    }
+    None
+}
+
 /// Finds the minibrot of period `period` whose nucleus Newton's method reaches from `start`:
 /// Newton at `start`'s precision, then again with enough bits to place the nucleus well
-/// inside its own size. None when Newton does not converge.
-pub fn minibrot(start: &BigC, period: u32) -> Option<Minibrot> {
-    let mut c = newton(start, period, 200)?;
+/// inside its own size. None when Newton does not converge, or converges to a nucleus of a
+/// lower period ([`lower_period`]; its "size" for `period` would be meaningless).
+/// `steps`: Newton's steps from `start` at most (None: 200).
+pub fn minibrot(start: &BigC, period: u32, steps: Option<u32>) -> Option<Minibrot> {
+    let mut c = newton(start, period, steps.unwrap_or(NEWTON_STEPS))?;
+    if lower_period(&c, period).is_some() {
+        return None;
+    }
     loop {
         let s = size(&c, period);
         let magnitude = (s[0] * s[0] + s[1] * s[1]).sqrt();
@@ -111,11 +143,31 @@ mod tests {
         close(&near(-1.31, 0.0, 4), "-1.3107026413368328", "0", 16);
     }
 
+    /// Newton's method for period p converges to any nucleus whose period divides p: those
+    /// are told apart and refused.
+    #[test]
+    fn nuclei_of_a_lower_period_are_refused() {
+        let airplane = newton(&BigC::from_f64(-1.75, 0.0, 256), 3, 100).unwrap();
+        assert_eq!(lower_period(&airplane, 3), None);
+        assert_eq!(lower_period(&airplane, 6), Some(3));
+        assert_eq!(lower_period(&airplane, 12), Some(3));
+        assert_eq!(lower_period(&BigC::zero(256), 540), Some(1));
+        let bulb4 = newton(&BigC::from_f64(-1.31, 0.0, 256), 4, 100).unwrap();
+        assert_eq!(lower_period(&bulb4, 20), Some(4));
+        // From beside the main cardioid's cusp, Newton for period 540 reaches 0: no
+        // minibrot. From -1.25 + 0.001i, Newton for 20 reaches the period-4 nucleus.
+        assert_eq!(minibrot(&BigC::from_f64(0.25, 0.0, 128), 540, None), None);
+        let to_zero = newton(&BigC::from_f64(0.25, 0.0, 128), 540, 200).unwrap();
+        assert!(to_zero.abs() < FloatExp::from(1e-30), "{:?}", to_zero.to_fe());
+        assert_eq!(lower_period(&to_zero, 540), Some(1));
+        assert_eq!(minibrot(&BigC::from_f64(-1.25, 0.001, 128), 20, None), None);
+    }
+
     #[test]
     fn sizes_of_known_minibrots() {
         // The period-3 airplane minibrot is about 1/52 the size of the whole set (its
         // estimate is ~0.019, pointing left like the set itself: argument near 0).
-        let m = minibrot(&BigC::from_f64(-1.75, 0.0, 128), 3).expect("found");
+        let m = minibrot(&BigC::from_f64(-1.75, 0.0, 128), 3, None).expect("found");
         let s = m.size.to_f64();
         assert!((0.015..0.025).contains(&s), "size {s}");
         assert!(m.angle.abs() < 0.1, "angle {}", m.angle);
@@ -134,7 +186,7 @@ mod tests {
         );
         let p = super::super::period::ball_period(&near, FloatExp::exp10(-40.0), 100_000).expect("a period");
         assert_eq!(p, 1282);
-        let m = minibrot(&near, p).expect("found");
+        let m = minibrot(&near, p, None).expect("found");
         assert!((-74.0..-72.0).contains(&(m.size.log2() * std::f64::consts::LOG10_2)), "size {:?}", m.size);
         let bits = m.nucleus.bits;
         let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));

@@ -33,6 +33,34 @@ pub fn ball_period(center: &BigC, radius: FloatExp, max_period: u32) -> Option<u
     None
 }
 
+/// The iterations after `after` (up to `max_period`; at most `count` of them) at which the
+/// orbit of `center` comes nearer to 0 than at any earlier one: the periods of the atom
+/// domains that hold `center` (Claude Heiland-Allen's notes on atom domains), whose nuclei
+/// Newton's method from `center` tends to reach. The orbit is followed until it leaves
+/// |z| <= 2 (then it comes near 0 no more).
+pub fn atom_periods(center: &BigC, after: u32, max_period: u32, count: usize) -> Vec<u32> {
+    let mut z = BigC::zero(center.bits);
+    let mut least = FloatExp::from(f64::INFINITY);
+    let mut out = Vec::new();
+    for n in 1..=max_period {
+        z = z.square().add(center);
+        let size = z.abs();
+        if size > FloatExp::from(2.0) {
+            break;
+        }
+        if size < least {
+            least = size;
+            if n > after {
+                out.push(n);
+                if out.len() == count {
+                    break;
+                }
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -47,5 +75,16 @@ mod tests {
         assert_eq!(at(-0.1226, 0.7449, 1e-3), Some(3));
         // Far outside the set: nothing.
         assert_eq!(at(2.0, 2.0, 0.01), None);
+    }
+
+    #[test]
+    fn atom_periods_of_a_point_in_the_period_doubling_cascade() {
+        // On the real axis at -1.4, between the period-8 nucleus (-1.3815) and the
+        // Feigenbaum point (-1.4012): the orbit comes nearest to 0 at the doubling periods.
+        let c = BigC::from_f64(-1.4, 0.0, 128);
+        assert_eq!(atom_periods(&c, 0, 1000, 5), vec![1, 2, 4, 8, 16]);
+        assert_eq!(atom_periods(&c, 8, 1000, 1), vec![16]);
+        // An escaping orbit stops: c = 1 leaves |z| <= 2 at its third iteration.
+        assert_eq!(atom_periods(&BigC::from_f64(1.0, 0.0, 128), 0, 1000, 10), vec![1]);
     }
 }

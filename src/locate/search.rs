@@ -42,12 +42,12 @@ pub enum SearchError {
         /// The largest period tried.
         max_period: u32,
     },
-    /// Newton's method found no nucleus of the period in the view.
+    /// Newton's method from the view's centre reached no nucleus in the view.
     #[error(
-        "the view holds a nucleus of period {period}, but Newton's method from the view's centre did not reach it (move the centre closer)"
+        "Newton's method from the view's centre reached no minibrot inside the view (the ball method puts the lowest period there at {period} or more): move the centre closer to one, or zoom in"
     )]
     NoNucleus {
-        /// The period detected.
+        /// The ball method's period: a lower bound on the view's lowest.
         period: u32,
     },
     /// No Misiurewicz point in range lies in the view.
@@ -84,11 +84,45 @@ pub fn disc(center: &[Decimal; 2], log10_radius: f64) -> (BigC, FloatExp) {
     (BigC::from_decimals(&center[0], &center[1], bits), FloatExp::exp10(log10_radius))
 }
 
+/// Periods [`minibrot_in_view`] tries after the ball method's ([`period::atom_periods`]).
+const MORE_PERIODS: usize = 8;
+/// Newton's steps from the view's centre for each of those (where the centre lies in a
+/// nucleus's basin it converges within a few dozen).
+const MORE_NEWTON_STEPS: u32 = 64;
+/// Big-float iterations those Newton searches may take together at most (a few seconds at
+/// the precision of a 1e-1000 view; a search that would pass it is not started).
+const MORE_ITERATIONS: u64 = 4_000_000;
+
 /// The lowest-period minibrot whose nucleus lies in the disc of `radius` about `center`
-/// (the view's centre and half-height, `center` at the precision the view needs).
+/// (the view's centre and half-height, `center` at the precision the view needs), as far as
+/// Newton's method from the centre reaches.
+///
+/// The ball method's period p bounds from below the periods of the nuclei in the disc (a
+/// nucleus of period q inside puts 0 within the bound at iteration q), and Newton's method
+/// for period p from the centre looks for one. Only a nucleus of period exactly p inside
+/// the disc is taken: Newton's method also reaches nuclei outside the view, and near a
+/// bulb's root or a cusp those of a period dividing p (0 for every p; [`nucleus::minibrot`]).
+/// Where it finds none (the bound is loose where the disc is large beside the structure in
+/// it, and the centre may lie outside the basin of the nucleus it found), the periods of
+/// the centre's atom domains after p are tried in turn, and the first nucleus of one of them
+/// that lies in the disc is returned (within a fixed budget of work): a minibrot of the view,
+/// of a higher period than the lowest there may be.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
-    nucleus::minibrot(center, p).ok_or(SearchError::NoNucleus { period: p })
+    let reach = |q: u32, steps: Option<u32>| {
+        nucleus::minibrot(center, q, steps).filter(|m| m.nucleus.sub(center).abs() <= radius)
+    };
+    reach(p, None)
+        .or_else(|| {
+            let later = period::atom_periods(center, p, max_period, MORE_PERIODS);
+            let mut left = MORE_ITERATIONS;
+            later.into_iter().find_map(|q| {
+                let cost = u64::from(q) * u64::from(MORE_NEWTON_STEPS);
+                left = left.checked_sub(cost)?;
+                reach(q, Some(MORE_NEWTON_STEPS))
+            })
+        })
+        .ok_or(SearchError::NoNucleus { period: p })
 }
 
 /// Periods searched by [`misiurewicz_limits`] at most, and preperiods at most twice that.
@@ -208,6 +242,67 @@ mod tests {
         // Nothing that simple in a tiny view far from both.
         let c = BigC::from_f64(-0.3, 0.3, 192);
         assert!(misiurewicz_in_view(&c, FloatExp::from(1e-6), 3, 2).is_err());
+    }
+
+    /// Whether `c` is a nucleus of period exactly `p`, by its own orbit: z_p vanishes to
+    /// within `tol` and no earlier z_n (n dividing p) does.
+    fn exact_nucleus(c: &BigC, p: u32, tol: f64) -> bool {
+        let mut z = BigC::zero(c.bits);
+        for n in 1..=p {
+            z = z.square().add(c);
+            let small = z.abs() < FloatExp::from(tol);
+            if n < p && p.is_multiple_of(n) && small {
+                return false;
+            }
+            if n == p {
+                return small;
+            }
+        }
+        false
+    }
+
+    /// Views where Newton's method from the centre for the ball method's period reaches a
+    /// nucleus of a period dividing it (the period-4 bulb's for 20, the rabbit's for 33, 0
+    /// from the main cardioid's cusp for 540) or one far outside the view: what is
+    /// returned is a nucleus of exactly its period inside the view, or an error, never
+    /// those.
+    #[test]
+    fn never_a_nucleus_of_a_lower_period_or_outside_the_view() {
+        for (re, im, r) in [
+            (-1.25, 0.001, 3.3e-3),
+            (-0.1, 0.651, 3.3e-3),
+            (0.25, 0.0, 3.3e-5),
+            (-0.75, 0.1, 3.3e-2),
+            (-0.7453, 0.1127, 3.3e-6),
+            (0.3, 0.02, 3.3e-4),
+        ] {
+            let c = BigC::from_f64(re, im, 192);
+            match minibrot_in_view(&c, FloatExp::from(r), 100_000) {
+                Ok(m) => {
+                    assert!(
+                        m.nucleus.sub(&c).abs() <= FloatExp::from(r),
+                        "({re}, {im}): {:?} outside",
+                        m.nucleus.to_fe()
+                    );
+                    assert!(exact_nucleus(&m.nucleus, m.period, 1e-30), "({re}, {im}): not of period {}", m.period);
+                    assert!(m.size < FloatExp::from(r), "({re}, {im}): size {:?}", m.size);
+                }
+                Err(e) => assert!(matches!(e, SearchError::NoNucleus { .. }), "({re}, {im}): {e}"),
+            }
+        }
+    }
+
+    /// In the period-doubling cascade at -1.4 the ball method's period, 8, has its nucleus
+    /// (-1.3815) outside a view of radius 0.0033; the centre's next atom domain's period, 16,
+    /// has its nucleus inside (-1.3969453597045606..., published).
+    #[test]
+    fn the_next_atom_domain_when_the_ball_methods_nucleus_is_outside() {
+        let c = BigC::from_f64(-1.4, 0.0, 192);
+        let m = minibrot_in_view(&c, FloatExp::from(3.3e-3), 1000).unwrap();
+        assert_eq!(m.period, 16);
+        let re = m.nucleus.to_fe()[0].to_f64();
+        assert!((re + 1.396_945_359_704_560_6).abs() < 1e-15, "{re}");
+        assert!(exact_nucleus(&m.nucleus, 16, 1e-40));
     }
 
     #[test]
