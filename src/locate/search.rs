@@ -1,10 +1,15 @@
 //! Searching a view for a location to zoom to: the lowest-period minibrot in it, or the
 //! simplest Misiurewicz point in it, each with the zoom that frames it.
 //!
-//! Minibrot: the ball method gives the lowest period p of a nucleus in the view's disc,
-//! Newton's method from the view's centre finds that nucleus, and the size estimate frames
-//! it. Misiurewicz point: the centre's orbit (with its derivative in c), computed once,
-//! gives, for every period p in range (the periods shared between the cores), the first
+//! Minibrot: the ball method gives a lower bound p on the periods of the nuclei in the
+//! view's disc, Newton's method from the view's centre looks for a nucleus of period p,
+//! then of the periods above it, and the size estimate frames the first found. Only a
+//! nucleus of exactly the period sought that lies in the disc is taken: Newton's method
+//! for period p also converges to nuclei of the periods dividing p and to nuclei outside
+//! the view, whose "size" for p means nothing.
+//!
+//! Misiurewicz point: the centre's orbit (with its derivative in c), computed once, gives,
+//! for every period p in range (the periods shared between the cores), the first
 //! preperiod k >= 2 whose Newton step length
 //! |z_(k+p) - z_k| / |z'_(k+p) - z'_k| — a first-order distance from the centre to a root
 //! of z_(k+p) = z_k — is inside the view, leaving out the roots that belong to a lower
@@ -84,14 +89,20 @@ pub fn disc(center: &[Decimal; 2], log10_radius: f64) -> (BigC, FloatExp) {
     (BigC::from_decimals(&center[0], &center[1], bits), FloatExp::exp10(log10_radius))
 }
 
-/// Periods [`minibrot_in_view`] tries after the ball method's ([`period::atom_periods`]).
+/// Periods above the ball method's that [`minibrot_in_view`] tries one by one: up to this
+/// many times it (and at least up to [`MIN_UPWARD`]).
+const UPWARD_FACTOR: u32 = 8;
+/// See [`UPWARD_FACTOR`].
+const MIN_UPWARD: u32 = 64;
+/// Periods of the centre's atom domains tried after those ([`period::atom_periods`]).
 const MORE_PERIODS: usize = 8;
-/// Newton's steps from the view's centre for each of those (where the centre lies in a
-/// nucleus's basin it converges within a few dozen).
+/// Newton's steps from the view's centre for each period after the ball method's (where
+/// the centre lies in a nucleus's basin it converges within a few dozen).
 const MORE_NEWTON_STEPS: u32 = 64;
-/// Big-float iterations those Newton searches may take together at most (a few seconds at
-/// the precision of a 1e-1000 view; a search that would pass it is not started).
-const MORE_ITERATIONS: u64 = 4_000_000;
+/// What those Newton searches may cost together at most, in big-float iterations at 128
+/// bits (an iteration at b bits counted b / 128 times): about a second. A search that would
+/// pass it is not started, so at depth, where each costs more, fewer are tried.
+const MORE_WORK: u64 = 4_000_000;
 
 /// The lowest-period minibrot whose nucleus lies in the disc of `radius` about `center`
 /// (the view's centre and half-height, `center` at the precision the view needs), as far as
@@ -102,26 +113,30 @@ const MORE_ITERATIONS: u64 = 4_000_000;
 /// for period p from the centre looks for one. Only a nucleus of period exactly p inside
 /// the disc is taken: Newton's method also reaches nuclei outside the view, and near a
 /// bulb's root or a cusp those of a period dividing p (0 for every p; [`nucleus::minibrot`]).
-/// Where it finds none (the bound is loose where the disc is large beside the structure in
-/// it, and the centre may lie outside the basin of the nucleus it found), the periods of
-/// the centre's atom domains after p are tried in turn, and the first nucleus of one of them
-/// that lies in the disc is returned (within a fixed budget of work): a minibrot of the view,
-/// of a higher period than the lowest there may be.
+/// The bound is not always attained (it is loose where the disc is large beside the
+/// structure in it: a view of radius 0.033 at -0.75 + 0.1i has 8 for its bound, and Newton's
+/// method from a 13 x 13 grid of starts over it reaches no nucleus in it below period 25),
+/// so where Newton's method finds none, the periods above p are tried in turn (up to eight
+/// times p, at least 64), then the later periods of the centre's atom domains, within a
+/// fixed budget of big-float work (about a second at 128 bits, less at depth, where each try
+/// costs more); the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
-    let reach = |q: u32, steps: Option<u32>| {
-        nucleus::minibrot(center, q, steps).filter(|m| m.nucleus.sub(center).abs() <= radius)
+    let inside = |m: &Minibrot| m.nucleus.sub(center).abs() <= radius;
+    if let Some(m) = nucleus::minibrot(center, p, None).filter(inside) {
+        return Ok(m);
+    }
+    let mut left = MORE_WORK;
+    let weight = center.bits.max(128) / 128;
+    let mut attempt = |q: u32| {
+        left = left.checked_sub(u64::from(q) * u64::from(MORE_NEWTON_STEPS) * weight)?;
+        nucleus::minibrot(center, q, Some(MORE_NEWTON_STEPS)).filter(inside)
     };
-    reach(p, None)
-        .or_else(|| {
-            let later = period::atom_periods(center, p, max_period, MORE_PERIODS);
-            let mut left = MORE_ITERATIONS;
-            later.into_iter().find_map(|q| {
-                let cost = u64::from(q) * u64::from(MORE_NEWTON_STEPS);
-                left = left.checked_sub(cost)?;
-                reach(q, Some(MORE_NEWTON_STEPS))
-            })
-        })
+    let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
+    let later = || period::atom_periods(center, top, max_period, MORE_PERIODS);
+    (p + 1..=top)
+        .find_map(&mut attempt)
+        .or_else(|| later().into_iter().find_map(&mut attempt))
         .ok_or(SearchError::NoNucleus { period: p })
 }
 
@@ -293,16 +308,23 @@ mod tests {
     }
 
     /// In the period-doubling cascade at -1.4 the ball method's period, 8, has its nucleus
-    /// (-1.3815) outside a view of radius 0.0033; the centre's next atom domain's period, 16,
-    /// has its nucleus inside (-1.3969453597045606..., published).
+    /// (-1.3815) outside a view of radius 0.0033; period 16 has its nucleus inside
+    /// (-1.3969453597045606..., published). In seahorse valley at -0.75 + 0.1i (radius
+    /// 0.033) the ball method's 8 has no nucleus in the view either.
     #[test]
-    fn the_next_atom_domain_when_the_ball_methods_nucleus_is_outside() {
+    fn a_higher_period_where_the_ball_methods_has_no_nucleus_in_the_view() {
         let c = BigC::from_f64(-1.4, 0.0, 192);
         let m = minibrot_in_view(&c, FloatExp::from(3.3e-3), 1000).unwrap();
         assert_eq!(m.period, 16);
         let re = m.nucleus.to_fe()[0].to_f64();
         assert!((re + 1.396_945_359_704_560_6).abs() < 1e-15, "{re}");
         assert!(exact_nucleus(&m.nucleus, 16, 1e-40));
+        let c = BigC::from_f64(-0.75, 0.1, 192);
+        let r = FloatExp::from(3.3e-2);
+        assert_eq!(period::ball_period(&c, r, 1000), Some(8));
+        let m = minibrot_in_view(&c, r, 1000).unwrap();
+        assert!(m.period > 8 && exact_nucleus(&m.nucleus, m.period, 1e-40), "period {}", m.period);
+        assert!(m.nucleus.sub(&c).abs() <= r);
     }
 
     #[test]
