@@ -11,7 +11,13 @@ decimal arithmetic at 80 digits (independent of the engine's big floats), z_p is
 answers failed the check, and how many views ended in an error (no minibrot in the view,
 or none that Newton's method from the centre reaches).
 
-    scripts/find-views.py [SEED] [COUNT] [DEEPFIELD]   # defaults: 11, 80, target/release/deepfield
+With --misiurewicz, `find --misiurewicz` instead: each point printed must lie in the disc
+and have exactly the printed preperiod k and period p, in the same arithmetic:
+|z_(k+p) - z_k| below 1e-20 (the printed centre's own rounding, amplified by the repelling
+cycle, stays far below that at these depths), and no pair (k', p') with k' <= k, p' <= p
+other than (k, p) itself comes that close.
+
+    scripts/find-views.py [--misiurewicz] [SEED] [COUNT] [DEEPFIELD]   # defaults: 11, 80, target/release/deepfield
 """
 import cmath
 import decimal
@@ -22,9 +28,11 @@ import subprocess
 import sys
 import time
 
-seed = int(sys.argv[1]) if len(sys.argv) > 1 else 11
-count = int(sys.argv[2]) if len(sys.argv) > 2 else 80
-binary = sys.argv[3] if len(sys.argv) > 3 else "target/release/deepfield"
+args = [a for a in sys.argv[1:] if a != "--misiurewicz"]
+misiurewicz = len(args) < len(sys.argv) - 1
+seed = int(args[0]) if len(args) > 0 else 11
+count = int(args[1]) if len(args) > 1 else 80
+binary = args[2] if len(args) > 2 else "target/release/deepfield"
 decimal.getcontext().prec = 80
 D = decimal.Decimal
 
@@ -46,6 +54,26 @@ def exact_period(re_text, im_text, period):
     return False
 
 
+def exact_type(re_text, im_text, preperiod, period):
+    """True when re + im i has exactly that preperiod and period (see the module doc)."""
+    cr, ci = D(re_text), D(im_text)
+    orbit = [(D(0), D(0))]
+    for _ in range(preperiod + period):
+        zr, zi = orbit[-1]
+        orbit.append((zr * zr - zi * zi + cr, 2 * zr * zi + ci))
+    tiny = D("1e-20")
+
+    def close(a, b):
+        (ar, ai), (br, bi) = orbit[a], orbit[b]
+        return ((ar - br) ** 2 + (ai - bi) ** 2).sqrt() < tiny
+
+    if not close(preperiod + period, preperiod):
+        return False
+    return not any(
+        close(k + p, k) for k in range(preperiod + 1) for p in range(1, period + 1) if (k, p) != (preperiod, period)
+    )
+
+
 rng = random.Random(seed)
 found = bad = errors = 0
 start = time.time()
@@ -58,7 +86,8 @@ for _ in range(count):
     c += complex(rng.uniform(-1, 1), rng.uniform(-1, 1)) * 0.01
     zoom = rng.choice([1e2, 1e3, 1e4, 1e6])
     run = subprocess.run(
-        [binary, "find", "--center", f"{c.real!r},{c.imag!r}", "--zoom", f"{zoom:g}"],
+        [binary, "find", "--center", f"{c.real!r},{c.imag!r}", "--zoom", f"{zoom:g}"]
+        + (["--misiurewicz"] if misiurewicz else []),
         capture_output=True,
         text=True,
     )
@@ -66,15 +95,21 @@ for _ in range(count):
         errors += 1
         continue
     header = run.stdout.splitlines()[0]
-    period = int(re.search(r"period (\d+)", header).group(1))
+    period = int(re.search(r"\bperiod (\d+)", header).group(1))
     m = re.search(r'center = \["([^"]+)", "([^"]+)"\]', run.stdout)
-    nucleus = complex(float(m.group(1)), float(m.group(2)))
+    point = complex(float(m.group(1)), float(m.group(2)))
     disc = 2 / zoom * math.sqrt(1 + (4 / 3) ** 2)
-    ok = abs(nucleus - c) <= disc * (1 + 1e-9) and exact_period(m.group(1), m.group(2), period)
+    if misiurewicz:
+        preperiod = int(re.search(r"preperiod (\d+)", header).group(1))
+        exact = exact_type(m.group(1), m.group(2), preperiod, period)
+    else:
+        exact = exact_period(m.group(1), m.group(2), period)
+    ok = abs(point - c) <= disc * (1 + 1e-9) and exact
     if ok:
         found += 1
     else:
         bad += 1
         print(f"FAILED CHECK: centre {c.real!r},{c.imag!r} zoom {zoom:g}: {header}")
-print(f"{count} views (seed {seed}): {found} minibrots found, {bad} failed the check, {errors} errors; {time.time() - start:.1f} s")
+what = "Misiurewicz points" if misiurewicz else "minibrots"
+print(f"{count} views (seed {seed}): {found} {what} found, {bad} failed the check, {errors} errors; {time.time() - start:.1f} s")
 sys.exit(1 if bad else 0)
