@@ -20,7 +20,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::anyhow;
-use deepfield::num::Decimal;
+use deepfield::num::{Decimal, scientific};
 use deepfield::orbit::saved::{SavedReferences, key_of};
 use deepfield::render::{self, Options};
 use deepfield::scene::Scene;
@@ -130,7 +130,9 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
         write_frame(&scene, &path, simd, references.clone(), &cancel)?;
         frame_seconds += t.elapsed().as_secs_f64();
         if !args.quiet {
-            eprintln!("keyframe {k} of {frames}: zoom {zoom} ({:.2} s)", t.elapsed().as_secs_f64());
+            // The zoom in short: the scene holds it exactly, in as many digits as it has.
+            let short = Decimal::parse(&zoom).map_or(zoom.clone(), |z| scientific(z.log10_abs(), 3));
+            eprintln!("keyframe {k} of {frames}: zoom {short} ({:.2} s)", t.elapsed().as_secs_f64());
         }
     }
     if let Some(center) = center.as_ref().filter(|_| units.end == frames) {
