@@ -11,9 +11,9 @@
 //! near it; where the disc is large (shallow views near the set's boundary) the bound can be
 //! far below the lowest period there (8 in seahorse valley at radius 0.033, where Newton's
 //! method from a 13 x 13 grid of starts over the disc reaches no nucleus in it below period
-//! 25), and the search ([`super::search`]) goes on from it. This is the "box period" method of Robert
-//! P. Munafo's Mandelbrot encyclopedia, with a disc in place of the box as in Claude
-//! Heiland-Allen's notes on finding minibrots.
+//! 25), and the search ([`super::search`]) goes on from it. This is the "box period" method
+//! of Robert P. Munafo's Mandelbrot encyclopedia, with a disc in place of the box as in
+//! Claude Heiland-Allen's notes on finding minibrots.
 
 use crate::num::FloatExp;
 
