@@ -29,6 +29,11 @@ pub struct Minibrot {
 /// Returns the nucleus when the steps converge (the last step below 2^(16 - bits) relative)
 /// within `max_steps`; None otherwise.
 pub fn newton(start: &BigC, period: u32, max_steps: u32) -> Option<BigC> {
+    newton_leashed(start, period, max_steps, None)
+}
+
+/// [`newton`], giving up once an iterate is farther than `leash` from `start`.
+fn newton_leashed(start: &BigC, period: u32, max_steps: u32, leash: Option<FloatExp>) -> Option<BigC> {
     let bits = start.bits;
     let mut c = start.clone();
     let one = BigC::from_f64(1.0, 0.0, bits);
@@ -50,6 +55,9 @@ pub fn newton(start: &BigC, period: u32, max_steps: u32) -> Option<BigC> {
         }
         // Diverged (or NaN: then the comparison is false too).
         if c.abs().partial_cmp(&FloatExp::from(4.0)) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        if leash.is_some_and(|l| c.sub(start).abs() > l) {
             return None;
         }
     }
@@ -98,8 +106,23 @@ pub fn lower_period(c: &BigC, period: u32) -> Option<u32> {
 /// lower period ([`lower_period`]; its "size" for `period` would be meaningless).
 /// `steps`: Newton's steps from `start` at most (None: 200).
 pub fn minibrot(start: &BigC, period: u32, steps: Option<u32>) -> Option<Minibrot> {
-    let mut c = newton(start, period, steps.unwrap_or(NEWTON_STEPS))?;
-    if lower_period(&c, period).is_some() {
+    minibrot_within(start, period, steps, None)
+}
+
+/// How far Newton's method may stray from its start, in radii of the disc the nucleus must
+/// lie in ([`minibrot_within`]), before it is given up: its iterates approach a nucleus in
+/// its basin from nearby, and one that wanders off converges, if at all, elsewhere.
+const LEASH: f64 = 16.0;
+
+/// [`minibrot`], for a nucleus within `radius` of `start` only (None: anywhere). Newton's
+/// method is given up once it strays 16 radii away, and a root outside the disc is
+/// refused before its refinement (at depth both take seconds for a root the caller would
+/// refuse).
+pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: Option<FloatExp>) -> Option<Minibrot> {
+    let leash = radius.map(|r| r.mul_f64(LEASH));
+    let mut c = newton_leashed(start, period, steps.unwrap_or(NEWTON_STEPS), leash)?;
+    let outside = radius.is_some_and(|r| c.sub(start).abs() > r);
+    if outside || lower_period(&c, period).is_some() {
         return None;
     }
     loop {
@@ -161,6 +184,19 @@ mod tests {
         assert!(to_zero.abs() < FloatExp::from(1e-30), "{:?}", to_zero.to_fe());
         assert_eq!(lower_period(&to_zero, 540), Some(1));
         assert_eq!(minibrot(&BigC::from_f64(-1.25, 0.001, 128), 20, None), None);
+    }
+
+    /// Newton's method on a leash: from beside the cusp it wanders off to 0, a quarter away;
+    /// held within 1e-3 of its start it gives up, and a disc of 1e-3 refuses the root.
+    #[test]
+    fn newton_on_a_leash_gives_up_far_from_its_start() {
+        let start = BigC::from_f64(0.25, 0.0, 128);
+        assert!(newton_leashed(&start, 540, 200, None).is_some());
+        assert_eq!(newton_leashed(&start, 540, 200, Some(FloatExp::from(1e-3))), None);
+        let airplane = BigC::from_f64(-1.75, 0.0, 128);
+        assert_eq!(minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-3))), None);
+        let m = minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-2))).expect("within 0.0049");
+        assert_eq!(m.period, 3);
     }
 
     #[test]

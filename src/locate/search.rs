@@ -122,15 +122,14 @@ const MORE_WORK: u64 = 4_000_000;
 /// costs more); the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
-    let inside = |m: &Minibrot| m.nucleus.sub(center).abs() <= radius;
-    if let Some(m) = nucleus::minibrot(center, p, None).filter(inside) {
+    if let Some(m) = nucleus::minibrot_within(center, p, None, Some(radius)) {
         return Ok(m);
     }
     let mut left = MORE_WORK;
     let weight = center.bits.max(128) / 128;
     let mut attempt = |q: u32| {
         left = left.checked_sub(u64::from(q) * u64::from(MORE_NEWTON_STEPS) * weight)?;
-        nucleus::minibrot(center, q, Some(MORE_NEWTON_STEPS)).filter(inside)
+        nucleus::minibrot_within(center, q, Some(MORE_NEWTON_STEPS), Some(radius))
     };
     let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
     let later = || period::atom_periods(center, top, max_period, MORE_PERIODS);
