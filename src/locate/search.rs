@@ -179,7 +179,61 @@ pub fn misiurewicz_in_view(
             return Ok(MisiurewiczPoint { point, preperiod: k, period: p });
         }
     }
-    Err(none)
+    copies_in_minibrot(center, radius, max_preperiod, max_period).ok_or(none)
+}
+
+/// Misiurewicz points of the whole Mandelbrot set whose copies [`copies_in_minibrot`] looks
+/// for: the tip -2 (preperiod 2, period 1), i and -i (2, 2), and the band-merging point
+/// -1.5436890126920764 (3, 1).
+const WHOLE_SET_POINTS: [([f64; 2], u32, u32); 4] =
+    [([-2.0, 0.0], 2, 1), ([0.0, 1.0], 2, 2), ([0.0, -1.0], 2, 2), ([-1.543_689_012_692_076_4, 0.0], 3, 1)];
+
+/// The copy, in the lowest-period minibrot of the view, of one of [`WHOLE_SET_POINTS`]
+/// (the first that lies in the view with preperiod and period within the limits).
+///
+/// The search by first-order distances misses these from a view around a minibrot: there
+/// the orbit of every parameter nearly repeats with the minibrot's period P, so the
+/// distances for period P are all small and the orbit's step into its cycle is not seen.
+/// But a minibrot is a copy of the whole set (Douady and Hubbard's renormalisation): its
+/// first-return map near 0 is, in a coordinate, z -> z^2 + c', so a Misiurewicz point
+/// c' of preperiod k and period p has a copy of preperiod (k - 1) P + 1 and period p P
+/// (the copy's orbit stands at the copy of c' at its first iteration, and every P after),
+/// near c_0 + s c' (c_0 the nucleus, s the complex size estimate, whose argument turns the
+/// copy as the minibrot is turned). Newton's method from there, at the precision the point's
+/// derivative asks, and the same check of the orbit's type.
+fn copies_in_minibrot(
+    center: &BigC,
+    radius: FloatExp,
+    max_preperiod: u32,
+    max_period: u32,
+) -> Option<MisiurewiczPoint> {
+    let m = minibrot_in_view(center, radius, max_period).ok()?;
+    let bits = m.nucleus.bits.max(center.bits);
+    let s = nucleus::size(&m.nucleus.with_bits(bits), m.period);
+    let big = |x: FloatExp, imaginary: bool| {
+        let (re, im) = if imaginary { (0.0, x.mantissa()) } else { (x.mantissa(), 0.0) };
+        BigC::from_f64(re, im, bits).ldexp(x.exponent())
+    };
+    WHOLE_SET_POINTS.iter().find_map(|&([x, y], k, p)| {
+        // The copy's orbit reaches the copy of c' at iteration 1 and returns every P:
+        // preperiod (k - 1) P + 1.
+        let (k, p) = ((k - 1).checked_mul(m.period)?.checked_add(1)?, p.checked_mul(m.period)?);
+        if k > max_preperiod || p > max_period {
+            return None;
+        }
+        // s c' = (s_re x - s_im y) + i (s_re y + s_im x).
+        let (re, im) = (s[0].mul_f64(x) - s[1].mul_f64(y), s[0].mul_f64(y) + s[1].mul_f64(x));
+        let start = m.nucleus.with_bits(bits).add(&big(re, false)).add(&big(im, true));
+        let orbit = misiurewicz::Orbit::of(&start, (k + p) as usize, None);
+        let extra = orbit.slope((k + p) as usize, k as usize).log2().max(0.0).ceil() as u64;
+        let point = misiurewicz::newton(&start.with_bits(bits + extra + NEWTON_MARGIN_BITS), k, p, 64)?;
+        let inside = point.sub(center).abs() <= radius;
+        (inside && misiurewicz::orbit_type(&point, k, p) == Some((k, p))).then_some(MisiurewiczPoint {
+            point,
+            preperiod: k,
+            period: p,
+        })
+    })
 }
 
 /// A preperiod and period worth Newton's method.
@@ -324,6 +378,30 @@ mod tests {
         let m = minibrot_in_view(&c, r, 1000).unwrap();
         assert!(m.period > 8 && exact_nucleus(&m.nucleus, m.period, 1e-40), "period {}", m.period);
         assert!(m.nucleus.sub(&c).abs() <= r);
+    }
+
+    /// From a view centred on the airplane's nucleus (period 3) the search by first-order
+    /// distances finds nothing (every orbit there nearly repeats with period 3); the copy
+    /// of the tip -2 in the airplane minibrot is found, -1.7903274919993457..., preperiod
+    /// (2 - 1) 3 + 1 = 4 and period 3, checked by its own orbit.
+    #[test]
+    fn misiurewicz_points_copied_into_a_minibrot() {
+        let c = nucleus::newton(&BigC::from_f64(-1.75, 0.0, 256), 3, 100).unwrap();
+        let r = FloatExp::from(0.167);
+        let m = misiurewicz_in_view(&c, r, 5000, 64).unwrap();
+        assert_eq!((m.preperiod, m.period), (4, 3));
+        let re = m.point.to_fe()[0].to_f64();
+        assert!((re + 1.790_327_491_999_345_7).abs() < 1e-15, "{re}");
+        let mut z = vec![BigC::zero(m.point.bits)];
+        for _ in 0..8 {
+            z.push(z[z.len() - 1].square().add(&m.point));
+        }
+        assert!(z[7].sub(&z[4]).abs() < FloatExp::from(1e-50));
+        assert!(z[6].sub(&z[3]).abs() > FloatExp::from(0.1));
+        // The whole set, from its nucleus 0 (where every first-order distance is 0 / 0): the
+        // tip itself, (2, 1).
+        let whole = misiurewicz_in_view(&BigC::zero(128), FloatExp::from(3.4), 5000, 64).unwrap();
+        assert_eq!((whole.preperiod, whole.period), (2, 1));
     }
 
     #[test]
