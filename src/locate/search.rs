@@ -18,6 +18,9 @@
 //! derivative amplifies rounding by, and the first whose root lies in the view and whose
 //! orbit really has preperiod k and period p wins. At depth that extra precision is what
 //! makes the root and its check possible: bench-e1086's centre at 1e60 needs ~200 more bits.
+//! Around a minibrot those distances see nothing (every orbit there nearly repeats with its
+//! period); where they find no point, the minibrot's copies of the whole set's simplest
+//! points are tried, placed by renormalisation and the size estimate.
 
 use rayon::prelude::*;
 
@@ -158,7 +161,10 @@ pub fn misiurewicz_limits(center: &BigC, radius: FloatExp) -> (u32, u32) {
 const NEWTON_MARGIN_BITS: u64 = 64;
 
 /// The simplest Misiurewicz point (smallest preperiod + period) within `radius` of
-/// `center`, with preperiod at most `max_preperiod` and period at most `max_period`.
+/// `center`, with preperiod at most `max_preperiod` and period at most `max_period`, as
+/// the first-order distances from the centre rank them (module docs); where those find
+/// none, the copy in the view's lowest-period minibrot of one of the whole set's simplest
+/// points (its tip -2, ±i, or -1.5437...), as renormalisation places them.
 pub fn misiurewicz_in_view(
     center: &BigC,
     radius: FloatExp,
