@@ -64,6 +64,14 @@ fn newton_leashed(start: &BigC, period: u32, max_steps: u32, leash: Option<Float
     None
 }
 
+/// A complex number as its modulus and argument (radians). Both parts are divided by the
+/// modulus before the argument is taken: at depth they lie far below f64's range, where
+/// they would round to zeros and the argument to 0 or ±π.
+fn polar(s: [FloatExp; 2]) -> (FloatExp, f64) {
+    let modulus = (s[0] * s[0] + s[1] * s[1]).sqrt();
+    (modulus, (s[1] / modulus).to_f64().atan2((s[0] / modulus).to_f64()))
+}
+
 /// The complex size estimate of the minibrot whose nucleus is `c` (period `period`).
 pub fn size(c: &BigC, period: u32) -> [FloatExp; 2] {
     let mut z = BigC::zero(c.bits);
@@ -126,14 +134,12 @@ pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: Op
         return None;
     }
     loop {
-        let s = size(&c, period);
-        let magnitude = (s[0] * s[0] + s[1] * s[1]).sqrt();
+        let (magnitude, angle) = polar(size(&c, period));
         if magnitude.is_zero() {
             return None;
         }
         let needed = (-magnitude.log2()).max(0.0) as u64 + 64;
         if c.bits >= needed {
-            let angle = s[1].to_f64().atan2(s[0].to_f64());
             return Some(Minibrot { nucleus: c, period, size: magnitude, angle });
         }
         c = newton(&c.with_bits(needed + 32), period, 64)?;
@@ -197,6 +203,16 @@ mod tests {
         assert_eq!(minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-3))), None);
         let m = minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-2))).expect("within 0.0049");
         assert_eq!(m.period, 3);
+    }
+
+    /// A size estimate's direction at any depth: 120 degrees at 2^-2000 as at 1.
+    #[test]
+    fn the_direction_of_a_size_beyond_f64s_range() {
+        for e in [0, -2000] {
+            let (modulus, angle) = polar([FloatExp::new(-1.0, e), FloatExp::new(3f64.sqrt(), e)]);
+            assert!((modulus.log2() - (e + 1) as f64).abs() < 1e-12, "{e}: {modulus:?}");
+            assert!((angle.to_degrees() - 120.0).abs() < 1e-9, "{e}: {}", angle.to_degrees());
+        }
     }
 
     #[test]
