@@ -53,6 +53,14 @@ impl BigC {
         BigC { re: self.re.sub_prec_ref_ref(&o.re, p).0, im: self.im.sub_prec_ref_ref(&o.im, p).0, bits: p }
     }
 
+    /// One step of c's orbit with its derivative in c, from (z_n, z_n') to
+    /// (z_(n+1), z_(n+1)') = (z_n^2 + c, 2 z_n z_n' + 1), with `self` as c and `one` as 1 at
+    /// its precision (made once by the caller: every orbit loop of Newton's method and its
+    /// checks takes this step).
+    pub fn orbit_step(&self, (z, dz): (&BigC, &BigC), one: &BigC) -> (BigC, BigC) {
+        (z.square().add(self), z.mul(dz).ldexp(1).add(one))
+    }
+
     /// self * o.
     pub fn mul(&self, o: &BigC) -> BigC {
         let p = self.bits;

@@ -23,8 +23,7 @@ pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Opti
         let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
         let (mut zk, mut dzk) = (BigC::zero(bits), BigC::zero(bits));
         for n in 1..=preperiod + period {
-            dz = z.mul(&dz).ldexp(1).add(&one);
-            z = z.square().add(&c);
+            (z, dz) = c.orbit_step((&z, &dz), &one);
             if n == preperiod {
                 (zk, dzk) = (z.clone(), dz.clone());
             }
@@ -84,8 +83,7 @@ impl Orbit {
         let mut orbit = Vec::with_capacity(n + 1);
         orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
         for _ in 0..n {
-            dz = z.mul(&dz).ldexp(1).add(&one);
-            z = z.square().add(c);
+            (z, dz) = c.orbit_step((&z, &dz), &one);
             if bound.is_some_and(|b| z.abs() > b) {
                 break;
             }

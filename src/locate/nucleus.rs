@@ -41,8 +41,7 @@ fn newton_leashed(start: &BigC, period: u32, max_steps: u32, leash: Option<Float
     for _ in 0..max_steps {
         let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
         for _ in 0..period {
-            dz = z.mul(&dz).ldexp(1).add(&one);
-            z = z.square().add(&c);
+            (z, dz) = c.orbit_step((&z, &dz), &one);
         }
         if dz.abs().is_zero() {
             return None;
@@ -99,8 +98,7 @@ pub fn lower_period(c: &BigC, period: u32) -> Option<u32> {
     let tolerance = FloatExp::new(1.0, 32 - bits as i32) * FloatExp::ONE.max(c.abs());
     let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
     for n in 1..period {
-        dz = z.mul(&dz).ldexp(1).add(&one);
-        z = z.square().add(c);
+        (z, dz) = c.orbit_step((&z, &dz), &one);
         if period.is_multiple_of(n) && z.abs() <= tolerance * dz.abs() {
             return Some(n);
         }
@@ -112,9 +110,8 @@ pub fn lower_period(c: &BigC, period: u32) -> Option<u32> {
 /// Newton at `start`'s precision, then again with enough bits to place the nucleus well
 /// inside its own size. None when Newton does not converge, or converges to a nucleus of a
 /// lower period ([`lower_period`]; its "size" for `period` would be meaningless).
-/// `steps`: Newton's steps from `start` at most (None: 200).
-pub fn minibrot(start: &BigC, period: u32, steps: Option<u32>) -> Option<Minibrot> {
-    minibrot_within(start, period, steps, None)
+pub fn minibrot(start: &BigC, period: u32) -> Option<Minibrot> {
+    found(start, period, NEWTON_STEPS, None)
 }
 
 /// How far Newton's method may stray from its start, in radii of the disc the nucleus must
@@ -122,13 +119,18 @@ pub fn minibrot(start: &BigC, period: u32, steps: Option<u32>) -> Option<Minibro
 /// its basin from nearby, and one that wanders off converges, if at all, elsewhere.
 const LEASH: f64 = 16.0;
 
-/// [`minibrot`], for a nucleus within `radius` of `start` only (None: anywhere). Newton's
-/// method is given up once it strays 16 radii away, and a root outside the disc is
-/// refused before its refinement (at depth both take seconds for a root the caller would
-/// refuse).
-pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: Option<FloatExp>) -> Option<Minibrot> {
+/// [`minibrot`], for a nucleus within `radius` of `start` only, from at most `steps` of
+/// Newton's method (`None`: as many as [`minibrot`] takes). Newton's method is given up
+/// once it strays 16 radii away, and a root outside the disc is refused before its
+/// refinement (at depth both take seconds for a root the caller would refuse).
+pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: FloatExp) -> Option<Minibrot> {
+    found(start, period, steps.unwrap_or(NEWTON_STEPS), Some(radius))
+}
+
+/// [`minibrot`] and [`minibrot_within`]: within `radius` of `start` where one is given.
+fn found(start: &BigC, period: u32, steps: u32, radius: Option<FloatExp>) -> Option<Minibrot> {
     let leash = radius.map(|r| r.mul_f64(LEASH));
-    let mut c = newton_leashed(start, period, steps.unwrap_or(NEWTON_STEPS), leash)?;
+    let mut c = newton_leashed(start, period, steps, leash)?;
     let outside = radius.is_some_and(|r| c.sub(start).abs() > r);
     if outside || lower_period(&c, period).is_some() {
         return None;
@@ -185,11 +187,11 @@ mod tests {
         assert_eq!(lower_period(&bulb4, 20), Some(4));
         // From beside the main cardioid's cusp, Newton for period 540 reaches 0: no
         // minibrot. From -1.25 + 0.001i, Newton for 20 reaches the period-4 nucleus.
-        assert_eq!(minibrot(&BigC::from_f64(0.25, 0.0, 128), 540, None), None);
+        assert_eq!(minibrot(&BigC::from_f64(0.25, 0.0, 128), 540), None);
         let to_zero = newton(&BigC::from_f64(0.25, 0.0, 128), 540, 200).unwrap();
         assert!(to_zero.abs() < FloatExp::from(1e-30), "{:?}", to_zero.to_fe());
         assert_eq!(lower_period(&to_zero, 540), Some(1));
-        assert_eq!(minibrot(&BigC::from_f64(-1.25, 0.001, 128), 20, None), None);
+        assert_eq!(minibrot(&BigC::from_f64(-1.25, 0.001, 128), 20), None);
     }
 
     /// Newton's method on a leash: from beside the cusp it wanders off to 0, a quarter away;
@@ -200,8 +202,8 @@ mod tests {
         assert!(newton_leashed(&start, 540, 200, None).is_some());
         assert_eq!(newton_leashed(&start, 540, 200, Some(FloatExp::from(1e-3))), None);
         let airplane = BigC::from_f64(-1.75, 0.0, 128);
-        assert_eq!(minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-3))), None);
-        let m = minibrot_within(&airplane, 3, None, Some(FloatExp::from(1e-2))).expect("within 0.0049");
+        assert_eq!(minibrot_within(&airplane, 3, None, FloatExp::from(1e-3)), None);
+        let m = minibrot_within(&airplane, 3, None, FloatExp::from(1e-2)).expect("within 0.0049");
         assert_eq!(m.period, 3);
     }
 
@@ -219,7 +221,7 @@ mod tests {
     fn sizes_of_known_minibrots() {
         // The period-3 airplane minibrot is about 1/52 the size of the whole set (its
         // estimate is ~0.019, pointing left like the set itself: argument near 0).
-        let m = minibrot(&BigC::from_f64(-1.75, 0.0, 128), 3, None).expect("found");
+        let m = minibrot(&BigC::from_f64(-1.75, 0.0, 128), 3).expect("found");
         let s = m.size.to_f64();
         assert!((0.015..0.025).contains(&s), "size {s}");
         assert!(m.angle.abs() < 0.1, "angle {}", m.angle);
@@ -238,7 +240,7 @@ mod tests {
         );
         let p = super::super::period::ball_period(&near, FloatExp::exp10(-40.0), 100_000).expect("a period");
         assert_eq!(p, 1282);
-        let m = minibrot(&near, p, None).expect("found");
+        let m = minibrot(&near, p).expect("found");
         assert!((-74.0..-72.0).contains(&(m.size.log2() * std::f64::consts::LOG10_2)), "size {:?}", m.size);
         let bits = m.nucleus.bits;
         let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));

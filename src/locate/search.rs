@@ -125,14 +125,14 @@ const MORE_WORK: u64 = 4_000_000;
 /// costs more); the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
-    if let Some(m) = nucleus::minibrot_within(center, p, None, Some(radius)) {
+    if let Some(m) = nucleus::minibrot_within(center, p, None, radius) {
         return Ok(m);
     }
     let mut left = MORE_WORK;
     let weight = center.bits.max(128) / 128;
     let mut attempt = |q: u32| {
         left = left.checked_sub(u64::from(q) * u64::from(MORE_NEWTON_STEPS) * weight)?;
-        nucleus::minibrot_within(center, q, Some(MORE_NEWTON_STEPS), Some(radius))
+        nucleus::minibrot_within(center, q, Some(MORE_NEWTON_STEPS), radius)
     };
     let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
     let later = || period::atom_periods(center, top, max_period, MORE_PERIODS);
@@ -174,18 +174,28 @@ pub fn misiurewicz_in_view(
     let none = SearchError::NoMisiurewicz { max_preperiod, max_period };
     let mut near = candidates(center, radius, max_preperiod, max_period);
     near.sort_by_key(|c| (c.preperiod + c.period, c.period));
-    for c in near.iter().take(MAX_NEWTON_TRIES) {
-        let (k, p) = (c.preperiod, c.period);
-        let bits = center.bits + c.log2_derivative.max(0.0).ceil() as u64 + NEWTON_MARGIN_BITS;
-        let Some(point) = misiurewicz::newton(&center.with_bits(bits), k, p, 64) else { continue };
-        if point.sub(center).abs() > radius {
-            continue;
-        }
-        if misiurewicz::orbit_type(&point, k, p) == Some((k, p)) {
-            return Ok(MisiurewiczPoint { point, preperiod: k, period: p });
-        }
-    }
-    copies_in_minibrot(center, radius, max_preperiod, max_period).ok_or(none)
+    let inside = |c: &Candidate| misiurewicz_root(center, center, radius, *c);
+    near.iter()
+        .take(MAX_NEWTON_TRIES)
+        .find_map(inside)
+        .or_else(|| copies_in_minibrot(center, radius, max_preperiod, max_period))
+        .ok_or(none)
+}
+
+/// Newton's method for a Misiurewicz point of the candidate's preperiod and period from
+/// `start`, at its precision plus the bits the candidate's derivative amplifies rounding by;
+/// the root where it lies within `radius` of `center` and its orbit has exactly that
+/// preperiod and period.
+fn misiurewicz_root(start: &BigC, center: &BigC, radius: FloatExp, c: Candidate) -> Option<MisiurewiczPoint> {
+    let (k, p) = (c.preperiod, c.period);
+    let bits = start.bits + c.log2_derivative.max(0.0).ceil() as u64 + NEWTON_MARGIN_BITS;
+    let point = misiurewicz::newton(&start.with_bits(bits), k, p, 64)?;
+    let inside = point.sub(center).abs() <= radius;
+    (inside && misiurewicz::orbit_type(&point, k, p) == Some((k, p))).then_some(MisiurewiczPoint {
+        point,
+        preperiod: k,
+        period: p,
+    })
 }
 
 /// Misiurewicz points of the whole Mandelbrot set whose copies [`copies_in_minibrot`] looks
@@ -214,11 +224,13 @@ fn copies_in_minibrot(
     max_period: u32,
 ) -> Option<MisiurewiczPoint> {
     let m = minibrot_in_view(center, radius, max_period).ok()?;
-    let bits = m.nucleus.bits.max(center.bits);
-    let s = nucleus::size(&m.nucleus.with_bits(bits), m.period);
+    let nucleus = m.nucleus.with_bits(m.nucleus.bits.max(center.bits));
+    // The complex size estimate, s = |s| e^(i angle).
+    let (sin, cos) = m.angle.sin_cos();
+    let s = [m.size.mul_f64(cos), m.size.mul_f64(sin)];
     let big = |x: FloatExp, imaginary: bool| {
         let (re, im) = if imaginary { (0.0, x.mantissa()) } else { (x.mantissa(), 0.0) };
-        BigC::from_f64(re, im, bits).ldexp(x.exponent())
+        BigC::from_f64(re, im, nucleus.bits).ldexp(x.exponent())
     };
     WHOLE_SET_POINTS.iter().find_map(|&([x, y], k, p)| {
         // The copy's orbit reaches the copy of c' at iteration 1 and returns every P:
@@ -229,16 +241,10 @@ fn copies_in_minibrot(
         }
         // s c' = (s_re x - s_im y) + i (s_re y + s_im x).
         let (re, im) = (s[0].mul_f64(x) - s[1].mul_f64(y), s[0].mul_f64(y) + s[1].mul_f64(x));
-        let start = m.nucleus.with_bits(bits).add(&big(re, false)).add(&big(im, true));
+        let start = nucleus.add(&big(re, false)).add(&big(im, true));
         let orbit = misiurewicz::Orbit::of(&start, (k + p) as usize, None);
-        let extra = orbit.slope((k + p) as usize, k as usize).log2().max(0.0).ceil() as u64;
-        let point = misiurewicz::newton(&start.with_bits(bits + extra + NEWTON_MARGIN_BITS), k, p, 64)?;
-        let inside = point.sub(center).abs() <= radius;
-        (inside && misiurewicz::orbit_type(&point, k, p) == Some((k, p))).then_some(MisiurewiczPoint {
-            point,
-            preperiod: k,
-            period: p,
-        })
+        let log2_derivative = orbit.slope((k + p) as usize, k as usize).log2();
+        misiurewicz_root(&start, center, radius, Candidate { preperiod: k, period: p, log2_derivative })
     })
 }
 
