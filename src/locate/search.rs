@@ -184,18 +184,21 @@ pub fn misiurewicz_in_view(
 
 /// Newton's method for a Misiurewicz point of the candidate's preperiod and period from
 /// `start`, at its precision plus the bits the candidate's derivative amplifies rounding by;
-/// the root where it lies within `radius` of `center` and its orbit has exactly that
-/// preperiod and period.
+/// the root where it lies within `radius` of `center` and its orbit is a Misiurewicz
+/// point's, with the preperiod and period the orbit really has. Those may be lower than the
+/// candidate's: every root of z_(k'+p') = z_k' with k' <= k and p' dividing p is a root of
+/// z_(k+p) = z_k too (a copy in a satellite component lands on a cycle of half the copy's
+/// period, [`copies_in_minibrot`]). A nucleus is a root as well (preperiod 0, or 1 where
+/// z_(1+p) = z_1 = c), and is refused.
 fn misiurewicz_root(start: &BigC, center: &BigC, radius: FloatExp, c: Candidate) -> Option<MisiurewiczPoint> {
     let (k, p) = (c.preperiod, c.period);
     let bits = start.bits + c.log2_derivative.max(0.0).ceil() as u64 + NEWTON_MARGIN_BITS;
     let point = misiurewicz::newton(&start.with_bits(bits), k, p, 64)?;
-    let inside = point.sub(center).abs() <= radius;
-    (inside && misiurewicz::orbit_type(&point, k, p) == Some((k, p))).then_some(MisiurewiczPoint {
-        point,
-        preperiod: k,
-        period: p,
-    })
+    if point.sub(center).abs() > radius {
+        return None;
+    }
+    let (preperiod, period) = misiurewicz::orbit_type(&point, k, p).filter(|&(k, _)| k >= 2)?;
+    Some(MisiurewiczPoint { point, preperiod, period })
 }
 
 /// Misiurewicz points of the whole Mandelbrot set whose copies [`copies_in_minibrot`] looks
@@ -217,6 +220,15 @@ const WHOLE_SET_POINTS: [([f64; 2], u32, u32); 4] =
 /// near c_0 + s c' (c_0 the nucleus, s the complex size estimate, whose argument turns the
 /// copy as the minibrot is turned). Newton's method from there, at the precision the point's
 /// derivative asks, and the same check of the orbit's type.
+///
+/// The size estimate is made for primitive minibrots. For a satellite that doubles its
+/// parent's period (the period-doubling cascade on the real axis, the 1/2 bulbs) it is
+/// about twice the scale of its copy, and the copy of the tip lands on a cycle of half the
+/// period, the parent's: the period-2 bulb (nucleus -1, estimate 0.5) has the tip's copy at
+/// -1.5437 (preperiod 3, period 1), 0.54 estimates from the nucleus where 2 were expected;
+/// the period-16 bulb at -1.39695, its copy at -1.40249 (preperiod 17, period 8). So the
+/// copies are looked for at the estimate's scale, then at half of it (a view inside the
+/// cascade, at -1.4 and zoom 1e3, has only the second kind).
 fn copies_in_minibrot(
     center: &BigC,
     radius: FloatExp,
@@ -232,14 +244,17 @@ fn copies_in_minibrot(
         let (re, im) = if imaginary { (0.0, x.mantissa()) } else { (x.mantissa(), 0.0) };
         BigC::from_f64(re, im, nucleus.bits).ldexp(x.exponent())
     };
-    WHOLE_SET_POINTS.iter().find_map(|&([x, y], k, p)| {
+    // The whole scale first, then half of it (see above).
+    let points = [1.0, 0.5].into_iter().flat_map(|f| WHOLE_SET_POINTS.iter().map(move |&(c, k, p)| (f, c, k, p)));
+    points.into_iter().find_map(|(f, [x, y], k, p)| {
         // The copy's orbit reaches the copy of c' at iteration 1 and returns every P:
         // preperiod (k - 1) P + 1.
         let (k, p) = ((k - 1).checked_mul(m.period)?.checked_add(1)?, p.checked_mul(m.period)?);
         if k > max_preperiod || p > max_period {
             return None;
         }
-        // s c' = (s_re x - s_im y) + i (s_re y + s_im x).
+        // f s c' = f ((s_re x - s_im y) + i (s_re y + s_im x)).
+        let (x, y) = (x * f, y * f);
         let (re, im) = (s[0].mul_f64(x) - s[1].mul_f64(y), s[0].mul_f64(y) + s[1].mul_f64(x));
         let start = nucleus.add(&big(re, false)).add(&big(im, true));
         let orbit = misiurewicz::Orbit::of(&start, (k + p) as usize, None);
@@ -414,6 +429,29 @@ mod tests {
         // tip itself, (2, 1).
         let whole = misiurewicz_in_view(&BigC::zero(128), FloatExp::from(3.4), 5000, 64).unwrap();
         assert_eq!((whole.preperiod, whole.period), (2, 1));
+    }
+
+    /// A view inside the period-doubling cascade at -1.4 (radius 3.3e-3): the first-order
+    /// distances find nothing (the orbit settles on a cycle of period 16), nor do the copies
+    /// at the scale of the period-16 bulb's size estimate; at half of it, the copy of the
+    /// tip is the 16 -> 8 band-merging point -1.4024921763585643... (Newton's method in
+    /// Python's complex floats from -1.40252), preperiod 17 and period 8, not the 16 the copy
+    /// was looked for with: checked by its own orbit.
+    #[test]
+    fn a_misiurewicz_point_copied_into_a_satellite() {
+        let c = BigC::from_f64(-1.4, 0.0, 192);
+        let m = misiurewicz_in_view(&c, FloatExp::from(3.3e-3), 5000, 64).unwrap();
+        assert_eq!((m.preperiod, m.period), (17, 8));
+        let re = m.point.to_fe()[0].to_f64();
+        assert!((re + 1.402_492_176_358_564_3).abs() < 1e-15, "{re}");
+        let mut z = vec![BigC::zero(m.point.bits)];
+        for _ in 0..26 {
+            z.push(z[z.len() - 1].square().add(&m.point));
+        }
+        let gap = |i: usize, j: usize| z[i].sub(&z[j]).abs();
+        assert!(gap(25, 17) < FloatExp::from(1e-40), "z_25 = z_17");
+        assert!(gap(24, 16) > FloatExp::from(1e-3), "z_24 != z_16: preperiod 17");
+        assert!(gap(21, 17) > FloatExp::from(1e-3), "z_21 != z_17: period 8, not 4");
     }
 
     #[test]
