@@ -29,38 +29,39 @@ pub struct Minibrot {
 /// Returns the nucleus when the steps converge (the last step below 2^(16 - bits) relative)
 /// within `max_steps`; None otherwise.
 pub fn newton(start: &BigC, period: u32, max_steps: u32) -> Option<BigC> {
-    newton_leashed(start, period, max_steps, None)
+    newton_leashed(start, period, max_steps, None).0
 }
 
-/// [`newton`], giving up once an iterate is farther than `leash` from `start`.
-fn newton_leashed(start: &BigC, period: u32, max_steps: u32, leash: Option<FloatExp>) -> Option<BigC> {
+/// [`newton`], giving up once an iterate is farther than `leash` from `start`; with the
+/// number of steps it took.
+fn newton_leashed(start: &BigC, period: u32, max_steps: u32, leash: Option<FloatExp>) -> (Option<BigC>, u32) {
     let bits = start.bits;
     let mut c = start.clone();
     let one = BigC::from_f64(1.0, 0.0, bits);
     let tolerance = FloatExp::new(1.0, 16 - bits as i32);
-    for _ in 0..max_steps {
+    for taken in 1..=max_steps {
         let (mut z, mut dz) = (BigC::zero(bits), BigC::zero(bits));
         for _ in 0..period {
             (z, dz) = c.orbit_step((&z, &dz), &one);
         }
         if dz.abs().is_zero() {
-            return None;
+            return (None, taken);
         }
         let step = z.div(&dz);
         c = c.sub(&step);
         let scale = FloatExp::ONE.max(c.abs());
         if step.abs() <= tolerance * scale {
-            return Some(c);
+            return (Some(c), taken);
         }
         // Diverged (or NaN: then the comparison is false too).
         if c.abs().partial_cmp(&FloatExp::from(4.0)) != Some(std::cmp::Ordering::Less) {
-            return None;
+            return (None, taken);
         }
         if leash.is_some_and(|l| c.sub(start).abs() > l) {
-            return None;
+            return (None, taken);
         }
     }
-    None
+    (None, max_steps)
 }
 
 /// A complex number as its modulus and argument (radians). Both parts are divided by the
@@ -111,7 +112,7 @@ pub fn lower_period(c: &BigC, period: u32) -> Option<u32> {
 /// inside its own size. None when Newton does not converge, or converges to a nucleus of a
 /// lower period ([`lower_period`]; its "size" for `period` would be meaningless).
 pub fn minibrot(start: &BigC, period: u32) -> Option<Minibrot> {
-    found(start, period, NEWTON_STEPS, None)
+    found(start, period, NEWTON_STEPS, None).0
 }
 
 /// How far Newton's method may stray from its start, in radii of the disc the nucleus must
@@ -124,13 +125,36 @@ const LEASH: f64 = 16.0;
 /// once it strays 16 radii away, and a root outside the disc is refused before its
 /// refinement (at depth both take seconds for a root the caller would refuse).
 pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: FloatExp) -> Option<Minibrot> {
-    found(start, period, steps.unwrap_or(NEWTON_STEPS), Some(radius))
+    found(start, period, steps.unwrap_or(NEWTON_STEPS), Some(radius)).0
 }
 
-/// [`minibrot`] and [`minibrot_within`]: within `radius` of `start` where one is given.
-fn found(start: &BigC, period: u32, steps: u32, radius: Option<FloatExp>) -> Option<Minibrot> {
+/// [`minibrot_within`] out of a budget: `work` is the big-float work left, in iterations at
+/// 128 bits (an iteration at b bits counts b / 128 times), and each of Newton's steps,
+/// `period` iterations, is taken from it; at most `steps` steps, fewer where the budget
+/// holds fewer. The refinement of a nucleus found is not counted.
+pub fn minibrot_budgeted(start: &BigC, period: u32, steps: u32, radius: FloatExp, work: &mut u64) -> Option<Minibrot> {
+    let cost = u64::from(period) * (start.bits.max(128) / 128);
+    let steps = steps.min(u32::try_from(*work / cost.max(1)).unwrap_or(u32::MAX));
+    if steps == 0 {
+        return None;
+    }
+    let (m, taken) = found(start, period, steps, Some(radius));
+    *work -= u64::from(taken) * cost;
+    m
+}
+
+/// [`minibrot`] and [`minibrot_within`]: within `radius` of `start` where one is given;
+/// with the number of Newton's steps it took (before any refinement).
+fn found(start: &BigC, period: u32, steps: u32, radius: Option<FloatExp>) -> (Option<Minibrot>, u32) {
     let leash = radius.map(|r| r.mul_f64(LEASH));
-    let mut c = newton_leashed(start, period, steps, leash)?;
+    let (c, taken) = newton_leashed(start, period, steps, leash);
+    (c.and_then(|c| refined(c, start, period, radius)), taken)
+}
+
+/// A root of Newton's method for `period` from `start`, as a minibrot: refused where it
+/// lies farther than `radius` from the start or is a nucleus of a lower period, and refined
+/// until its precision places it well inside its own size.
+fn refined(mut c: BigC, start: &BigC, period: u32, radius: Option<FloatExp>) -> Option<Minibrot> {
     let outside = radius.is_some_and(|r| c.sub(start).abs() > r);
     if outside || lower_period(&c, period).is_some() {
         return None;
@@ -199,12 +223,34 @@ mod tests {
     #[test]
     fn newton_on_a_leash_gives_up_far_from_its_start() {
         let start = BigC::from_f64(0.25, 0.0, 128);
-        assert!(newton_leashed(&start, 540, 200, None).is_some());
-        assert_eq!(newton_leashed(&start, 540, 200, Some(FloatExp::from(1e-3))), None);
+        assert!(newton_leashed(&start, 540, 200, None).0.is_some());
+        let (root, taken) = newton_leashed(&start, 540, 200, Some(FloatExp::from(1e-3)));
+        assert_eq!(root, None);
+        assert!(taken < 20, "{taken} steps");
         let airplane = BigC::from_f64(-1.75, 0.0, 128);
         assert_eq!(minibrot_within(&airplane, 3, None, FloatExp::from(1e-3)), None);
         let m = minibrot_within(&airplane, 3, None, FloatExp::from(1e-2)).expect("within 0.0049");
         assert_eq!(m.period, 3);
+    }
+
+    /// A search out of a budget is charged the steps it took, and gets no more steps than
+    /// the budget holds: from beside the cusp, leashed, it gives up after a few steps of
+    /// period 540; a budget of 539 iterations holds none of them, and three of period 3.
+    #[test]
+    fn a_search_out_of_a_budget_is_charged_what_it_took() {
+        let start = BigC::from_f64(0.25, 0.0, 128);
+        let r = FloatExp::from(1e-3);
+        let mut work = 1_000_000;
+        assert_eq!(minibrot_budgeted(&start, 540, 64, r, &mut work), None);
+        let (_, taken) = newton_leashed(&start, 540, 64, Some(r.mul_f64(LEASH)));
+        assert_eq!(1_000_000 - work, u64::from(taken) * 540);
+        let airplane = BigC::from_f64(-1.75, 0.0, 128);
+        let mut little = 539;
+        let m = minibrot_budgeted(&airplane, 3, 64, FloatExp::from(1e-2), &mut little);
+        assert_eq!(m.map(|m| m.period), Some(3));
+        let mut none = 539;
+        assert_eq!(minibrot_budgeted(&start, 540, 64, r, &mut none), None);
+        assert_eq!(none, 539);
     }
 
     /// A size estimate's direction at any depth: 120 degrees at 2^-2000 as at 1.

@@ -103,8 +103,9 @@ const MORE_PERIODS: usize = 8;
 /// the centre lies in a nucleus's basin it converges within a few dozen).
 const MORE_NEWTON_STEPS: u32 = 64;
 /// What those Newton searches may cost together at most, in big-float iterations at 128
-/// bits (an iteration at b bits counted b / 128 times): about a second. A search that would
-/// pass it is not started, so at depth, where each costs more, fewer are tried.
+/// bits (an iteration at b bits counted b / 128 times): about a second. Each is charged the
+/// steps it took (most that fail leave their leash within a few), and the last one gets the
+/// steps the budget still holds; at depth, where each step costs more, fewer are tried.
 const MORE_WORK: u64 = 4_000_000;
 
 /// The lowest-period minibrot whose nucleus lies in the disc of `radius` about `center`
@@ -118,22 +119,20 @@ const MORE_WORK: u64 = 4_000_000;
 /// bulb's root or a cusp those of a period dividing p (0 for every p; [`nucleus::minibrot`]).
 /// The bound is not always attained (it is loose where the disc is large beside the
 /// structure in it: a view of radius 0.033 at -0.75 + 0.1i has 8 for its bound, and Newton's
-/// method from a 13 x 13 grid of starts over it reaches no nucleus in it below period 25),
-/// so where Newton's method finds none, the periods above p are tried in turn (up to eight
-/// times p, at least 64), then the later periods of the centre's atom domains, within a
-/// fixed budget of big-float work (about a second at 128 bits, less at depth, where each try
-/// costs more); the first nucleus found in the disc is returned.
+/// method from a 13 x 13 grid of starts over it reaches no nucleus in it below period 25;
+/// at the tip of a minibrot of period P the nuclei it reaches for the bound lie outside
+/// the view, and the periods of those inside step by P), so where Newton's method finds
+/// none, the periods above p are tried in turn (up to eight times p, at least 64), then
+/// the later periods of the centre's atom domains, within a fixed budget of big-float work
+/// (about a second at 128 bits, less at depth, where each try costs more), each try charged
+/// the steps it took; the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
     if let Some(m) = nucleus::minibrot_within(center, p, None, radius) {
         return Ok(m);
     }
     let mut left = MORE_WORK;
-    let weight = center.bits.max(128) / 128;
-    let mut attempt = |q: u32| {
-        left = left.checked_sub(u64::from(q) * u64::from(MORE_NEWTON_STEPS) * weight)?;
-        nucleus::minibrot_within(center, q, Some(MORE_NEWTON_STEPS), radius)
-    };
+    let mut attempt = |q: u32| nucleus::minibrot_budgeted(center, q, MORE_NEWTON_STEPS, radius, &mut left);
     let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
     let later = || period::atom_periods(center, top, max_period, MORE_PERIODS);
     (p + 1..=top)
@@ -240,10 +239,6 @@ fn copies_in_minibrot(
     // The complex size estimate, s = |s| e^(i angle).
     let (sin, cos) = m.angle.sin_cos();
     let s = [m.size.mul_f64(cos), m.size.mul_f64(sin)];
-    let big = |x: FloatExp, imaginary: bool| {
-        let (re, im) = if imaginary { (0.0, x.mantissa()) } else { (x.mantissa(), 0.0) };
-        BigC::from_f64(re, im, nucleus.bits).ldexp(x.exponent())
-    };
     // The whole scale first, then half of it (see above).
     let points = [1.0, 0.5].into_iter().flat_map(|f| WHOLE_SET_POINTS.iter().map(move |&(c, k, p)| (f, c, k, p)));
     points.into_iter().find_map(|(f, [x, y], k, p)| {
@@ -256,11 +251,18 @@ fn copies_in_minibrot(
         // f s c' = f ((s_re x - s_im y) + i (s_re y + s_im x)).
         let (x, y) = (x * f, y * f);
         let (re, im) = (s[0].mul_f64(x) - s[1].mul_f64(y), s[0].mul_f64(y) + s[1].mul_f64(x));
-        let start = nucleus.add(&big(re, false)).add(&big(im, true));
+        let start = nucleus.add(&offset(re, im, nucleus.bits));
         let orbit = misiurewicz::Orbit::of(&start, (k + p) as usize, None);
         let log2_derivative = orbit.slope((k + p) as usize, k as usize).log2();
         misiurewicz_root(&start, center, radius, Candidate { preperiod: k, period: p, log2_derivative })
     })
+}
+
+/// re + i im as a big complex number of `bits` (exact: each part is an f64 mantissa and an
+/// exponent).
+fn offset(re: FloatExp, im: FloatExp, bits: u64) -> BigC {
+    let re = BigC::from_f64(re.mantissa(), 0.0, bits).ldexp(re.exponent());
+    re.add(&BigC::from_f64(0.0, im.mantissa(), bits).ldexp(im.exponent()))
 }
 
 /// A preperiod and period worth Newton's method.
@@ -405,6 +407,44 @@ mod tests {
         let m = minibrot_in_view(&c, r, 1000).unwrap();
         assert!(m.period > 8 && exact_nucleus(&m.nucleus, m.period, 1e-40), "period {}", m.period);
         assert!(m.nucleus.sub(&c).abs() <= r);
+    }
+
+    /// A view of radius 3.3e-20 centred on the tip of a minibrot of period 69 near seahorse
+    /// valley (the Misiurewicz point of preperiod 70 and period 69 that `find
+    /// --misiurewicz` gives from -0.7453 + 0.1127i at zoom 1e4, to 63 digits): the ball
+    /// method's period is 1380 = 20 x 69, and the nuclei of 1380 and 1449 that Newton's
+    /// method from the centre reaches lie 12.7 and 3.2 radii away (its nearest nuclei step
+    /// by the minibrot's period along its antenna); one of period 1518 lies 0.80 radii from
+    /// the centre (Newton's method in mpmath at 160 bits: the first two from the centre,
+    /// the third from points of a grid over the disc). The search tries the periods above
+    /// 1380 from the centre; charged for each the steps it took rather than the 64 it may
+    /// take, it reaches 1518 within its budget, and finds that nucleus; checked by its own
+    /// orbit.
+    #[test]
+    fn a_minibrot_near_the_tip_of_another() {
+        let parse = |s: &str| crate::num::Decimal::parse(s).unwrap();
+        let re = parse("-0.745364479025458672062596071600162594309826812798577840536768726");
+        let im = parse("0.112436757524417052314660847064084632753529873418744313970532617");
+        let c = BigC::from_decimals(&re, &im, 192);
+        let r = FloatExp::from(3.3e-20);
+        assert_eq!(period::ball_period(&c, r, 100_000), Some(1380));
+        let m = minibrot_in_view(&c, r, 100_000).unwrap();
+        assert_eq!(m.period, 1518);
+        let away = (m.nucleus.sub(&c).abs() / r).to_f64();
+        assert!((0.79..0.81).contains(&away), "{away} radii from the centre");
+        // Its own orbit: z_1518 within a first-order distance |z / z'| far below its size
+        // (6.3e-33) of 0, and z_n of every proper divisor n of 1518 far from it.
+        let one = BigC::from_f64(1.0, 0.0, m.nucleus.bits);
+        let (mut z, mut dz) = (BigC::zero(m.nucleus.bits), BigC::zero(m.nucleus.bits));
+        for n in 1..=m.period {
+            (z, dz) = m.nucleus.orbit_step((&z, &dz), &one);
+            let distance = z.abs() / dz.abs();
+            if n == m.period {
+                assert!(distance < FloatExp::from(1e-50), "{distance:?}");
+            } else if m.period.is_multiple_of(n) {
+                assert!(distance > FloatExp::from(1e-30), "period {n}: {distance:?}");
+            }
+        }
     }
 
     /// From a view centred on the airplane's nucleus (period 3) the search by first-order
