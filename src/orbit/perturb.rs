@@ -37,25 +37,39 @@
 //! turn after turn (rebase at Z_p, a single step, one period-aligned BLA step from Z_1 back
 //! to Z_p): those passes run in a loop of their own (`Perturbation::turns`) that does the
 //! same operations in the same order without searching the table at Z_1 each time.
+//!
+//! This file holds the sample's state, the drivers and the loop's passes (`op`); beside it:
+//! where a sample starts (`start`), the view-wide skip (`skip`), the derivative's
+//! representation (`der`), the turn loop (`turns`), the packed tail's loop (`tail`), the
+//! vector lanes (`lanes`), and interior detection's Newton test (`probe`), quadratic model
+//! (`model`, `batch_models`) and certified disks (`disks`).
 
 mod batch_models;
+mod der;
 mod disks;
 mod lanes;
 mod model;
+mod probe;
+mod skip;
+mod start;
+mod tail;
+mod turns;
 
 use std::sync::atomic::AtomicBool;
 
 use super::bla::{BlaTable, Step};
-use super::interior::{self, Check, Contraction, Decision, Detection};
-use super::packed::Packed;
+use super::interior::{Check, Contraction, Decision, Detection};
 use super::reference::Reference;
-use crate::cancel::Cancelled;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
-use crate::num::{FloatExp, Real, Scaled};
+use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
+use der::{DER_HI, DER_LO, DER_TINY_Z2, Der};
 use model::Model;
+use probe::{Probe, from_model};
+pub use skip::Skip;
+use start::delta_c;
 
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
@@ -75,22 +89,6 @@ const DOWN: f64 = f64::from_bits((1023 - 500) << 52);
 const UP: f64 = f64::from_bits((1023 - 480) << 52);
 /// Pauldelbrot's criterion, squared: |Z + δ|^2 < GLITCH2 |Z|^2 flags a glitch.
 const GLITCH2: f64 = 1e-6;
-/// The derivative's mantissa is renormalised when its largest part leaves [2^-500, 2^500].
-const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
-const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
-/// BLA multipliers below this update the derivative in f64 (|A| |mant| < 2^900).
-const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
-/// Where an orbit passes near 0 (|z| below this, or a BLA step whose |A| is below twice
-/// this), the f64 update of the derivative can be wrong: 2 z mant may underflow (z itself
-/// is 0 in f64 below 2^-1074), and so may the added term, spacing / 2^exp, which is then
-/// all that is left of dz -> 2 z dz + 1. bench-e1086 lost its derivative this way on every
-/// pixel (distance estimates at the 1e30 cap). Such a wrong result is always outside the
-/// renormalisation range, so only there is the step redone in FloatExp.
-const DER_TINY_Z: f64 = f64::from_bits((1023 - 101) << 52);
-/// DER_TINY_Z squared: the vector lanes test |z|^2 (which their escape test computed) and
-/// hand such steps to the scalar loop.
-const DER_TINY_Z2: f64 = f64::from_bits((1023 - 202) << 52);
-
 /// Which number types the deltas use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Numbers {
@@ -124,7 +122,7 @@ pub struct Counters {
     /// Of those, samples Newton's test found (the rest: the contraction criterion).
     pub newton: u64,
     /// Of those, samples in disks of parameters certified at once, which took no iteration
-    /// ([`interior::disk_attracting`]).
+    /// ([`super::interior::disk_attracting`]).
     pub disks: u64,
 }
 
@@ -251,81 +249,6 @@ impl Perturbation {
     }
 }
 
-/// The run of BLA steps from the start of the primary reference that is valid for every
-/// sample of the view at once (their deltas are bounded by the largest offset), composed
-/// into one quadratic map of the sample's offset u: δ_m = K1 u + K2 u^2. Every sample would
-/// take these same steps (or longer ones covering them, equal within the tolerance); taking
-/// them once per view skips each sample's first BLA lookups, and at depth its whole FloatExp
-/// phase.
-///
-/// Composing steps as polynomials in u is not the same as applying them to each sample's
-/// number: a step's A2 δ^2 and AB δ u hold terms of degree 3 and 4 in u (2 A2 K1 K2 u^3,
-/// ...) that a quadratic in u drops. The tables' radii do not bound those (they bound what a
-/// step drops from the true iteration, not what a truncated composite drops from the
-/// step), and where |A2 δ| is near |A| (orbits lingering near |Z| = 2, e.g. close to c =
-/// -2) they are far above ε: composing on regardless displaced every pixel of such views.
-/// So [`Skip::find`] carries a bound on the dropped remainder and stops composing before
-/// it would exceed ε/4 of the smallest |δ_m| relative to u (see [`Skip::find`]).
-#[derive(Debug, Clone, Copy)]
-pub struct Skip {
-    /// Reference index (and iteration) the samples continue from.
-    pub m: u32,
-    /// δ_m = K1 u + K2 u^2 (u = δc for the Mandelbrot set, δ_0 for Julia sets), and the
-    /// scaled derivative is (K1 + 2 K2 u) times the spacing.
-    pub k: [[FloatExp; 2]; 2],
-    /// d(δ_m)/d(δ_start) = D1 + D2 u to first order in u (the derivative with respect to the
-    /// orbit's start that interior detection carries, [`super::interior`]).
-    pub d: [[FloatExp; 2]; 2],
-    /// BLA steps composed.
-    pub steps: u32,
-}
-
-impl Skip {
-    /// Composes the valid steps of `table` from `start` for offsets up to `u_max`, within
-    /// `max_iter`, while the truncation stays within the relative tolerance `eps`.
-    ///
-    /// With δ = K1 u + K2 u^2 + R(u), a step A δ + B u + A2 δ^2 + AB δ u + B2 u^2 gives
-    /// K1' = A K1 + B, K2' = A K2 + A2 K1^2 + AB K1 + B2 and a remainder R' = A R + A2 (2 (K1
-    /// u + K2 u^2) R + R^2) + AB u R + A2 (2 K1 K2 u^3 + K2^2 u^4) + AB K2 u^3. Every term of
-    /// R has degree 3 or more in u, so a bound E on the sum of its coefficients' moduli
-    /// times u_max^degree bounds |R(u)| by E (|u| / u_max)^3 for every |u| <= u_max, and
-    /// |R(u)| / |δ(u)| <= E / (|K1| u_max - |K2| u_max^2). That ratio is held to ε / 4.
-    pub fn find(table: &BlaTable<FloatExp>, start: u32, u_max: FloatExp, max_iter: u32, eps: f64) -> Option<Skip> {
-        let (mut k1, mut k2) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
-        let (mut d1, mut d2) = ([FloatExp::ONE, FloatExp::ZERO], [FloatExp::ZERO; 2]);
-        let (mut m, mut bound, mut steps) = (start, u_max, 0);
-        let mut rem = FloatExp::ZERO;
-        let abs = |v: [FloatExp; 2]| norm2(v).sqrt();
-        let (u, u2, u3) = (u_max, u_max * u_max, u_max * u_max * u_max);
-        let limit = eps / 4.0;
-        while let Some((e, len)) = table.lookup_untested(m, bound * bound, max_iter - m) {
-            // δ = K1 u + K2 u^2 and c = u (Julia: B = AB = B2 = 0, so c drops out):
-            // A δ + B u + A2 δ^2 + AB δ u + B2 u^2 to second order in u.
-            let (f, q) = (e.first, e.second);
-            let n2 = cadd(cadd(cmul(f.a, k2), cmul(q.a2, cmul(k1, k1))), cadd(cmul(q.ab, k1), q.b2));
-            let n1 = cadd(cmul(f.a, k1), f.b);
-            let (a, a2, ab) = (abs(f.a), abs(q.a2), abs(q.ab));
-            let (k1a, k2a) = (abs(k1), abs(k2));
-            let lead = k1a * u + k2a * u2;
-            let carried = a * rem + a2 * (lead.ldexp(1) * rem + rem * rem) + ab * u * rem;
-            let dropped = a2 * ((k1a * k2a).ldexp(1) * u3 + k2a * k2a * u2 * u2) + ab * k2a * u3;
-            let next = carried + dropped;
-            let floor = abs(n1) * u - abs(n2) * u2;
-            if floor <= FloatExp::ZERO || next > floor.mul_f64(limit) {
-                break;
-            }
-            // d(δ')/d(δ) = A + 2 A2 δ + AB u = A + (2 A2 K1 + AB) u + O(u^2).
-            let slope = cadd(cmul([q.a2[0].ldexp(1), q.a2[1].ldexp(1)], k1), q.ab);
-            (d1, d2) = (cmul(f.a, d1), cadd(cmul(f.a, d2), cmul(slope, d1)));
-            (k1, k2, rem) = (n1, n2, next);
-            bound = abs(k1) * u + abs(k2) * u2 + rem;
-            m += len;
-            steps += 1;
-        }
-        (steps > 0).then_some(Skip { m, k: [k1, k2], d: [d1, d2], steps })
-    }
-}
-
 /// The steps whose radii set where a sample stops looking for BLA steps: level 3, steps of
 /// 16 iterations (see [`single_step_threshold`]).
 pub const SINGLE_STEP_LEVEL: usize = 3;
@@ -393,180 +316,10 @@ struct Sample<D> {
     probe: Probe,
 }
 
-/// What a sample remembers for interior detection's Newton test, at the ends of the periods
-/// of a nucleus's reference: the iteration from which it may run, and an anchor (an end
-/// earlier, its full value, the binary exponent of |dz/dz|^2 there, and the squared distance
-/// from its value to the next end's); and whether it has left interior detection
-/// altogether (`plain`: its quadratic model escaped, and its |dz/dz|^2 is
-/// [`Contraction::dropped`]); and the period in turns of the attracting cycle the quadratic
-/// model has at its offset ([`Perturbation::start_model`]; 0 where it has none).
-#[derive(Debug, Clone, Copy)]
-struct Probe {
-    at: u32,
-    anchor_n: u32,
-    anchor_exp: i32,
-    anchor: [f64; 2],
-    first2: f64,
-    plain: bool,
-    period: u32,
-}
-
-impl Probe {
-    /// Whether a sample at full value `w`, `turns` turns after its anchor, may try Newton's
-    /// test: one turn after it always (and the distance it went away is kept), later where
-    /// it has come back four times closer than that; never without an anchor (0 turns).
-    #[inline(always)]
-    fn candidate(&mut self, turns: u32, w: [f64; 2]) -> bool {
-        let away2 = norm2([w[0] - self.anchor[0], w[1] - self.anchor[1]]);
-        match turns {
-            0 => false,
-            1 => {
-                self.first2 = away2;
-                true
-            }
-            _ => away2 * 16.0 < self.first2,
-        }
-    }
-}
-
 impl<D: Real> Sample<D> {
     fn convert<E: Real>(&self) -> Sample<E> {
         let (m, which, n, single, shrink, probe) = (self.m, self.which, self.n, self.single, self.shrink, self.probe);
         Sample { dz: cconv(self.dz), dc: cconv(self.dc), m, which, n, single, shrink, probe }
-    }
-}
-
-/// The scaled derivative mant * 2^exp (= dz/dc times the spacing), and what a step adds.
-#[derive(Debug, Clone, Copy)]
-struct Der {
-    mant: [f64; 2],
-    exp: i32,
-    add: f64,
-}
-
-impl Der {
-    /// The derivative of a sample whose loop carries none.
-    const UNUSED: Der = Der { mant: [0.0; 2], exp: 0, add: 0.0 };
-
-    fn to_fe(self) -> [FloatExp; 2] {
-        [FloatExp::new(self.mant[0], self.exp), FloatExp::new(self.mant[1], self.exp)]
-    }
-
-    fn from_fe(v: [FloatExp; 2], add_fe: FloatExp) -> Der {
-        let big = if v[0].is_zero() {
-            v[1]
-        } else if v[1].is_zero() || v[0].abs() > v[1].abs() {
-            v[0]
-        } else {
-            v[1]
-        };
-        let exp = if big.is_zero() { 0 } else { big.exponent() };
-        let mant = [v[0].ldexp(-exp).to_f64(), v[1].ldexp(-exp).to_f64()];
-        Der { mant, exp, add: add_fe.ldexp(-exp).to_f64() }
-    }
-
-    #[inline(always)]
-    fn renormalise(&mut self, add_fe: FloatExp) {
-        let big = self.mant[0].abs().max(self.mant[1].abs());
-        if !(DER_LO..=DER_HI).contains(&big) && big != 0.0 {
-            *self = Der::from_fe(self.to_fe(), add_fe);
-        }
-    }
-
-    fn to_f64(self) -> [f64; 2] {
-        let v = self.to_fe();
-        [v[0].to_f64(), v[1].to_f64()]
-    }
-
-    /// self *= f, with nothing added (the derivative of a turn in Newton's test, up to
-    /// Λ ~ 1/sqrt(minibrot size) mid-turn): in f64 while |f| is within 2^+-400 (its product
-    /// with a mantissa within 2^+-500 neither overflows nor underflows), else in FloatExp.
-    #[inline]
-    fn mul(&mut self, f: [f64; 2]) {
-        let big = f[0].abs().max(f[1].abs());
-        if big < DER_SAFE && big > 1.0 / DER_SAFE {
-            self.mant = cmul(self.mant, f);
-            self.renormalise(FloatExp::ZERO);
-        } else {
-            *self = Der::from_fe(cmul(self.to_fe(), cconv(f)), FloatExp::ZERO);
-        }
-    }
-
-    /// True when the larger part of the mantissa is outside [DER_LO, DER_HI] (or 0).
-    #[inline(always)]
-    fn out_of_range(&self) -> bool {
-        !(DER_LO..=DER_HI).contains(&self.mant[0].abs().max(self.mant[1].abs()))
-    }
-
-    /// One perturbation step, der <- 2 z der + what a step adds; `z` is the full value
-    /// rounded to f64, `full` the same unrounded. Done in f64, with the renormalisation's
-    /// range test as the only test: a result can be wrong only where a term underflowed,
-    /// and it is then out of range (the other term is too small to hold it in).
-    #[inline(always)]
-    fn step<D: Real>(&mut self, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
-        let prev = *self;
-        let [x, y] = z;
-        let [a, b] = self.mant;
-        self.mant = [2.0 * (x * a - y * b) + self.add, 2.0 * (x * b + y * a)];
-        if self.out_of_range() {
-            self.step_slow(prev, z, full, add_fe);
-        }
-    }
-
-    /// [`Der::step`] once the f64 result is out of range: from a tiny z the step is redone in
-    /// FloatExp from `prev`, else the result is renormalised.
-    #[cold]
-    #[inline(never)]
-    fn step_slow<D: Real>(&mut self, prev: Der, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
-        if z[0] * z[0] + z[1] * z[1] < DER_TINY_Z2 {
-            let f: [FloatExp; 2] = cconv(full);
-            let d = cmul([f[0].ldexp(1), f[1].ldexp(1)], prev.to_fe());
-            *self = Der::from_fe([d[0] + add_fe, d[1]], add_fe);
-        } else {
-            self.renormalise(add_fe);
-        }
-    }
-
-    /// A BLA step's update, der <- m der + n (what a step adds): in f64 when the multipliers
-    /// are moderate (the common case), else in FloatExp (they may be huge at depth, or m
-    /// tiny where the step passes near 0; as in [`Der::step`], the latter shows as a result
-    /// out of range).
-    #[inline(always)]
-    fn jacobian(
-        &mut self,
-        m: [f64; 2],
-        n: [f64; 2],
-        fe: impl FnOnce() -> ([FloatExp; 2], [FloatExp; 2]),
-        add_fe: FloatExp,
-    ) {
-        let big = m[0].abs().max(m[1].abs()).max(n[0].abs()).max(n[1].abs());
-        if big < DER_SAFE {
-            // |m mant| < 2^900: no overflow; the added term is spacing / 2^exp (0 when that
-            // underflows, where it is negligible unless m is tiny).
-            let prev = *self;
-            let d = self.mant;
-            let md = [m[0] * d[0] - m[1] * d[1], m[0] * d[1] + m[1] * d[0]];
-            self.mant = [md[0] + n[0] * self.add, md[1] + n[1] * self.add];
-            if self.out_of_range() {
-                if m[0].abs().max(m[1].abs()) < 2.0 * DER_TINY_Z {
-                    let (m, n) = fe();
-                    *self = prev;
-                    self.jacobian_fe(m, n, add_fe);
-                } else {
-                    self.renormalise(add_fe);
-                }
-            }
-        } else {
-            let (m, n) = fe();
-            self.jacobian_fe(m, n, add_fe);
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn jacobian_fe(&mut self, m: [FloatExp; 2], n: [FloatExp; 2], add_fe: FloatExp) {
-        let d = cadd(cmul(m, self.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
-        *self = Der::from_fe(d, add_fe);
     }
 }
 
@@ -625,94 +378,6 @@ struct Lane {
     dc_fe: [FloatExp; 2],
 }
 
-/// The quadratic model's parameter c' = K origin + K spacing × offset of the sample at
-/// `offset`, from [`Perturbation::model_map`]'s `(ko, ks)`.
-fn model_parameter((ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> [f64; 2] {
-    let d = cmul(ks, offset);
-    [ko[0] + d[0], ko[1] + d[1]]
-}
-
-/// A point z of the quadratic model's coordinate z = Λ w as the full value w near 0 at a
-/// period end (`Perturbation::model_cycle`); None where it is not a finite f64.
-fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
-    let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
-    (w[0].is_finite() && w[1].is_finite()).then_some(w)
-}
-
-/// A sample's δc in `T`: the origin plus the spacing times its offset (a zero origin is
-/// not added, which is exact either way: a render of its own is unchanged bit for bit).
-fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset: [f64; 2]) -> [T; 2] {
-    let sp = T::from_fe(spacing);
-    let d = [sp.mul_f64(offset[0]), sp.mul_f64(offset[1])];
-    if origin == [FloatExp::ZERO; 2] { d } else { cadd(cconv(origin), d) }
-}
-
-/// A sample's delta at the start, u = origin + spacing × offset, and, when the view's
-/// common BLA steps are taken (`common` = their K1, K2), δ_m = K1 u + K2 u² with the scaled
-/// derivative (K1 + 2 K2 u) × spacing where `derivative` asks for it (else zero): computed
-/// in `T` (f64 where [`Perturbation::start_in_f64`] allows, which gives FloatExp's bits
-/// sooner), returned in FloatExp.
-#[allow(clippy::type_complexity)] // three complex values, named in the doc
-fn start_arithmetic<T: Real>(
-    spacing: FloatExp,
-    origin: [FloatExp; 2],
-    offset: [f64; 2],
-    common: Option<[[FloatExp; 2]; 2]>,
-    derivative: bool,
-) -> ([FloatExp; 2], Option<([FloatExp; 2], [FloatExp; 2])>) {
-    let fe = |v: [FloatExp; 2]| -> [T; 2] { cconv(v) };
-    let sp = T::from_fe(spacing);
-    let d = delta_c::<T>(spacing, origin, offset);
-    let moved = common.map(|[k1, k2]| {
-        let (k1, k2) = (fe(k1), fe(k2));
-        let dz = cadd(cmul(k1, d), cmul(cmul(k2, d), d));
-        let der = if derivative {
-            let k2d = cmul(k2, d);
-            cconv(cmul(cadd(k1, [k2d[0].mul_f64(2.0), k2d[1].mul_f64(2.0)]), [sp, T::from_f64(0.0)]))
-        } else {
-            [FloatExp::ZERO; 2]
-        };
-        (cconv(dz), der)
-    });
-    (cconv(d), moved)
-}
-
-/// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`]):
-/// the spacing, the origin, the common steps' coefficients and the offset are zero or
-/// within exponents that keep every product and sum the start forms a normal f64, where
-/// FloatExp's operations give the bits f64's give (its mantissa products and sums are f64
-/// operations, rounded alike; its alignment by powers of two is exact).
-///
-/// Without an origin or a derivative (a render of its own, no distance layer) the window
-/// follows the view: δc = spacing · offset has an exponent within the spacing's plus
-/// [-60, 41], and each product the start forms (K δc, K δc δc) must lie within 2^±900, so
-/// that each sum of two of them (cancelling at most 53 bits) stays normal too. Otherwise
-/// fixed windows cover the origin's sum and the derivative's products.
-fn start_fits_f64(
-    spacing: FloatExp,
-    origin: [FloatExp; 2],
-    common: Option<&[[FloatExp; 2]; 2]>,
-    derivative: bool,
-    offset: [f64; 2],
-) -> bool {
-    let o = |x: f64| x == 0.0 || (2f64.powi(-60)..=2f64.powi(40)).contains(&x.abs());
-    if !(o(offset[0]) && o(offset[1])) {
-        return false;
-    }
-    let coefficients = || common.into_iter().flatten().flatten().filter(|v| !v.is_zero());
-    if origin == [FloatExp::ZERO; 2] && !derivative && !spacing.is_zero() {
-        let within = |lo: i32, hi: i32| lo >= -900 && hi <= 900;
-        let d = (spacing.exponent() - 60, spacing.exponent() + 41);
-        return within(d.0, d.1)
-            && coefficients().all(|v| {
-                let e = v.exponent();
-                within(e + d.0, e + d.1) && within(e + 2 * d.0, e + 2 * d.1)
-            });
-    }
-    let fits = |v: FloatExp, lo: i32, hi: i32| v.is_zero() || (lo..=hi).contains(&v.exponent());
-    fits(spacing, -250, 0) && origin.iter().all(|&v| fits(v, -250, 40)) && coefficients().all(|&v| fits(v, -250, 250))
-}
-
 /// Samples the interleaved loop keeps in flight: their dependency chains (each step waits
 /// for the previous one's multiply-adds) overlap in the out-of-order core. Measured by
 /// alternating binaries (liiiines, 1e50 view): 2 lanes beat 1, 3, 4 and 8 (4 lanes: 25%
@@ -722,312 +387,9 @@ fn start_fits_f64(
 const LANES: usize = 2;
 
 impl Perturbation {
-    /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
-    /// after the view's common BLA steps when `skip` (counted into `counters`).
-    /// `known`: the sample's [`Perturbation::start_model`] where the batch has worked it out
-    /// (`Perturbation::sample_models`).
-    fn start(
-        &self,
-        offset: [f64; 2],
-        known: Option<Model>,
-        skip: bool,
-        counters: &mut Counters,
-    ) -> (Sample<FloatExp>, Der, FloatExp) {
-        let zero = FloatExp::ZERO;
-        let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
-        let (d, moved) = if self.start_in_f64(offset) {
-            start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
-        } else {
-            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
-        };
-        // A sample whose quadratic model escapes leaves interior detection here.
-        let model = known.or_else(|| self.start_model(self.model_map()?, offset));
-        let plain = model == Some(Model::Escapes);
-        let period = if let Some(Model::Cycle(_, k)) = model { k } else { 0 };
-        let shrink = match self.interior {
-            None => Contraction::IDLE,
-            Some(c) if plain => Contraction::dropped(c),
-            Some(c) => Contraction::new(FloatExp::ONE, c),
-        };
-        // The first Newton test at the end of the second period, if the first contracted.
-        let at = if plain { NEVER } else { self.newton_period().map_or(u32::MAX, |p| p.saturating_mul(2)) };
-        let probe = Probe { at, anchor_n: 0, anchor_exp: i32::MAX, anchor: [0.0; 2], first2: 0.0, plain, period };
-        let (mut start, add_fe) = if self.mandelbrot {
-            (Sample { dz: d, dc: d, m: 1, which: 0, n: 1, single: false, shrink, probe }, self.spacing)
-        } else {
-            (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
-        };
-        let mut der = [self.spacing, zero];
-        if let (true, Some(k), Some((dz, scaled))) = (skip, &self.skip, moved) {
-            counters.iterations += (k.m - start.m) as u64;
-            counters.bla_iterations += (k.m - start.m) as u64;
-            counters.bla_steps += k.steps as u64;
-            start.dz = dz;
-            start.m = k.m;
-            start.n = k.m;
-            der = scaled;
-            if let Some(c) = self.interior.filter(|_| !plain) {
-                let [d1, d2] = k.d;
-                start.shrink = Contraction::new(norm2(cadd(d1, cmul(d2, d))), c);
-            }
-        }
-        // Without a derivative the loop never reads it (its DER parameter is false).
-        let der = if self.derivative { Der::from_fe(der, add_fe) } else { Der::UNUSED };
-        (start, der, add_fe)
-    }
-
-    /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`],
-    /// [`start_fits_f64`]).
-    fn start_in_f64(&self, offset: [f64; 2]) -> bool {
-        start_fits_f64(self.spacing, self.origin, self.skip.as_ref().map(|k| &k.k), self.derivative, offset)
-    }
-
-    /// The period of the reference when interior detection may use Newton's test: a
-    /// Mandelbrot view centred on a nucleus (its reference is one period, stored densely).
-    fn newton_period(&self) -> Option<u32> {
-        self.refs[0].period().filter(|&p| self.mandelbrot && self.interior.is_some() && p <= self.refs[0].last())
-    }
-
-    /// Interior detection's Newton test, at the end of a period of a nucleus's reference
-    /// (the sample has just rebased to Z_0 = 0 with δ its full value, near 0).
-    ///
-    /// A sample inside the minibrot's cardioid is attracted by a cycle of the reference's
-    /// period p; inside one of its bulbs, by a cycle of period k p, whose point near 0 the
-    /// sample comes back to every k ends. So the sample keeps an anchor (an earlier end):
-    /// one end after it, it may be a cycle of period p; later, k ends after it, one of
-    /// period k p where its value has come back to the anchor's four times closer than it
-    /// went away at the first end. Where that holds, |dz/dz|^2 shrank since the anchor, and
-    /// the iteration count has reached the sample's `at`, Newton's method looks for an
-    /// attracting cycle of period k p from the value ([`interior::newton_attracting`]). At
-    /// the first end, before any anchor, a test of period k p starts from a point of the
-    /// attracting cycle of the one-period quadratic model ([`Perturbation::model_cycle`])
-    /// wherever the model has one: inside the minibrot's cardioid (k = 1) and its bulbs that
-    /// start is close enough for Newton to certify within a few turns, without waiting for
-    /// the orbit.
-    /// Found, the sample is interior (its parameter lies in a hyperbolic component); else
-    /// the next test waits until the iteration count has doubled, from a new anchor. This
-    /// finds most interior samples within a few periods, where the contraction criterion
-    /// needs log(threshold) / log|λ| of them (hundreds, and more than the limit allows near
-    /// a component's edge); the contraction criterion still decides everywhere else.
-    ///
-    /// Called at every turn's end, and at most ends it only waits for the anchor's next
-    /// turns: that case is decided here, inline in the loop; the rest, out of line, in
-    /// [`Perturbation::newton_probe_at`] (a call per end cost an exterior sample a tenth of
-    /// its time on the 1e102 minibrot view).
-    #[inline(always)]
-    fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
-        let Some(p) = self.newton_period() else { return false };
-        let pr = &mut s.probe;
-        if pr.at == NEVER {
-            return false;
-        }
-        let since = s.n.wrapping_sub(pr.anchor_n);
-        if pr.anchor_n != 0 && since >= p && since < p.saturating_mul(MAX_CYCLE_PERIODS) {
-            // Turns 1 to MAX_CYCLE_PERIODS - 1 after the anchor: as below, but for a sample
-            // that does not try Newton's test now, which keeps its anchor. (Only whether it
-            // is one turn or more matters to the candidate test.)
-            let turns = if since < p.saturating_mul(2) { 1 } else { 2 };
-            let candidate = pr.candidate(turns, cto_f64(s.dz));
-            if !(candidate && s.n >= pr.at && s.shrink.value().exponent() < pr.anchor_exp) {
-                return false;
-            }
-        }
-        self.newton_probe_at(s, p)
-    }
-
-    /// [`Perturbation::newton_probe`] where the sample has no anchor, has gone past its
-    /// reach, or tries Newton's test: `p` is the reference's period.
-    #[inline(never)]
-    fn newton_probe_at<D: Real>(&self, s: &mut Sample<D>, p: u32) -> bool {
-        let exp = s.shrink.value().exponent();
-        let (w, dc) = (cto_f64(s.dz), cto_f64(s.dc));
-        let pr = &mut s.probe;
-        let k = if pr.anchor_n == 0 { 0 } else { (s.n - pr.anchor_n) / p };
-        let candidate = pr.candidate(k, w);
-        // At the first end, a start from the quadratic model's attracting cycle, where the
-        // model has one: no need to wait for the orbit to settle.
-        if pr.anchor_n == 0
-            && let Some((w0, turns)) = self.model_cycle(w, pr.period)
-            && u64::from(turns) * u64::from(p) * MODEL_TURNS_SPARE <= u64::from(self.max_iter)
-            && interior::newton_attracting(w0, |w, second| self.return_map(w, dc, p, turns, second))
-        {
-            return true;
-        }
-        if candidate && exp < pr.anchor_exp && s.n >= pr.at {
-            pr.at = s.n.saturating_mul(2);
-            if interior::newton_attracting(w, |w, second| self.return_map(w, dc, p, k, second)) {
-                return true;
-            }
-        } else if k != 0 && k < MAX_CYCLE_PERIODS {
-            return false;
-        }
-        *pr = Probe { anchor_n: s.n, anchor_exp: exp, anchor: w, ..*pr };
-        false
-    }
-
-    /// K = Λ ∂Z_p/∂c of a nucleus's reference, which the engine keeps in its `model_scale`
-    /// field: the sensitivity of one turn from w = 0 at the nucleus, times Λ. None where the
-    /// view has no Newton test.
-    pub(super) fn compute_model_scale(&self) -> Option<[FloatExp; 2]> {
-        let (p, lam) = (self.newton_period()?, self.renormal?);
-        let (_, sens) = self.return_map_with::<true>([0.0; 2], [0.0; 2], p, 1, false)?;
-        Some(cmul(lam, sens?.dc))
-    }
-
-    /// The quadratic model's parameter as a function of a sample's offset, to first order:
-    /// c' = K δc = K origin + K spacing × offset (K the engine's `model_scale`), as the two
-    /// complex numbers K origin and K spacing in f64 (in the model's coordinate, where the
-    /// minibrot is the whole Mandelbrot set: K spacing is a sample's step there, and both
-    /// terms are a few units at most where the samples lie near the minibrot). None where
-    /// the view has no model, or no interior detection to use it.
-    fn model_map(&self) -> Option<([f64; 2], [f64; 2])> {
-        self.interior?;
-        let k = self.model_scale?;
-        Some((cto_f64(cmul(k, self.origin)), [(k[0] * self.spacing).to_f64(), (k[1] * self.spacing).to_f64()]))
-    }
-
-    /// What the quadratic model does at a sample's `offset`, its parameter c' by
-    /// [`Perturbation::model_map`] `(ko, ks)`: its attracting fixed point inside the main
-    /// cardioid, else [`model::settled_cycle`].
-    ///
-    /// A sample whose model escapes lies outside the minibrot and leaves interior detection
-    /// from its start, so that its first turn (in which most such samples escape) runs as
-    /// without detection, vector lanes' bursts included. One whose model has an attracting
-    /// cycle keeps its period, and at its first period end Newton's method finds the cycle
-    /// of the model at its own value ([`Perturbation::model_cycle`]), a start for the test.
-    fn start_model(&self, map: ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
-        let c = model_parameter(map, offset);
-        Some(model::fixed_point(c).map_or_else(|| model::settled_cycle(c), |z| Model::Cycle(z, 1)))
-    }
-
-    /// [`Perturbation::start_model`] of every sample of a batch (None where the view has no
-    /// model): worked out before the disks, which then look only among the samples whose
-    /// model has a short attracting cycle.
-    fn sample_models(&self, offsets: &[[f64; 2]], simd: SimdLevel) -> Option<Vec<Model>> {
-        let map = self.model_map()?;
-        let cs: Vec<[f64; 2]> = offsets.iter().map(|&o| model_parameter(map, o)).collect();
-        // A batch is whole rows: the first sample of the second row ends the first. (On a
-        // rotated grid every sample's y differs: the "row" is then one sample, and the one
-        // before serves as the one above; the models only ever cost time.)
-        let width = offsets.iter().position(|o| o[1] != offsets[0][1]).unwrap_or(offsets.len());
-        Some(batch_models::models(&cs, width, simd))
-    }
-
-    /// A point of the attracting cycle of period k turns of the quadratic model
-    /// w -> a + Λ w^2 of one period near 0 (a the sample's value at its first period end,
-    /// f^p(0)), and its exact period, where the model has one: in the renormalised
-    /// coordinate z = Λ w the model is z -> z^2 + c' with c' = Λ a, whose attracting fixed
-    /// point is [`model::fixed_point`]'s (the minibrot's cardioid, k = 1) and whose k-cycle
-    /// Newton's method finds ([`model::attractor`]) where c' lies in a bulb of the standard
-    /// Mandelbrot set of period k, so that samples in the minibrot's bulbs get Newton's test of
-    /// period k p at their first period end too, rather than after waiting for their orbit to
-    /// come back to an anchor. `k` is the period the model had at the sample's offset
-    /// ([`Perturbation::start_model`]; 0: none, and so None here, as where Λ is unknown or
-    /// Newton's method finds no attracting cycle at the sample's own value).
-    fn model_cycle(&self, a: [f64; 2], k: u32) -> Option<([f64; 2], u32)> {
-        let lam = self.renormal?;
-        let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
-        let (z, k) = match k {
-            0 => return None,
-            1 => (model::fixed_point(c)?, 1),
-            k => model::attractor(c, k)?,
-        };
-        Some((from_model(lam, z)?, k))
-    }
-
-    /// f^(k p)(w) and its first and second derivatives in w, for a full value w near 0 and
-    /// the sample offset `dc`, by perturbation against k turns of one period p of a
-    /// nucleus's reference from Z_0 = 0 (each turn ending at Z_p, near 0, where the next
-    /// begins from Z_0 with δ the full value): BLA steps where the f64 tables have them
-    /// (δ' = A δ + B δc + A2 δ^2 + AB δ δc + B2 δc^2, so d1' = m d1 with m = A + 2 A2 δ +
-    /// AB δc and d2' = m d2 + 2 A2 d1^2), single steps elsewhere (d1' = 2 z d1,
-    /// d2' = 2 (d1^2 + z d2)); d2 only when `second` asks. None where the orbit of w escapes
-    /// or leaves the reference within a turn (it would rebase elsewhere than at Z_p).
-    #[inline(always)]
-    fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
-        self.return_map_with::<false>(w, dc, p, k, second).map(|(t, _)| t)
-    }
-
-    /// [`Perturbation::return_map`], with its [`interior::Sensitivity`] to the parameter
-    /// when `C`: e = ∂z/∂c and f = ∂²z/∂w∂c, through a BLA step e' = m e + n (n = B + AB δ +
-    /// 2 B2 δc, the step's derivative in δc) and f' = m f + d1 (2 A2 e + AB), through a
-    /// single step e' = 2 z e + 1 and f' = 2 (d1 e + z f).
-    fn return_map_with<const C: bool>(
-        &self,
-        w: [f64; 2],
-        dc: [f64; 2],
-        p: u32,
-        k: u32,
-        second: bool,
-    ) -> Option<(interior::Turn, Option<interior::Sensitivity>)> {
-        let r = &self.refs[0];
-        let table = self.bla_f64[0].as_ref();
-        let mut z = w;
-        // d1 as an f64 pair with its own exponent (FloatExp for each product would double
-        // the cost of the turn); d2 likewise ([`Scaled`]: only its size enters Newton's
-        // bound), and only when asked for; e and f likewise.
-        let mut d1 = Der { mant: [1.0, 0.0], exp: 0, add: 0.0 };
-        let (mut d2, mut e, mut f) = (Scaled::ZERO, Scaled::ZERO, Scaled::ZERO);
-        for _ in 0..k {
-            let (mut dz, mut m) = (z, 0u32);
-            while m < p {
-                let zm = r.get(m);
-                let full = cadd(zm, dz);
-                let (f2, d2z) = (norm2(full), norm2(dz));
-                if f2 > self.escape2 || (m > 0 && f2 < d2z) {
-                    return None;
-                }
-                let d = || Scaled::new(d1.mant, d1.exp);
-                if let Some(t) = table
-                    && let Some((s, len)) = t.lookup(m, d2z, p - m)
-                {
-                    let linear = s.linear(d2z);
-                    let (next, jac, jc) = if linear {
-                        (cadd(cmul(s.first.a, dz), cmul(s.first.b, dc)), s.first.a, s.first.b)
-                    } else {
-                        s.apply_with_jacobian(dz, dc)
-                    };
-                    // 2 A2 (as d, made only where it is used: on the plain turn of Newton's
-                    // first steps, neither asks for it).
-                    let a2 = || Scaled::from_f64(s.second.a2).ldexp(1);
-                    if C {
-                        let mix = if linear { Scaled::ZERO } else { a2() * e + Scaled::from_f64(s.second.ab) };
-                        f = Scaled::from_f64(jac) * f + d() * mix;
-                        e = Scaled::from_f64(jac) * e + Scaled::from_f64(jc);
-                    }
-                    if second {
-                        d2 = Scaled::from_f64(jac) * d2 + a2() * d().square();
-                    }
-                    d1.mul(jac);
-                    (dz, m) = (next, m + len);
-                    continue;
-                }
-                if C {
-                    f = (d() * e + Scaled::from_f64(full) * f).ldexp(1);
-                    e = (Scaled::from_f64(full) * e).ldexp(1) + Scaled::from_f64([1.0, 0.0]);
-                }
-                if second {
-                    d2 = (d().square() + Scaled::from_f64(full) * d2).ldexp(1);
-                }
-                d1.mul([full[0] * 2.0, full[1] * 2.0]);
-                dz = cadd(cmul([zm[0] * 2.0 + dz[0], zm[1] * 2.0 + dz[1]], dz), dc);
-                m += 1;
-            }
-            z = cadd(r.get(p), dz);
-        }
-        let turn = interior::Turn { z, d1: d1.to_fe(), d2: second.then_some(d2.to_fe()) };
-        Some((turn, C.then(|| interior::Sensitivity { dc: e.to_fe(), dwc: f.to_fe() })))
-    }
-
     /// Interior detection's check (one that never fires when it is off).
     fn check(&self) -> Check {
         self.interior.unwrap_or(Check::OFF)
-    }
-
-    /// True when a sample starting at `s` must begin in FloatExp.
-    fn starts_in_floatexp(&self, s: &Sample<FloatExp>) -> bool {
-        let big = s.dz[0].abs().max(s.dz[1].abs());
-        self.numbers == Numbers::FloatExp && big < FloatExp::from(DOWN)
     }
 
     fn ctx<'a, D: Real>(
@@ -1450,79 +812,6 @@ impl Perturbation {
         self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local)
     }
 
-    /// The passes of [`Perturbation::op`] through the turns of a nucleus's reference, for a
-    /// sample (f64 phase, no traps) that a BLA step has just brought to the reference's end
-    /// Z_p: there it rebases to Z_0 = 0 and takes the single step to Z_1, from where one
-    /// period-aligned step reaches Z_p again, turn after turn while it stays near the
-    /// minibrot (tens to thousands of turns at a minibrot-centred view). The same operations
-    /// in the same order as `op`'s passes, so the same bits; what it saves is the search
-    /// for the step at Z_1 (the step [`BlaTable::fixed_step`] says the search would find,
-    /// taken while |δ|^2 is below its bound) and the tests for what cannot happen at these
-    /// two indices. Returns None, to go on in `op`, at the start of a pass at Z_1 that would
-    /// do anything else (rebase, single steps, another step); the tests it has done there
-    /// give the same answers again.
-    #[inline(never)]
-    fn turns<D: Real, const DER: bool, const INT: bool>(
-        &self,
-        s: &mut Sample<D>,
-        der: &mut Der,
-        ctx: Ctx<'_, D>,
-        local: &mut Counters,
-    ) -> Option<Exit<D>> {
-        if INT && s.probe.plain {
-            return self.turns::<D, DER, false>(s, der, ctx, local);
-        }
-        let r = &self.refs[s.which];
-        let table = ctx.tables[self.refs.len() - 1]?;
-        let (step, len, bound) = table.fixed_step(1)?;
-        let last = r.last();
-        if s.which != self.refs.len() - 1 || len == 0 || 1 + len != last {
-            return None;
-        }
-        let at = |m: u32| reference_value::<D>(|| r.get(m), || r.get_fe(m));
-        let (z_end, z_one) = (at(last), at(1));
-        let glitch2 = norm2(z_one).mul_f64(GLITCH2);
-        loop {
-            // The pass at Z_p: end tests, the rebase, Newton's test, the step to Z_1.
-            if INT && s.shrink.interior(self.check()) {
-                return found_interior(local, false);
-            }
-            let full = cadd(z_end, s.dz);
-            let z = cto_f64(full);
-            if let Some(exit) = self.ends::<D, DER>(s, z, der, &[], &mut []) {
-                return Some(exit);
-            }
-            let f2 = norm2(full);
-            self.rebase(s, full, false, local);
-            if INT && self.newton_probe(s) {
-                return found_interior(local, true);
-            }
-            if ctx.hybrid && z[0].abs().max(z[1].abs()) < DOWN {
-                return Some(Exit::Switch(*s));
-            }
-            if let Some(exit) = self.perturb_step::<D, DER, INT>(s, der, ctx, ([D::ZERO; 2], full, z, f2), local) {
-                return Some(exit);
-            }
-            // The pass at Z_1, while it takes the step back to Z_p.
-            if INT && s.shrink.interior(self.check()) {
-                return found_interior(local, false);
-            }
-            let full = cadd(z_one, s.dz);
-            if let Some(exit) = self.ends::<D, DER>(s, cto_f64(full), der, &[], &mut []) {
-                return Some(exit);
-            }
-            let (d2, f2) = (norm2(s.dz), norm2(full));
-            // `op`'s rebase, glitch and single-step tests, then the bound and budget under
-            // which its search finds `step` (a NaN fails the bound, as it fails the search).
-            let elsewhere = f2 < d2 || f2 < glitch2 || s.single || d2.to_f64() > self.single_d2;
-            let found = d2.partial_cmp(&bound) == Some(std::cmp::Ordering::Less) && self.max_iter - s.n >= len;
-            if elsewhere || !found {
-                return None;
-            }
-            self.apply_bla::<D, DER, INT>((step, len), s, d2, der, ctx.add_fe, local);
-        }
-    }
-
     /// One perturbation step from Z_m = `zm`, with the sample's full value z = Z_m + δ,
     /// z in f64 and |z|^2 in `at`: the derivative and |dz/dz|^2 stepped, δ -> (2 Z_m + δ) δ
     /// + δc. Returns the switch to f64 when a FloatExp delta has grown into f64's range.
@@ -1590,86 +879,6 @@ impl Perturbation {
         s.m = 0;
         s.which = self.refs.len() - 1;
         s.single = false;
-    }
-
-    /// The loop through a reference's packed tail ([`Packed`]), entered at Z_last (the end
-    /// of the dense part) with that pass's end tests done and (Z_last, z, z in f64) in
-    /// `at`: single steps, the values read in order, and at each block boundary the
-    /// longest valid step of whole blocks (`bla::TailSteps`, after which the sample reads
-    /// on from the table's cursor where the step ends), until the sample rebases (and takes
-    /// the rebase's step, as [`Perturbation::op`] does), escapes, is found interior or
-    /// reaches the limit. The passes are `op`'s, in its order, and the blocks begin where
-    /// a dense orbit's blocks past the tree would (`bla::TailSteps`), so a sample steps
-    /// through the same bits as through the same orbit stored densely. It keeps its number
-    /// type and leaves the vector lanes aside until it is back in the dense part, which is
-    /// the only part they read by index.
-    #[inline(never)]
-    #[allow(clippy::too_many_arguments)]
-    fn tail<D: Real, const DER: bool, const INT: bool>(
-        &self,
-        s: &mut Sample<D>,
-        der: &mut Der,
-        ctx: Ctx<'_, D>,
-        at: ([D; 2], [D; 2], [f64; 2]),
-        traps: &[Trap],
-        states: &mut [TrapState],
-        local: &mut Counters,
-        packed: &Packed,
-    ) -> Option<Exit<D>> {
-        let full_range = D::NAME == FloatExp::NAME;
-        let (mut zm, mut full, mut z) = at;
-        // Entered at the seed only: the cursor starts there.
-        debug_assert_eq!(s.m, packed.seed_index());
-        let mut cursor = packed.cursor();
-        let steps = match ctx.tables[s.which].map(|t| t.tail(ctx.cancel)) {
-            Some(Err(Cancelled)) => return Some(Exit::Done(Orbit::interior())),
-            Some(Ok(steps)) => steps,
-            None => None,
-        };
-        loop {
-            let d2 = norm2(s.dz);
-            let f2 = norm2(full);
-            let end = s.m >= packed.last();
-            let rebase = f2 < d2 || end;
-            let glitch = !rebase && f2 < norm2(zm).mul_f64(GLITCH2);
-            if rebase || glitch {
-                self.rebase(s, full, glitch, local);
-                if ctx.hybrid && !full_range && z[0].abs().max(z[1].abs()) < DOWN {
-                    return Some(Exit::Switch(*s));
-                }
-                zm = [D::ZERO; 2];
-            }
-            // A block's step where one starts here and is valid (in the f64 phase, for a
-            // delta that `op` would still look a step up for).
-            let bla = !(rebase || glitch || self.goes_single(s, d2));
-            if let Some(t) = steps.filter(|_| bla)
-                && let Some((e, len, at)) = t.lookup(s.m, d2, self.max_iter - s.n)
-                && let Some(reader) = t.reader(at)
-            {
-                self.apply_step::<D, DER, INT>((e, len), s, d2, der, ctx.add_fe, local);
-                local.tail_steps += 1;
-                cursor = reader;
-            } else {
-                let switch = self.perturb_step::<D, DER, INT>(s, der, ctx, (zm, full, z, f2), local);
-                if rebase || glitch {
-                    // Back in the dense part: the switch `op` takes after a step. Within the
-                    // tail the sample keeps its number type.
-                    return switch;
-                }
-                let more = cursor.advance(packed);
-                debug_assert!(more, "the tail's end was tested before the step");
-            }
-            debug_assert_eq!(cursor.index(), s.m, "the reader stands at the sample's index");
-            if INT && s.shrink.interior(self.check()) {
-                return found_interior(local, false);
-            }
-            zm = reference_value(|| cursor.get(), || cursor.get_fe(packed));
-            full = cadd(zm, s.dz);
-            z = cto_f64(full);
-            if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
-                return Some(exit);
-            }
-        }
     }
 
     /// Whether a sample takes single steps rather than looking a BLA step up, in the f64
@@ -1776,55 +985,6 @@ mod tests {
         "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
         "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
     ];
-
-    /// Where [`start_fits_f64`] allows it, a start computed in f64 has FloatExp's bits: over
-    /// a grid of spacings from 2^-1000 to 2^-10, coefficients K1 and K2 each from 2^-600 to
-    /// 2^600 and offsets over their whole range (mantissas and signs drawn at random), with and
-    /// without a derivative and an origin, so that products reach both edges of the window.
-    /// The view-dependent window takes in a 1e-102 view's starts (spacing 2^-349).
-    #[test]
-    fn a_start_in_f64_has_floatexps_bits() {
-        let mut seed = 12345u64;
-        let mut u = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let (mut allowed, mut deep) = (0, 0);
-        for es in (-1000..=-10).step_by(15) {
-            for (ek, ek2) in (-600..=600).step_by(40).flat_map(|a| (-600..=600).step_by(40).map(move |b| (a, b))) {
-                for (eo, variant) in [-59, -20, 0, 39].into_iter().flat_map(|eo| (0..4).map(move |v| (eo, v))) {
-                    let mut fe = |e: i32| {
-                        let m = 1.0 + u();
-                        FloatExp::new(if u() < 0.5 { -m } else { m }, e)
-                    };
-                    let spacing = fe(es).abs();
-                    let k = [[fe(ek), fe(ek - 3)], [fe(ek2), fe(ek2 - 2)]];
-                    let origin = if variant == 1 { [fe(-120), fe(-130)] } else { [FloatExp::ZERO; 2] };
-                    let derivative = variant == 2;
-                    let offset = [(1.0 + u()) * 2f64.powi(eo), -(1.0 + u()) * 2f64.powi(eo)];
-                    // Variant 3: no common steps.
-                    let common = (variant != 3).then_some(k);
-                    if !start_fits_f64(spacing, origin, common.as_ref(), derivative, offset) {
-                        continue;
-                    }
-                    allowed += 1;
-                    deep += usize::from(es < -300);
-                    let bits = |v: [FloatExp; 2]| v.map(|x| (x.mantissa().to_bits(), x.exponent()));
-                    let a = start_arithmetic::<f64>(spacing, origin, offset, common, derivative);
-                    let b = start_arithmetic::<FloatExp>(spacing, origin, offset, common, derivative);
-                    let what =
-                        format!("spacing 2^{es}, coefficients 2^{ek} and 2^{ek2}, offset 2^{eo}, variant {variant}");
-                    assert_eq!(bits(a.0), bits(b.0), "δc: {what}");
-                    if let (Some(ma), Some(mb)) = (a.1, b.1) {
-                        assert_eq!((bits(ma.0), bits(ma.1)), (bits(mb.0), bits(mb.1)), "start: {what}");
-                    }
-                }
-            }
-        }
-        assert!(allowed > 1000 && deep > 100, "{allowed} starts in f64, {deep} of them past 2^-300");
-        let k = [[FloatExp::new(1.3, 40), FloatExp::new(-1.1, 38)], [FloatExp::new(1.7, 300), FloatExp::ZERO]];
-        assert!(start_fits_f64(FloatExp::new(1.2, -349), [FloatExp::ZERO; 2], Some(&k), false, [123.5, -7.25]));
-    }
 
     /// Where an orbit passes near 0 the Mandelbrot derivative collapses to its added term
     /// (dz -> 2 z dz + 1): a single step from a tiny z, or a BLA step with a tiny multiplier,
