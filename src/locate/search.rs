@@ -341,6 +341,15 @@ mod tests {
         assert!(misiurewicz_in_view(&c, FloatExp::from(1e-6), 3, 2).is_err());
     }
 
+    /// z_0 .. z_n of c's critical orbit, by plain squaring in big floats.
+    fn orbit(c: &BigC, n: usize) -> Vec<BigC> {
+        let mut z = vec![BigC::zero(c.bits)];
+        for _ in 0..n {
+            z.push(z[z.len() - 1].square().add(c));
+        }
+        z
+    }
+
     /// Whether `c` is a nucleus of period exactly `p`, by its own orbit: z_p vanishes to
     /// within `tol` and no earlier z_n (n dividing p) does.
     fn exact_nucleus(c: &BigC, p: u32, tol: f64) -> bool {
@@ -459,10 +468,7 @@ mod tests {
         assert_eq!((m.preperiod, m.period), (4, 3));
         let re = m.point.to_fe()[0].to_f64();
         assert!((re + 1.790_327_491_999_345_7).abs() < 1e-15, "{re}");
-        let mut z = vec![BigC::zero(m.point.bits)];
-        for _ in 0..8 {
-            z.push(z[z.len() - 1].square().add(&m.point));
-        }
+        let z = orbit(&m.point, 8);
         assert!(z[7].sub(&z[4]).abs() < FloatExp::from(1e-50));
         assert!(z[6].sub(&z[3]).abs() > FloatExp::from(0.1));
         // The whole set, from its nucleus 0 (where every first-order distance is 0 / 0): the
@@ -472,7 +478,7 @@ mod tests {
     }
 
     /// A view inside the period-doubling cascade at -1.4 (radius 3.3e-3): the first-order
-    /// distances find nothing (the orbit settles on a cycle of period 16), nor do the copies
+    /// distances find nothing (the centre is interior), nor do the copies
     /// at the scale of the period-16 bulb's size estimate; at half of it, the copy of the
     /// tip is the 16 -> 8 band-merging point -1.4024921763585643... (Newton's method in
     /// Python's complex floats from -1.40252), preperiod 17 and period 8, not the 16 the copy
@@ -484,10 +490,7 @@ mod tests {
         assert_eq!((m.preperiod, m.period), (17, 8));
         let re = m.point.to_fe()[0].to_f64();
         assert!((re + 1.402_492_176_358_564_3).abs() < 1e-15, "{re}");
-        let mut z = vec![BigC::zero(m.point.bits)];
-        for _ in 0..26 {
-            z.push(z[z.len() - 1].square().add(&m.point));
-        }
+        let z = orbit(&m.point, 26);
         let gap = |i: usize, j: usize| z[i].sub(&z[j]).abs();
         assert!(gap(25, 17) < FloatExp::from(1e-40), "z_25 = z_17");
         assert!(gap(24, 16) > FloatExp::from(1e-3), "z_24 != z_16: preperiod 17");
