@@ -6,9 +6,8 @@
 //! test, and only a result out of range is looked at again (renormalised, or redone in
 //! FloatExp where the orbit passed near 0 and a term underflowed).
 
-use crate::num::FloatExp;
-use crate::num::Real;
 use crate::num::real::{cadd, cconv, cmul};
+use crate::num::{FloatExp, Real};
 
 /// The derivative's mantissa is renormalised when its largest part leaves [2^-500, 2^500].
 pub(super) const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
