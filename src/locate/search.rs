@@ -224,8 +224,9 @@ const WHOLE_SET_POINTS: [([f64; 2], u32, u32); 4] =
 /// parent's period (the period-doubling cascade on the real axis, the 1/2 bulbs) it is
 /// about twice the scale of its copy, and the copy of the tip lands on a cycle of half the
 /// period, the parent's: the period-2 bulb (nucleus -1, estimate 0.5) has the tip's copy at
-/// -1.5437 (preperiod 3, period 1), 0.54 estimates from the nucleus where 2 were expected;
-/// the period-16 bulb at -1.39695, its copy at -1.40249 (preperiod 17, period 8). So the
+/// -1.5437 (preperiod 3, period 1), 1.09 estimates from the nucleus where 2 were expected;
+/// the period-16 bulb at -1.39695 (estimate 5.6e-3), its copy at -1.40249 (preperiod 17,
+/// period 8), 0.99 estimates away. So the
 /// copies are looked for at the estimate's scale, then at half of it (a view inside the
 /// cascade, at -1.4 and zoom 1e3, has only the second kind).
 fn copies_in_minibrot(
