@@ -120,12 +120,11 @@ pub fn minibrot(start: &BigC, period: u32) -> Option<Minibrot> {
 /// its basin from nearby, and one that wanders off converges, if at all, elsewhere.
 const LEASH: f64 = 16.0;
 
-/// [`minibrot`], for a nucleus within `radius` of `start` only, from at most `steps` of
-/// Newton's method (`None`: as many as [`minibrot`] takes). Newton's method is given up
+/// [`minibrot`], for a nucleus within `radius` of `start` only. Newton's method is given up
 /// once it strays 16 radii away, and a root outside the disc is refused before its
 /// refinement (at depth both take seconds for a root the caller would refuse).
-pub fn minibrot_within(start: &BigC, period: u32, steps: Option<u32>, radius: FloatExp) -> Option<Minibrot> {
-    found(start, period, steps.unwrap_or(NEWTON_STEPS), Some(radius)).0
+pub fn minibrot_within(start: &BigC, period: u32, radius: FloatExp) -> Option<Minibrot> {
+    found(start, period, NEWTON_STEPS, Some(radius)).0
 }
 
 /// [`minibrot_within`] out of a budget: `work` is the big-float work left, in iterations at
@@ -228,8 +227,8 @@ mod tests {
         assert_eq!(root, None);
         assert!(taken < 20, "{taken} steps");
         let airplane = BigC::from_f64(-1.75, 0.0, 128);
-        assert_eq!(minibrot_within(&airplane, 3, None, FloatExp::from(1e-3)), None);
-        let m = minibrot_within(&airplane, 3, None, FloatExp::from(1e-2)).expect("within 0.0049");
+        assert_eq!(minibrot_within(&airplane, 3, FloatExp::from(1e-3)), None);
+        let m = minibrot_within(&airplane, 3, FloatExp::from(1e-2)).expect("within 0.0049");
         assert_eq!(m.period, 3);
     }
 

@@ -128,7 +128,7 @@ const MORE_WORK: u64 = 4_000_000;
 /// the steps it took; the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
     let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
-    if let Some(m) = nucleus::minibrot_within(center, p, None, radius) {
+    if let Some(m) = nucleus::minibrot_within(center, p, radius) {
         return Ok(m);
     }
     let mut left = MORE_WORK;
@@ -226,9 +226,9 @@ const WHOLE_SET_POINTS: [([f64; 2], u32, u32); 4] =
 /// period, the parent's: the period-2 bulb (nucleus -1, estimate 0.5) has the tip's copy at
 /// -1.5437 (preperiod 3, period 1), 1.09 estimates from the nucleus where 2 were expected;
 /// the period-16 bulb at -1.39695 (estimate 5.6e-3), its copy at -1.40249 (preperiod 17,
-/// period 8), 0.99 estimates away. So the
-/// copies are looked for at the estimate's scale, then at half of it (a view inside the
-/// cascade, at -1.4 and zoom 1e3, has only the second kind).
+/// period 8), 0.99 estimates away. So the copies are looked for at the estimate's scale,
+/// then at half of it (a view inside the cascade, at -1.4 and zoom 1e3, has only the
+/// second kind).
 fn copies_in_minibrot(
     center: &BigC,
     radius: FloatExp,
@@ -354,18 +354,9 @@ mod tests {
     /// Whether `c` is a nucleus of period exactly `p`, by its own orbit: z_p vanishes to
     /// within `tol` and no earlier z_n (n dividing p) does.
     fn exact_nucleus(c: &BigC, p: u32, tol: f64) -> bool {
-        let mut z = BigC::zero(c.bits);
-        for n in 1..=p {
-            z = z.square().add(c);
-            let small = z.abs() < FloatExp::from(tol);
-            if n < p && p.is_multiple_of(n) && small {
-                return false;
-            }
-            if n == p {
-                return small;
-            }
-        }
-        false
+        let z = orbit(c, p as usize);
+        let small = |n: u32| z[n as usize].abs() < FloatExp::from(tol);
+        small(p) && !(1..p).any(|n| p.is_multiple_of(n) && small(n))
     }
 
     /// Views where Newton's method from the centre for the ball method's period reaches a
