@@ -1,6 +1,6 @@
 //! Nanoseconds per reference-orbit iteration for each way deepfield can iterate it, at 1000,
 //! 2000, 4000 and 16000 bits (2000: near where a helper thread starts to pay): malachite-float (pure Rust floats), fixed point on machine words
-//! on one thread and shared with a helper thread (`orbit::fixed`), and MPFR through rug
+//! on one thread and shared with a helper thread (`orbit::reference::fixed`), and MPFR through rug
 //! when built with `--features mpfr`.
 //!
 //! `cargo bench --bench reference` prints a table. Every candidate iterates the e1086
@@ -12,8 +12,8 @@
 use std::time::Instant;
 
 use deepfield::num::Decimal;
-use deepfield::orbit::bigfloat;
-use deepfield::orbit::fixed::FixedOrbit;
+use deepfield::num::bigfloat;
+use deepfield::orbit::reference::fixed::FixedOrbit;
 use deepfield::simd_level::SimdLevel;
 use malachite_float::Float;
 
@@ -77,7 +77,7 @@ fn main() {
         }));
         #[cfg(feature = "mpfr")]
         row.push(time(steps, |k| {
-            let mut o = deepfield::orbit::mpfr::MpfrOrbit::new(&zero(), &c, bits);
+            let mut o = deepfield::orbit::reference::mpfr::MpfrOrbit::new(&zero(), &c, bits);
             for _ in 0..k {
                 o.step();
             }

@@ -2,7 +2,8 @@
 //! printed as a scene centred and framed on it.
 
 use anyhow::anyhow;
-use deepfield::locate::{BigC, search};
+use deepfield::locate::search;
+use deepfield::num::bigcomplex::BigC;
 use deepfield::num::{Decimal, FloatExp, scientific};
 use deepfield::scene::FamilySpec;
 use deepfield::scene::raw::cli;

@@ -30,7 +30,8 @@ pub use truth::Truth;
 
 use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes, Transform};
 use crate::gpu::{GpuContext, GpuError, Precision};
-use crate::orbit::{self, Numbers, bigfloat};
+use crate::num::bigfloat;
+use crate::orbit::{self, Numbers};
 use crate::render::{self, Options, Progress};
 use crate::scene::{EngineChoice, EngineKind, EnginePlan, FamilySpec, Scene};
 use crate::simd_level::SimdLevel;

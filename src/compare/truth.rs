@@ -9,7 +9,7 @@
 use malachite_float::Float;
 
 use crate::num::FloatExp;
-use crate::orbit::bigfloat;
+use crate::num::bigfloat;
 
 /// The true end of one orbit.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -14,7 +14,8 @@
 
 use std::fmt::Write as _;
 
-use crate::locate::{BigC, Minibrot, misiurewicz, nucleus, period};
+use crate::locate::{Minibrot, misiurewicz, nucleus, period};
+use crate::num::bigcomplex::BigC;
 use crate::num::{Decimal, FloatExp};
 use crate::scene::Scene;
 
@@ -121,7 +122,7 @@ impl Rng {
 /// Bits that place a point exactly at zoom 10^log10_zoom, with a margin (what a view's
 /// reference orbit gets).
 fn bits_for(log10_zoom: f64) -> u64 {
-    crate::orbit::bigfloat::precision_for(-log10_zoom)
+    crate::num::bigfloat::precision_for(-log10_zoom)
 }
 
 /// A point at distance `dist` from `p` in direction `angle`, at `p`'s precision.

@@ -10,7 +10,7 @@
 
 use crate::num::FloatExp;
 
-use super::big::BigC;
+use crate::num::bigcomplex::BigC;
 
 /// Newton's method for a root of z_(k+p) - z_k from `start`, at `start`'s precision;
 /// None unless the steps converge within `max_steps`.

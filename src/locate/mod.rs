@@ -10,11 +10,9 @@
 //! the caller chooses from the depth; the results keep it, so a centre found at 1e-2000 is
 //! exact to its last digit.
 
-pub mod big;
 pub mod misiurewicz;
 pub mod nucleus;
 pub mod period;
 pub mod search;
 
-pub use big::BigC;
 pub use nucleus::Minibrot;

@@ -10,7 +10,7 @@
 
 use crate::num::FloatExp;
 
-use super::big::BigC;
+use crate::num::bigcomplex::BigC;
 
 /// A minibrot found: its nucleus, period and size.
 #[derive(Debug, Clone, PartialEq)]

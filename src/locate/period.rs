@@ -17,7 +17,7 @@
 
 use crate::num::FloatExp;
 
-use super::big::BigC;
+use crate::num::bigcomplex::BigC;
 
 /// The first n <= `max_period` at which the disc of radius `radius` about `center`, iterated,
 /// contains 0; None when none does (or the disc escapes first: then it holds no nucleus of

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::num::{Decimal, FloatExp};
 
-use super::big::BigC;
+use crate::num::bigcomplex::BigC;
 use super::nucleus::{self, Minibrot};
 use super::{misiurewicz, period};
 
@@ -88,7 +88,7 @@ pub fn framing_log10_zoom(size: FloatExp) -> f64 {
 /// A disc to search, from its centre as decimals and its radius as a decimal logarithm:
 /// the centre in big floats at the precision a view of that radius needs, and the radius.
 pub fn disc(center: &[Decimal; 2], log10_radius: f64) -> (BigC, FloatExp) {
-    let bits = crate::orbit::bigfloat::precision_for(log10_radius);
+    let bits = crate::num::bigfloat::precision_for(log10_radius);
     (BigC::from_decimals(&center[0], &center[1], bits), FloatExp::exp10(log10_radius))
 }
 

@@ -8,6 +8,8 @@
 //! for quantities whose size as a whole is what counts; `Real` lets one loop run on f64 or
 //! `FloatExp`.
 
+pub mod bigcomplex;
+pub mod bigfloat;
 mod decimal;
 pub mod fastmath;
 mod floatexp;

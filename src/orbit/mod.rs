@@ -5,19 +5,11 @@
 //! [`Perturbation::orbit`] then iterates one sample. The loop is generic over the delta's
 //! number type (f64 or `FloatExp`), see [`perturb`].
 
-pub mod bigfloat;
 pub mod bla;
-pub mod comba;
-pub mod fixed;
-pub mod handover;
 pub mod interior;
-#[cfg(feature = "mpfr")]
-pub mod mpfr;
-pub mod packed;
 pub mod perturb;
 pub mod reference;
 pub mod saved;
-pub mod square;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -30,6 +22,7 @@ pub use perturb::{Counters, Numbers, Perturbation, Skip};
 pub use reference::Reference;
 
 use crate::cancel::Cancelled;
+use crate::num::bigfloat;
 use crate::num::{Decimal, FloatExp};
 use crate::simd_level::SimdLevel;
 

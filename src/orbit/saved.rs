@@ -14,7 +14,7 @@
 //!   u64 n, n x (f64 re, f64 im)     Z_0 .. Z_(n-1) as f64, the part stored densely
 //!   tiny list                       its values too small for f64, with their exponents:
 //!     u64 m, m x (u32 index, f64 re mantissa, i32 re exponent, f64 im mantissa, i32 im exponent)
-//!   u8 packed (0 or 1); if 1, the packed tail after Z_(n-1) (see `orbit::packed`):
+//!   u8 packed (0 or 1); if 1, the packed tail after Z_(n-1) (see `orbit::reference::packed`):
 //!     f64 c re, f64 c im, u32 values, u64 b, b bytes of codes, tiny list
 //! u32 CRC-32 (IEEE) of everything before it
 //! ```
@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use crate::num::FloatExp;
 
-use super::packed::{Packed, Tiny};
+use super::reference::packed::{Packed, Tiny};
 use super::reference::Reference;
 use super::{DeepSpec, reference_bits};
 

@@ -161,7 +161,7 @@ pub struct DeepStats {
     /// Iterations in the primary reference orbit.
     pub reference_iterations: u32,
     /// Of those, iterations stored densely (16 bytes each, read by index, with BLA); the
-    /// rest are packed (`orbit::packed`: about 1.0–1.4 bytes each, read in order by single
+    /// rest are packed (`orbit::reference::packed`: about 1.0–1.4 bytes each, read in order by single
     /// steps).
     pub reference_dense: u32,
     /// The primary reference escaped before the iteration limit.

@@ -8,7 +8,8 @@
 //! pressing the key to approach it. A Misiurewicz point's view is centred on it and zoomed
 //! by the factor (4 when none is set: the structure there looks alike at every depth).
 
-use crate::locate::{BigC, search};
+use crate::locate::search;
+use crate::num::bigcomplex::BigC;
 use crate::num::Decimal;
 
 use super::nav::Nav;

@@ -237,7 +237,7 @@ fn deep_key(scene: &Scene) -> String {
 fn difference(a: &[Decimal; 2], b: &[Decimal; 2]) -> [FloatExp; 2] {
     std::array::from_fn(|k| {
         let d = a[k].to_rational() - b[k].to_rational();
-        crate::orbit::bigfloat::to_floatexp(&malachite_float::Float::from_rational_prec(d, 64).0)
+        crate::num::bigfloat::to_floatexp(&malachite_float::Float::from_rational_prec(d, 64).0)
     })
 }
 

@@ -14,7 +14,7 @@ use astro_float::BigFloat;
 use deepfield::compare::fuzz;
 use deepfield::field::{self, ChannelSet};
 use deepfield::num::{Decimal, FloatExp};
-use deepfield::orbit::bigfloat;
+use deepfield::num::bigfloat;
 use deepfield::render::{self, Options};
 use malachite_float::Float;
 use malachite_q::Rational;
@@ -290,7 +290,7 @@ fn against_a_reference_computed_for_a_view_elsewhere() {
 fn a_nucleus_centred_view_stores_one_period_for_any_iteration_limit() {
     let e1086 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bench-e1086.toml")).unwrap();
     let c = scene(&e1086).center;
-    let near = deepfield::locate::BigC::from_decimals(&c[0], &c[1], 300);
+    let near = deepfield::num::bigcomplex::BigC::from_decimals(&c[0], &c[1], 300);
     let m = deepfield::locate::search::minibrot_in_view(&near, FloatExp::exp10(-60.0).mul_f64(3.4), 100_000)
         .expect("a minibrot");
     assert_eq!(m.period, 2578);
@@ -315,7 +315,7 @@ fn against_the_reference_of_a_deeper_view_of_the_same_centre() {
 }
 
 /// References stored densely for a few hundred iterations and packed after
-/// (`orbit::packed`, as limits past 2^25 store them): samples run through the packed tail
+/// (`orbit::reference::packed`, as limits past 2^25 store them): samples run through the packed tail
 /// by single steps, in f64 and FloatExp deltas, with BLA in the dense part, for the
 /// Mandelbrot set (a reference that escapes late and one that does not escape) and a Julia
 /// set.

@@ -1,6 +1,6 @@
 //! BLA steps of whole blocks, for the part of a long reference orbit past the reach of the
 //! table's tree: the rest of a densely stored orbit, and a packed tail
-//! ([`crate::orbit::packed`]), stored in about a byte per iteration and read in order only.
+//! ([`crate::orbit::reference::packed`]), stored in about a byte per iteration and read in order only.
 //!
 //! The tree holds a step of every length 2^k at every index it can start from, about 100
 //! bytes per iteration in f64 and 450 in FloatExp: 3.4 or 15 GB for the 2^25 iterations an
@@ -35,7 +35,7 @@ use rayon::prelude::*;
 use super::{Bla, Node, Second, Step, entry_to_f64, merge, then_single};
 use crate::cancel::Cancelled;
 use crate::num::{FloatExp, Real, Scaled};
-use crate::orbit::packed::{Cursor, Packed};
+use crate::orbit::reference::packed::{Cursor, Packed};
 use crate::orbit::reference::Reference;
 
 /// A tail table has at most 2^BLOCK_BITS blocks (the block length grows with the tail).

@@ -10,38 +10,38 @@ use crate::num::real::{cadd, cconv, cmul};
 use crate::num::{FloatExp, Real};
 
 /// The derivative's mantissa is renormalised when its largest part leaves [2^-500, 2^500].
-pub(super) const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
-pub(super) const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
+pub(in crate::orbit) const DER_HI: f64 = f64::from_bits((1023 + 500) << 52);
+pub(in crate::orbit) const DER_LO: f64 = f64::from_bits((1023 - 500) << 52);
 /// BLA multipliers below this update the derivative in f64 (|A| |mant| < 2^900).
-pub(super) const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
+pub(in crate::orbit) const DER_SAFE: f64 = f64::from_bits((1023 + 400) << 52);
 /// Where an orbit passes near 0 (|z| below this, or a BLA step whose |A| is below twice
 /// this), the f64 update of the derivative can be wrong: 2 z mant may underflow (z itself
 /// is 0 in f64 below 2^-1074), and so may the added term, spacing / 2^exp, which is then
 /// all that is left of dz -> 2 z dz + 1. bench-e1086 lost its derivative this way on every
 /// pixel (distance estimates at the 1e30 cap). Such a wrong result is always outside the
 /// renormalisation range, so only there is the step redone in FloatExp.
-pub(super) const DER_TINY_Z: f64 = f64::from_bits((1023 - 101) << 52);
+pub(in crate::orbit) const DER_TINY_Z: f64 = f64::from_bits((1023 - 101) << 52);
 /// DER_TINY_Z squared: the vector lanes test |z|^2 (which their escape test computed) and
 /// hand such steps to the scalar loop.
-pub(super) const DER_TINY_Z2: f64 = f64::from_bits((1023 - 202) << 52);
+pub(in crate::orbit) const DER_TINY_Z2: f64 = f64::from_bits((1023 - 202) << 52);
 
 /// The scaled derivative mant * 2^exp (= dz/dc times the spacing), and what a step adds.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Der {
-    pub(super) mant: [f64; 2],
-    pub(super) exp: i32,
-    pub(super) add: f64,
+pub(in crate::orbit) struct Der {
+    pub(in crate::orbit) mant: [f64; 2],
+    pub(in crate::orbit) exp: i32,
+    pub(in crate::orbit) add: f64,
 }
 
 impl Der {
     /// The derivative of a sample whose loop carries none.
-    pub(super) const UNUSED: Der = Der { mant: [0.0; 2], exp: 0, add: 0.0 };
+    pub(in crate::orbit) const UNUSED: Der = Der { mant: [0.0; 2], exp: 0, add: 0.0 };
 
-    pub(super) fn to_fe(self) -> [FloatExp; 2] {
+    pub(in crate::orbit) fn to_fe(self) -> [FloatExp; 2] {
         [FloatExp::new(self.mant[0], self.exp), FloatExp::new(self.mant[1], self.exp)]
     }
 
-    pub(super) fn from_fe(v: [FloatExp; 2], add_fe: FloatExp) -> Der {
+    pub(in crate::orbit) fn from_fe(v: [FloatExp; 2], add_fe: FloatExp) -> Der {
         let big = if v[0].is_zero() {
             v[1]
         } else if v[1].is_zero() || v[0].abs() > v[1].abs() {
@@ -55,14 +55,14 @@ impl Der {
     }
 
     #[inline(always)]
-    pub(super) fn renormalise(&mut self, add_fe: FloatExp) {
+    pub(in crate::orbit) fn renormalise(&mut self, add_fe: FloatExp) {
         let big = self.mant[0].abs().max(self.mant[1].abs());
         if !(DER_LO..=DER_HI).contains(&big) && big != 0.0 {
             *self = Der::from_fe(self.to_fe(), add_fe);
         }
     }
 
-    pub(super) fn to_f64(self) -> [f64; 2] {
+    pub(in crate::orbit) fn to_f64(self) -> [f64; 2] {
         let v = self.to_fe();
         [v[0].to_f64(), v[1].to_f64()]
     }
@@ -71,7 +71,7 @@ impl Der {
     /// Λ ~ 1/sqrt(minibrot size) mid-turn): in f64 while |f| is within 2^+-400 (its product
     /// with a mantissa within 2^+-500 neither overflows nor underflows), else in FloatExp.
     #[inline]
-    pub(super) fn mul(&mut self, f: [f64; 2]) {
+    pub(in crate::orbit) fn mul(&mut self, f: [f64; 2]) {
         let big = f[0].abs().max(f[1].abs());
         if big < DER_SAFE && big > 1.0 / DER_SAFE {
             self.mant = cmul(self.mant, f);
@@ -83,7 +83,7 @@ impl Der {
 
     /// True when the larger part of the mantissa is outside [DER_LO, DER_HI] (or 0).
     #[inline(always)]
-    pub(super) fn out_of_range(&self) -> bool {
+    pub(in crate::orbit) fn out_of_range(&self) -> bool {
         !(DER_LO..=DER_HI).contains(&self.mant[0].abs().max(self.mant[1].abs()))
     }
 
@@ -92,7 +92,7 @@ impl Der {
     /// range test as the only test: a result can be wrong only where a term underflowed,
     /// and it is then out of range (the other term is too small to hold it in).
     #[inline(always)]
-    pub(super) fn step<D: Real>(&mut self, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
+    pub(in crate::orbit) fn step<D: Real>(&mut self, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
         let prev = *self;
         let [x, y] = z;
         let [a, b] = self.mant;
@@ -106,7 +106,7 @@ impl Der {
     /// FloatExp from `prev`, else the result is renormalised.
     #[cold]
     #[inline(never)]
-    pub(super) fn step_slow<D: Real>(&mut self, prev: Der, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
+    pub(in crate::orbit) fn step_slow<D: Real>(&mut self, prev: Der, z: [f64; 2], full: [D; 2], add_fe: FloatExp) {
         if z[0] * z[0] + z[1] * z[1] < DER_TINY_Z2 {
             let f: [FloatExp; 2] = cconv(full);
             let d = cmul([f[0].ldexp(1), f[1].ldexp(1)], prev.to_fe());
@@ -121,7 +121,7 @@ impl Der {
     /// tiny where the step passes near 0; as in [`Der::step`], the latter shows as a result
     /// out of range).
     #[inline(always)]
-    pub(super) fn jacobian(
+    pub(in crate::orbit) fn jacobian(
         &mut self,
         m: [f64; 2],
         n: [f64; 2],
@@ -153,7 +153,7 @@ impl Der {
 
     #[cold]
     #[inline(never)]
-    pub(super) fn jacobian_fe(&mut self, m: [FloatExp; 2], n: [FloatExp; 2], add_fe: FloatExp) {
+    pub(in crate::orbit) fn jacobian_fe(&mut self, m: [FloatExp; 2], n: [FloatExp; 2], add_fe: FloatExp) {
         let d = cadd(cmul(m, self.to_fe()), [n[0] * add_fe, n[1] * add_fe]);
         *self = Der::from_fe(d, add_fe);
     }

@@ -4,15 +4,16 @@
 //! interior detection's state (the quadratic model's verdict, which may leave the sample
 //! out of detection from its first step).
 
-use super::model::Model;
-use super::{Counters, DOWN, Der, NEVER, Numbers, Perturbation, Probe, Sample};
+use crate::orbit::interior::model::Model;
+use super::{Counters, DOWN, Der, NEVER, Numbers, Perturbation, Sample};
+use crate::orbit::interior::probe::Probe;
 use crate::num::real::{cadd, cconv, cmul, norm2};
 use crate::num::{FloatExp, Real};
 use crate::orbit::interior::Contraction;
 
 /// A sample's δc in `T`: the origin plus the spacing times its offset (a zero origin is
 /// not added, which is exact either way: a render of its own is unchanged bit for bit).
-pub(super) fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset: [f64; 2]) -> [T; 2] {
+pub(in crate::orbit) fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset: [f64; 2]) -> [T; 2] {
     let sp = T::from_fe(spacing);
     let d = [sp.mul_f64(offset[0]), sp.mul_f64(offset[1])];
     if origin == [FloatExp::ZERO; 2] { d } else { cadd(cconv(origin), d) }
@@ -24,7 +25,7 @@ pub(super) fn delta_c<T: Real>(spacing: FloatExp, origin: [FloatExp; 2], offset:
 /// in `T` (f64 where [`Perturbation::start_in_f64`] allows, which gives FloatExp's bits
 /// sooner), returned in FloatExp.
 #[allow(clippy::type_complexity)] // three complex values, named in the doc
-pub(super) fn start_arithmetic<T: Real>(
+pub(in crate::orbit) fn start_arithmetic<T: Real>(
     spacing: FloatExp,
     origin: [FloatExp; 2],
     offset: [f64; 2],
@@ -59,7 +60,7 @@ pub(super) fn start_arithmetic<T: Real>(
 /// [-60, 41], and each product the start forms (K δc, K δc δc) must lie within 2^±900, so
 /// that each sum of two of them (cancelling at most 53 bits) stays normal too. Otherwise
 /// fixed windows cover the origin's sum and the derivative's products.
-pub(super) fn start_fits_f64(
+pub(in crate::orbit) fn start_fits_f64(
     spacing: FloatExp,
     origin: [FloatExp; 2],
     common: Option<&[[FloatExp; 2]; 2]>,
@@ -89,7 +90,7 @@ impl Perturbation {
     /// after the view's common BLA steps when `skip` (counted into `counters`).
     /// `known`: the sample's [`Perturbation::start_model`] where the batch has worked it out
     /// (`Perturbation::sample_models`).
-    pub(super) fn start(
+    pub(in crate::orbit) fn start(
         &self,
         offset: [f64; 2],
         known: Option<Model>,
@@ -141,12 +142,12 @@ impl Perturbation {
 
     /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`],
     /// [`start_fits_f64`]).
-    pub(super) fn start_in_f64(&self, offset: [f64; 2]) -> bool {
+    pub(in crate::orbit) fn start_in_f64(&self, offset: [f64; 2]) -> bool {
         start_fits_f64(self.spacing, self.origin, self.skip.as_ref().map(|k| &k.k), self.derivative, offset)
     }
 
     /// True when a sample starting at `s` must begin in FloatExp.
-    pub(super) fn starts_in_floatexp(&self, s: &Sample<FloatExp>) -> bool {
+    pub(in crate::orbit) fn starts_in_floatexp(&self, s: &Sample<FloatExp>) -> bool {
         let big = s.dz[0].abs().max(s.dz[1].abs());
         self.numbers == Numbers::FloatExp && big < FloatExp::from(DOWN)
     }

@@ -1,4 +1,4 @@
-//! The loop through a reference's packed tail ([`crate::orbit::packed::Packed`]): values
+//! The loop through a reference's packed tail ([`crate::orbit::reference::packed::Packed`]): values
 //! read in order rather than by index, and steps of whole blocks at the blocks' boundaries.
 
 use super::{Counters, Ctx, DOWN, Der, Exit, GLITCH2, Perturbation, Sample, found_interior, reference_value};
@@ -6,7 +6,7 @@ use crate::cancel::Cancelled;
 use crate::formula::end::Orbit;
 use crate::num::real::{cadd, cto_f64, norm2};
 use crate::num::{FloatExp, Real};
-use crate::orbit::packed::Packed;
+use crate::orbit::reference::packed::Packed;
 use crate::trap::{Trap, TrapState};
 
 impl Perturbation {

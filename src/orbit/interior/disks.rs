@@ -14,7 +14,9 @@
 //! of one that reached the iteration limit, so the disks change no pixel, only the time.
 
 use super::model::{self, Model};
-use super::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation, delta_c, from_model};
+use super::probe::from_model;
+use crate::orbit::perturb::start::delta_c;
+use crate::orbit::perturb::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation};
 use crate::num::FloatExp;
 use crate::num::real::{cmul, cto_f64, norm2};
 use crate::orbit::interior;
@@ -55,7 +57,7 @@ impl Perturbation {
     /// cardioid or one of its bulbs (`Perturbation::disk_interior`); then
     /// Newton's method finds the cycle at the disk's centre from the model's, and the disk
     /// certificate decides. What no disk covers is iterated as before.
-    pub(super) fn certified_disks(
+    pub(in crate::orbit) fn certified_disks(
         &self,
         offsets: &[[f64; 2]],
         models: Option<&[Model]>,

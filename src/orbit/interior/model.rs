@@ -17,9 +17,9 @@ use crate::num::real::{cmul, norm2};
 /// contraction criterion only after thousands (their multiplier per turn is near 1). A
 /// Newton test of k turns is tried only where the iteration limit holds
 /// [`super::MODEL_TURNS_SPARE`] such tests.
-pub(super) const MAX_PERIODS: u32 = 1024;
+pub(in crate::orbit) const MAX_PERIODS: u32 = 1024;
 /// Iterations of the quadratic model's orbit at most ([`super::Perturbation::model_cycle`]).
-pub(super) const ITERATIONS: u32 = 8192;
+pub(in crate::orbit) const ITERATIONS: u32 = 8192;
 /// The Newton search for a period n found at a new minimum of |z_n| waits until iteration
 /// n times this, for an orbit that escapes by then (most outside the set) to cost nothing.
 const NEWTON_DELAY: u32 = 4;
@@ -40,7 +40,7 @@ const NEWTON_BACK2: f64 = 1e-18;
 /// The attracting fixed point of z -> z^2 + c, (1 - sqrt(1 - 4c)) / 2, whose multiplier is
 /// 1 - sqrt(1 - 4c); None where that is not below 1 in modulus (c outside the main cardioid)
 /// or not a number (an overflowed c).
-pub(super) fn fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
+pub(in crate::orbit) fn fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
     let (z, mult2) = fixed_point_of(c);
     // Not a number compares false: refused.
     (mult2 < 1.0).then_some(z)
@@ -49,7 +49,7 @@ pub(super) fn fixed_point(c: [f64; 2]) -> Option<[f64; 2]> {
 /// [`fixed_point`] as a point and its multiplier's squared modulus, branch-free (a loop of
 /// these is vectorised).
 #[inline(always)]
-pub(super) fn fixed_point_of(c: [f64; 2]) -> ([f64; 2], f64) {
+pub(in crate::orbit) fn fixed_point_of(c: [f64; 2]) -> ([f64; 2], f64) {
     let (x, y) = (1.0 - 4.0 * c[0], -4.0 * c[1]);
     // Not hypot (a libm call): an |x| or |y| past 1e154 makes r infinite and the multiplier
     // not a number, which is refused below as it should be.
@@ -61,7 +61,7 @@ pub(super) fn fixed_point_of(c: [f64; 2]) -> ([f64; 2], f64) {
 
 /// What the orbit of 0 under the quadratic model z -> z^2 + c does.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Model {
+pub(in crate::orbit) enum Model {
     /// It settles on a cycle: a point of it, and its period.
     Cycle([f64; 2], u32),
     /// It escapes (|z| > 2): c is outside the model's Mandelbrot set.
@@ -85,12 +85,12 @@ pub(super) enum Model {
 /// where |λ| is near 1 (on the 1e-102 minibrot view: 579 iterations a sample on average,
 /// and 621 samples not settled within [`ITERATIONS`]); Newton's method takes a few
 /// times the period there too.
-pub(super) fn settled_cycle(c: [f64; 2]) -> Model {
+pub(in crate::orbit) fn settled_cycle(c: [f64; 2]) -> Model {
     cycle_within(c, ITERATIONS)
 }
 
 /// [`settled_cycle`] within `iterations`.
-pub(super) fn cycle_within(c: [f64; 2], iterations: u32) -> Model {
+pub(in crate::orbit) fn cycle_within(c: [f64; 2], iterations: u32) -> Model {
     // A parameter that is not a number escapes at once; from a finite one the orbit stays
     // finite until it escapes, so the loop tests |z|^2 > 4 alone.
     if !(c[0].is_finite() && c[1].is_finite()) {
@@ -126,14 +126,14 @@ pub(super) fn cycle_within(c: [f64; 2], iterations: u32) -> Model {
 /// period. None where Newton's method leaves |w| <= 2 (every cycle lies inside), has not
 /// converged within [`NEWTON_STEPS`], or converges on a repelling cycle, which it
 /// takes for one as soon as a step is below [`NEWTON_JUDGE2`] with |f^n'| >= 1.
-pub(super) fn attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
+pub(in crate::orbit) fn attractor(c: [f64; 2], n: u32) -> Option<([f64; 2], u32)> {
     attractor_from(c, n, [0.0, 0.0], NEWTON_STEPS)
 }
 
 /// [`attractor`] from `w` rather than 0, within `steps` Newton steps: from a point of a
 /// neighbouring parameter's attracting n-cycle, a few steps reach this parameter's, where
 /// it has one of that period.
-pub(super) fn attractor_from(c: [f64; 2], n: u32, mut w: [f64; 2], steps: u32) -> Option<([f64; 2], u32)> {
+pub(in crate::orbit) fn attractor_from(c: [f64; 2], n: u32, mut w: [f64; 2], steps: u32) -> Option<([f64; 2], u32)> {
     for _ in 0..steps {
         let (mut z, mut d) = (w, [1.0, 0.0]);
         for _ in 0..n {
@@ -178,7 +178,7 @@ fn step(z: [f64; 2], c: [f64; 2]) -> [f64; 2] {
 /// distance estimate puts c farther than `r` from the Mandelbrot set: with the estimate
 /// d = 2 |z| ln|z| / |dz/dc| taken where |z| has passed 1e4, Koebe's quarter theorem keeps
 /// the true distance above d / 4 (as |z| grows), so c is taken as far where d / 4 > r.
-pub(super) fn far(c: [f64; 2], r: f64, iterations: u32) -> bool {
+pub(in crate::orbit) fn far(c: [f64; 2], r: f64, iterations: u32) -> bool {
     let (mut z, mut dz) = ([0.0, 0.0], [0.0, 0.0]);
     for _ in 0..iterations {
         dz = [2.0 * (z[0] * dz[0] - z[1] * dz[1]) + 1.0, 2.0 * (z[0] * dz[1] + z[1] * dz[0])];
@@ -196,7 +196,7 @@ pub(super) fn far(c: [f64; 2], r: f64, iterations: u32) -> bool {
 }
 
 /// The multiplier of the k-cycle of z -> z^2 + c through `z`: the product of 2 z_i round it.
-pub(super) fn multiplier(c: [f64; 2], mut z: [f64; 2], k: u32) -> [f64; 2] {
+pub(in crate::orbit) fn multiplier(c: [f64; 2], mut z: [f64; 2], k: u32) -> [f64; 2] {
     let mut mu = [1.0, 0.0];
     for _ in 0..k {
         mu = cmul(mu, [2.0 * z[0], 2.0 * z[1]]);

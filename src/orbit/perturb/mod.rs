@@ -44,14 +44,10 @@
 //! vector lanes (`lanes`), and interior detection's Newton test (`probe`), quadratic model
 //! (`model`, `batch_models`) and certified disks (`disks`).
 
-mod batch_models;
-mod der;
-mod disks;
+pub(in crate::orbit) mod der;
 mod lanes;
-mod model;
-mod probe;
 mod skip;
-mod start;
+pub(in crate::orbit) mod start;
 mod tail;
 mod turns;
 
@@ -66,19 +62,19 @@ use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 use der::{DER_HI, DER_LO, DER_TINY_Z2, Der};
-use model::Model;
-use probe::{Probe, from_model};
+use super::interior::model::Model;
+use super::interior::probe::Probe;
 pub use skip::Skip;
-use start::delta_c;
+
 
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
-const MAX_CYCLE_PERIODS: u32 = 8;
+pub(in crate::orbit) const MAX_CYCLE_PERIODS: u32 = 8;
 /// A sample's [`Probe::at`] once it is to try no more Newton tests.
-const NEVER: u32 = u32::MAX;
+pub(in crate::orbit) const NEVER: u32 = u32::MAX;
 /// A Newton test of k turns from the quadratic model's cycle is tried only where the
 /// iteration limit holds this many of them ([`model::MAX_PERIODS`]).
-const MODEL_TURNS_SPARE: u64 = 16;
+pub(in crate::orbit) const MODEL_TURNS_SPARE: u64 = 16;
 /// A rebase to a full value below this (max norm) moves a sample from f64 to FloatExp in the
 /// hybrid mode: the next step is δ^2 + δc (Z_0 = 0), and δ^2 must stay a normal f64 well
 /// above the offset δc, which at these depths is below the f64 range.
@@ -218,7 +214,7 @@ impl Perturbation {
     pub fn with_spacing(&self, spacing: FloatExp, max_offset: f64) -> Option<Perturbation> {
         // `precision_for` keeps 96 bits below the spacing; a zoom-in may use 16 of them
         // (the reference then still errs by less than 2^-80 of a sample spacing).
-        let bits = super::bigfloat::precision_for(spacing.log2() / std::f64::consts::LOG2_10);
+        let bits = crate::num::bigfloat::precision_for(spacing.log2() / std::f64::consts::LOG2_10);
         let origin = (self.origin[0] * self.origin[0] + self.origin[1] * self.origin[1]).sqrt();
         if origin + spacing.mul_f64(max_offset) > self.extent || bits > self.refs[0].bits() + 16 {
             return None;
@@ -302,18 +298,18 @@ fn found_interior<D>(local: &mut Counters, newton: bool) -> Option<Exit<D>> {
 
 /// A sample's state in number type D.
 #[derive(Debug, Clone, Copy)]
-struct Sample<D> {
-    dz: [D; 2],
-    dc: [D; 2],
-    m: u32,
-    which: usize,
-    n: u32,
+pub(in crate::orbit) struct Sample<D> {
+    pub(in crate::orbit) dz: [D; 2],
+    pub(in crate::orbit) dc: [D; 2],
+    pub(in crate::orbit) m: u32,
+    pub(in crate::orbit) which: usize,
+    pub(in crate::orbit) n: u32,
     /// The delta went above `single_d2`: single steps only, until the next rebase.
-    single: bool,
+    pub(in crate::orbit) single: bool,
     /// |dz/dz|^2 from the orbit's start (interior detection; unused without it).
-    shrink: Contraction,
+    pub(in crate::orbit) shrink: Contraction,
     /// Interior detection's Newton test ([`Perturbation::newton_probe`]).
-    probe: Probe,
+    pub(in crate::orbit) probe: Probe,
 }
 
 impl<D: Real> Sample<D> {

@@ -76,6 +76,11 @@
 //! once per pass, and the threshold costs no second comparison: `lo`, the bottom of the
 //! window for the current exponent, is raised to threshold / 2^exp.
 
+pub(in crate::orbit) mod batch_models;
+mod disks;
+pub(in crate::orbit) mod model;
+pub(in crate::orbit) mod probe;
+
 use std::cmp::Ordering;
 
 use super::reference::Reference;

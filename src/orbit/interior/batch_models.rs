@@ -68,7 +68,7 @@ const EMPTY: usize = usize::MAX;
 
 /// What became of the orbit of 0 under z -> z^2 + c in [`follow`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Fate {
+pub(in crate::orbit) enum Fate {
     /// It left |z| <= 2.
     Escaped,
     /// It came back near an earlier point (Brent's test, anchors at powers of two): it has
@@ -83,7 +83,7 @@ pub(super) enum Fate {
 /// z -> z^2 + c does within `cap` iterations (a multiple of [`LOOK`]), computed in lanes
 /// under `level`'s features and written into `out`. A lane whose parameter is decided
 /// takes the next one, so no lane waits on a slow neighbour.
-pub(super) fn follow(cs: &[[f64; 2]], which: &[usize], cap: u32, level: SimdLevel, out: &mut [Fate]) {
+pub(in crate::orbit) fn follow(cs: &[[f64; 2]], which: &[usize], cap: u32, level: SimdLevel, out: &mut [Fate]) {
     level.arch().dispatch(Stream { cs, which, cap, out });
 }
 
@@ -225,7 +225,7 @@ fn stream(cs: &[[f64; 2]], which: &[usize], cap: u32, out: &mut [Fate]) {
 /// The models of parameters `cs` in the order a batch's samples come, row by row in rows
 /// of `width`: the verdicts of [`model::fixed_point`] and [`model::settled_cycle`] (module
 /// docs).
-pub(super) fn models(cs: &[[f64; 2]], width: usize, level: SimdLevel) -> Vec<Model> {
+pub(in crate::orbit) fn models(cs: &[[f64; 2]], width: usize, level: SimdLevel) -> Vec<Model> {
     let fixed = cardioid(cs, level);
     let all: Vec<usize> = (0..cs.len()).filter(|&k| fixed[k].is_none()).collect();
     let mut fates = vec![Fate::Escaped; cs.len()];

@@ -572,7 +572,7 @@ fn to_fixed(v: &Float, n: usize) -> Option<Vec<u64>> {
     if v.is_zero() {
         return Some(vec![0; n]);
     }
-    if crate::orbit::bigfloat::to_floatexp(v).abs() > FloatExp::from(MAX_MAGNITUDE) {
+    if crate::num::bigfloat::to_floatexp(v).abs() > FloatExp::from(MAX_MAGNITUDE) {
         return None;
     }
     let scaled = v.clone() << (64 * (n as u64 - 1));
@@ -633,7 +633,7 @@ fn to_floatexp(a: &[u64]) -> FloatExp {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::orbit::bigfloat;
+    use crate::num::bigfloat;
 
     fn big(x: f64, prec: u64) -> Float {
         Float::from_primitive_float_prec(x, prec).0

@@ -4,8 +4,8 @@
 use malachite_float::Float;
 use malachite_q::Rational;
 
+use crate::num::bigfloat;
 use crate::num::{Decimal, FloatExp};
-use crate::orbit::bigfloat;
 
 /// A complex number of two malachite floats, with the precision its operations round to.
 #[derive(Debug, Clone, PartialEq)]

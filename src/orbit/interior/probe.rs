@@ -7,7 +7,9 @@
 //! [`crate::orbit::interior`]; this file is how the loop reaches them.
 
 use super::model::{self, Model};
-use super::{Der, MAX_CYCLE_PERIODS, MODEL_TURNS_SPARE, NEVER, Perturbation, Sample, batch_models};
+use super::batch_models;
+use crate::orbit::perturb::der::Der;
+use crate::orbit::perturb::{MAX_CYCLE_PERIODS, MODEL_TURNS_SPARE, NEVER, Perturbation, Sample};
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real, Scaled};
 use crate::orbit::interior;
@@ -21,14 +23,14 @@ use crate::simd_level::SimdLevel;
 /// [`Contraction::dropped`]); and the period in turns of the attracting cycle the quadratic
 /// model has at its offset ([`Perturbation::start_model`]; 0 where it has none).
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Probe {
-    pub(super) at: u32,
-    pub(super) anchor_n: u32,
-    pub(super) anchor_exp: i32,
-    pub(super) anchor: [f64; 2],
-    pub(super) first2: f64,
-    pub(super) plain: bool,
-    pub(super) period: u32,
+pub(in crate::orbit) struct Probe {
+    pub(in crate::orbit) at: u32,
+    pub(in crate::orbit) anchor_n: u32,
+    pub(in crate::orbit) anchor_exp: i32,
+    pub(in crate::orbit) anchor: [f64; 2],
+    pub(in crate::orbit) first2: f64,
+    pub(in crate::orbit) plain: bool,
+    pub(in crate::orbit) period: u32,
 }
 
 impl Probe {
@@ -36,7 +38,7 @@ impl Probe {
     /// test: one turn after it always (and the distance it went away is kept), later where
     /// it has come back four times closer than that; never without an anchor (0 turns).
     #[inline(always)]
-    pub(super) fn candidate(&mut self, turns: u32, w: [f64; 2]) -> bool {
+    pub(in crate::orbit) fn candidate(&mut self, turns: u32, w: [f64; 2]) -> bool {
         let away2 = norm2([w[0] - self.anchor[0], w[1] - self.anchor[1]]);
         match turns {
             0 => false,
@@ -51,14 +53,14 @@ impl Probe {
 
 /// The quadratic model's parameter c' = K origin + K spacing × offset of the sample at
 /// `offset`, from [`Perturbation::model_map`]'s `(ko, ks)`.
-pub(super) fn model_parameter((ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> [f64; 2] {
+pub(in crate::orbit) fn model_parameter((ko, ks): ([f64; 2], [f64; 2]), offset: [f64; 2]) -> [f64; 2] {
     let d = cmul(ks, offset);
     [ko[0] + d[0], ko[1] + d[1]]
 }
 
 /// A point z of the quadratic model's coordinate z = Λ w as the full value w near 0 at a
 /// period end (`Perturbation::model_cycle`); None where it is not a finite f64.
-pub(super) fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
+pub(in crate::orbit) fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
     let w = cto_f64(cmul(cconv::<f64, FloatExp>(z), interior::cinv(lam)));
     (w[0].is_finite() && w[1].is_finite()).then_some(w)
 }
@@ -66,7 +68,7 @@ pub(super) fn from_model(lam: [FloatExp; 2], z: [f64; 2]) -> Option<[f64; 2]> {
 impl Perturbation {
     /// The period of the reference when interior detection may use Newton's test: a
     /// Mandelbrot view centred on a nucleus (its reference is one period, stored densely).
-    pub(super) fn newton_period(&self) -> Option<u32> {
+    pub(in crate::orbit) fn newton_period(&self) -> Option<u32> {
         self.refs[0].period().filter(|&p| self.mandelbrot && self.interior.is_some() && p <= self.refs[0].last())
     }
 
@@ -97,7 +99,7 @@ impl Perturbation {
     /// [`Perturbation::newton_probe_at`] (a call per end cost an exterior sample a tenth of
     /// its time on the 1e102 minibrot view).
     #[inline(always)]
-    pub(super) fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
+    pub(in crate::orbit) fn newton_probe<D: Real>(&self, s: &mut Sample<D>) -> bool {
         let Some(p) = self.newton_period() else { return false };
         let pr = &mut s.probe;
         if pr.at == NEVER {
@@ -120,7 +122,7 @@ impl Perturbation {
     /// [`Perturbation::newton_probe`] where the sample has no anchor, has gone past its
     /// reach, or tries Newton's test: `p` is the reference's period.
     #[inline(never)]
-    pub(super) fn newton_probe_at<D: Real>(&self, s: &mut Sample<D>, p: u32) -> bool {
+    pub(in crate::orbit) fn newton_probe_at<D: Real>(&self, s: &mut Sample<D>, p: u32) -> bool {
         let exp = s.shrink.value().exponent();
         let (w, dc) = (cto_f64(s.dz), cto_f64(s.dc));
         let pr = &mut s.probe;
@@ -162,7 +164,7 @@ impl Perturbation {
     /// minibrot is the whole Mandelbrot set: K spacing is a sample's step there, and both
     /// terms are a few units at most where the samples lie near the minibrot). None where
     /// the view has no model, or no interior detection to use it.
-    pub(super) fn model_map(&self) -> Option<([f64; 2], [f64; 2])> {
+    pub(in crate::orbit) fn model_map(&self) -> Option<([f64; 2], [f64; 2])> {
         self.interior?;
         let k = self.model_scale?;
         Some((cto_f64(cmul(k, self.origin)), [(k[0] * self.spacing).to_f64(), (k[1] * self.spacing).to_f64()]))
@@ -177,7 +179,7 @@ impl Perturbation {
     /// without detection, vector lanes' bursts included. One whose model has an attracting
     /// cycle keeps its period, and at its first period end Newton's method finds the cycle
     /// of the model at its own value ([`Perturbation::model_cycle`]), a start for the test.
-    pub(super) fn start_model(&self, map: ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
+    pub(in crate::orbit) fn start_model(&self, map: ([f64; 2], [f64; 2]), offset: [f64; 2]) -> Option<Model> {
         let c = model_parameter(map, offset);
         Some(model::fixed_point(c).map_or_else(|| model::settled_cycle(c), |z| Model::Cycle(z, 1)))
     }
@@ -185,7 +187,7 @@ impl Perturbation {
     /// [`Perturbation::start_model`] of every sample of a batch (None where the view has no
     /// model): worked out before the disks, which then look only among the samples whose
     /// model has a short attracting cycle.
-    pub(super) fn sample_models(&self, offsets: &[[f64; 2]], simd: SimdLevel) -> Option<Vec<Model>> {
+    pub(in crate::orbit) fn sample_models(&self, offsets: &[[f64; 2]], simd: SimdLevel) -> Option<Vec<Model>> {
         let map = self.model_map()?;
         let cs: Vec<[f64; 2]> = offsets.iter().map(|&o| model_parameter(map, o)).collect();
         // A batch is whole rows: the first sample of the second row ends the first. (On a
@@ -206,7 +208,7 @@ impl Perturbation {
     /// come back to an anchor. `k` is the period the model had at the sample's offset
     /// ([`Perturbation::start_model`]; 0: none, and so None here, as where Λ is unknown or
     /// Newton's method finds no attracting cycle at the sample's own value).
-    pub(super) fn model_cycle(&self, a: [f64; 2], k: u32) -> Option<([f64; 2], u32)> {
+    pub(in crate::orbit) fn model_cycle(&self, a: [f64; 2], k: u32) -> Option<([f64; 2], u32)> {
         let lam = self.renormal?;
         let c = cto_f64(cmul(lam, cconv::<f64, FloatExp>(a)));
         let (z, k) = match k {
@@ -226,7 +228,7 @@ impl Perturbation {
     /// d2' = 2 (d1^2 + z d2)); d2 only when `second` asks. None where the orbit of w escapes
     /// or leaves the reference within a turn (it would rebase elsewhere than at Z_p).
     #[inline(always)]
-    pub(super) fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
+    pub(in crate::orbit) fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
         self.return_map_with::<false>(w, dc, p, k, second).map(|(t, _)| t)
     }
 
@@ -234,7 +236,7 @@ impl Perturbation {
     /// when `C`: e = ∂z/∂c and f = ∂²z/∂w∂c, through a BLA step e' = m e + n (n = B + AB δ +
     /// 2 B2 δc, the step's derivative in δc) and f' = m f + d1 (2 A2 e + AB), through a
     /// single step e' = 2 z e + 1 and f' = 2 (d1 e + z f).
-    pub(super) fn return_map_with<const C: bool>(
+    pub(in crate::orbit) fn return_map_with<const C: bool>(
         &self,
         w: [f64; 2],
         dc: [f64; 2],

@@ -11,15 +11,23 @@
 //! predictively coded ([`Packed`], 1.0–1.4 bytes per iteration, the same values exactly):
 //! the loop reads the dense part by index, with BLA, and the tail in order by single steps.
 
+pub mod comba;
+pub mod fixed;
+pub mod handover;
+#[cfg(feature = "mpfr")]
+pub mod mpfr;
+pub mod packed;
+pub mod square;
+
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use malachite_float::Float;
 
-use super::bigfloat::{self, BigComplex};
-use super::fixed::FixedOrbit;
-use super::packed::{Cursor, Packed, TINY};
+use fixed::FixedOrbit;
+use packed::{Cursor, Packed, TINY};
 use crate::cancel::Cancelled;
 use crate::num::FloatExp;
+use crate::num::bigfloat::{self, BigComplex};
 use crate::simd_level::SimdLevel;
 
 /// Iterations between progress reports and cancellation checks.
@@ -48,7 +56,7 @@ pub struct Stepping {
 }
 
 /// A stored value too small for f64: its index and value.
-pub type Tiny = super::packed::Tiny;
+pub type Tiny = packed::Tiny;
 
 /// Moves the values after index `d` of a dense store into a packed tail seeded with Z_d.
 fn pack_after(z: &mut Vec<[f64; 2]>, tiny: &mut Vec<Tiny>, d: u32, c: [f64; 2]) -> Packed {
