@@ -26,9 +26,9 @@ use rayon::prelude::*;
 
 use crate::num::{Decimal, FloatExp};
 
-use crate::num::bigcomplex::BigC;
 use super::nucleus::{self, Minibrot};
 use super::{misiurewicz, period};
+use crate::num::bigcomplex::BigC;
 
 /// A Misiurewicz point found in a view.
 #[derive(Debug, Clone, PartialEq)]

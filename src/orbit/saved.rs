@@ -30,8 +30,8 @@ use std::sync::Arc;
 
 use crate::num::FloatExp;
 
-use super::reference::packed::{Packed, Tiny};
 use super::reference::Reference;
+use super::reference::packed::{Packed, Tiny};
 use super::{DeepSpec, reference_bits};
 
 const MAGIC: &[u8; 8] = b"DFREFORB";

@@ -368,16 +368,7 @@ pub fn prepare_field(
             saved.serves(&spec)?;
             spec.references = Some(saved.refs.clone());
         }
-        let shared = options.deep.as_ref().filter(|d| {
-            (d.max_iter, d.escape2, d.derivative, d.mandelbrot, d.interior_asked)
-                == (
-                    spec.max_iter,
-                    spec.escape_radius * spec.escape_radius,
-                    spec.derivative,
-                    spec.julia.is_none(),
-                    spec.interior,
-                )
-        });
+        let shared = options.deep.as_ref().filter(|d| d.built_for(&spec));
         if let Some(q) = shared.and_then(|d| d.with_spacing(spec.spacing, params.grid.max_offset())) {
             params.deep = Some(Arc::new(q));
         } else {
@@ -568,32 +559,32 @@ pub fn render<P: Send>(
     let c = counters.into_inner().unwrap_or_else(|e| e.into_inner());
     let deep = params.deep.as_ref().map(|d| {
         let (reference_bytes, bla_bytes) = d.bytes();
-        let blocks = || d.bla_f64[0].iter().flat_map(|t| t.built().into_iter().flatten().flatten());
+        let blocks = || d.primary_table().into_iter().flat_map(|t| t.built().into_iter().flatten().flatten());
         DeepStats {
             reference_bits: d.bits(),
             reference_iterations: d.reference_length(),
             reference_dense: d.reference_dense(),
             reference_escaped: d.reference_escaped(),
-            reference_period: d.refs[0].period(),
+            reference_period: d.references()[0].period(),
             reference_seconds,
-            orbit_seconds: d.orbit_seconds,
-            tables_seconds: d.tables_seconds,
+            orbit_seconds: d.orbit_seconds(),
+            tables_seconds: d.tables_seconds(),
             reference_bytes,
             bla_bytes,
-            aligned_steps: d.bla_f64[0].as_ref().map_or(0, |t| t.aligned_steps()),
-            aligned_stages: d.bla_f64[0].as_ref().map_or(0, |t| t.stage_count()),
+            aligned_steps: d.primary_table().map_or(0, |t| t.aligned_steps()),
+            aligned_stages: d.primary_table().map_or(0, |t| t.stage_count()),
             block_steps: blocks().map(|t| t.steps()).sum(),
             block_length: blocks().next().map_or(0, |t| t.block()),
             blocks_from: blocks().next().map_or(0, |t| t.first()),
-            blocks_seconds: d.bla_f64[0].as_ref().map_or(0.0, |t| t.blocks_seconds()),
+            blocks_seconds: d.primary_table().map_or(0.0, |t| t.blocks_seconds()),
             steps: c.steps,
             floatexp_steps: c.floatexp_steps,
             bla_steps: c.bla_steps,
             bla_iterations: c.bla_iterations,
             tail_bla_steps: c.tail_steps,
             rebases: c.rebases,
-            interior_detection: d.interior_decision,
-            interior_threshold: d.interior.map(|c| c.below2.to_f64()),
+            interior_detection: d.interior_decision(),
+            interior_threshold: d.interior_check().map(|c| c.below2.to_f64()),
             interior_samples: c.interior,
             interior_newton_samples: c.newton,
             interior_disk_samples: c.disks,

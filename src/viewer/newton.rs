@@ -9,8 +9,8 @@
 //! by the factor (4 when none is set: the structure there looks alike at every depth).
 
 use crate::locate::search;
-use crate::num::bigcomplex::BigC;
 use crate::num::Decimal;
+use crate::num::bigcomplex::BigC;
 
 use super::nav::Nav;
 

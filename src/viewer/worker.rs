@@ -256,7 +256,7 @@ fn deep_engine(
     // steps: past a few reaches narrower, a new one is cheaper.
     let view = scene.log10_radius + 0.5 * (1.0 + (scene.width as f64 / scene.height as f64).powi(2)).log10();
     let moved = cached
-        .filter(|(_, _, d)| d.extent.log2() * std::f64::consts::LOG10_2 - view < (4.0 * DEEP_REACH).log10())
+        .filter(|(_, _, d)| d.extent().log2() * std::f64::consts::LOG10_2 - view < (4.0 * DEEP_REACH).log10())
         .and_then(|(_, at, d)| d.with_origin(difference(&scene.center, &at)).map(Arc::new));
     let mut options = Options { deep: moved.clone(), deep_reach: Some(DEEP_REACH), ..Options::default() };
     // The file's orbits, where they serve this view.
@@ -265,9 +265,9 @@ fn deep_engine(
         options.references = saved.serves(&spec).is_ok().then(|| saved.clone());
     }
     let Some(engine) = render::prepare_deep(scene, &options, cancel, progress)? else { return Ok(None) };
-    let reused = moved.as_ref().is_some_and(|c| Arc::ptr_eq(&c.refs, &engine.refs));
+    let reused = moved.as_ref().is_some_and(|c| c.shares_references(&engine));
     if !reused {
-        if cache.saved.as_ref().is_some_and(|s| Arc::ptr_eq(&s.refs, &engine.refs)) {
+        if cache.saved.as_ref().is_some_and(|s| Arc::ptr_eq(&s.refs, engine.references())) {
             cache.from_file.fetch_add(1, Ordering::Relaxed);
         }
         *cache.engine.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, scene.center.clone(), engine.clone()));

@@ -13,8 +13,8 @@ use std::sync::atomic::AtomicBool;
 use astro_float::BigFloat;
 use deepfield::compare::fuzz;
 use deepfield::field::{self, ChannelSet};
-use deepfield::num::{Decimal, FloatExp};
 use deepfield::num::bigfloat;
+use deepfield::num::{Decimal, FloatExp};
 use deepfield::render::{self, Options};
 use malachite_float::Float;
 use malachite_q::Rational;
@@ -148,11 +148,11 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     let (params, _) = render::prepare_field(&s, &plan, options, &cancel, &|_| {}).expect("prepared");
     if let (Some(n), Some(d)) = (v.dense_orbit, &params.deep) {
         // (A Julia set's centre orbit may escape first; the orbit of 0 goes on.)
-        let packed = d.refs.iter().any(|r| r.last() == n && r.end() > n);
+        let packed = d.references().iter().any(|r| r.last() == n && r.end() > n);
         assert!(packed, "a reference is stored densely to {n} only and packed after");
     }
     if let (Some(_), Some(d)) = (v.reference_from, &params.deep) {
-        assert_ne!(d.origin, [FloatExp::ZERO; 2], "the moved engine served the view");
+        assert_ne!(d.origin(), [FloatExp::ZERO; 2], "the moved engine served the view");
     }
     let planes = field::compute_strip(&params, 0..SIZE.1, &cancel).expect("computed").planes;
     let ln_r = params.orbit.escape_radius.ln();

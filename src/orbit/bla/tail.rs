@@ -35,8 +35,8 @@ use rayon::prelude::*;
 use super::{Bla, Node, Second, Step, entry_to_f64, merge, then_single};
 use crate::cancel::Cancelled;
 use crate::num::{FloatExp, Real, Scaled};
-use crate::orbit::reference::packed::{Cursor, Packed};
 use crate::orbit::reference::Reference;
+use crate::orbit::reference::packed::{Cursor, Packed};
 
 /// A tail table has at most 2^BLOCK_BITS blocks (the block length grows with the tail).
 const BLOCK_BITS: u32 = 19;

@@ -15,11 +15,11 @@
 
 use super::model::{self, Model};
 use super::probe::from_model;
-use crate::orbit::perturb::start::delta_c;
-use crate::orbit::perturb::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation};
 use crate::num::FloatExp;
 use crate::num::real::{cmul, cto_f64, norm2};
 use crate::orbit::interior;
+use crate::orbit::perturb::start::delta_c;
+use crate::orbit::perturb::{Counters, MAX_CYCLE_PERIODS, Numbers, Perturbation};
 
 /// Iterations of the quadratic model's orbit at most in a disk's gate (the cycles of bulbs
 /// of period up to [`MAX_CYCLE_PERIODS`] are found within this where a disk can be

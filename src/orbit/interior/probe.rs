@@ -6,13 +6,13 @@
 //! `Perturbation::sample_models`). The criterion and the certificates themselves are in
 //! [`crate::orbit::interior`]; this file is how the loop reaches them.
 
-use super::model::{self, Model};
 use super::batch_models;
-use crate::orbit::perturb::der::Der;
-use crate::orbit::perturb::{MAX_CYCLE_PERIODS, MODEL_TURNS_SPARE, NEVER, Perturbation, Sample};
+use super::model::{self, Model};
 use crate::num::real::{cadd, cconv, cmul, cto_f64, norm2};
 use crate::num::{FloatExp, Real, Scaled};
 use crate::orbit::interior;
+use crate::orbit::perturb::der::Der;
+use crate::orbit::perturb::{MAX_CYCLE_PERIODS, MODEL_TURNS_SPARE, NEVER, Perturbation, Sample};
 use crate::simd_level::SimdLevel;
 
 /// What a sample remembers for interior detection's Newton test, at the ends of the periods
@@ -228,7 +228,14 @@ impl Perturbation {
     /// d2' = 2 (d1^2 + z d2)); d2 only when `second` asks. None where the orbit of w escapes
     /// or leaves the reference within a turn (it would rebase elsewhere than at Z_p).
     #[inline(always)]
-    pub(in crate::orbit) fn return_map(&self, w: [f64; 2], dc: [f64; 2], p: u32, k: u32, second: bool) -> Option<interior::Turn> {
+    pub(in crate::orbit) fn return_map(
+        &self,
+        w: [f64; 2],
+        dc: [f64; 2],
+        p: u32,
+        k: u32,
+        second: bool,
+    ) -> Option<interior::Turn> {
         self.return_map_with::<false>(w, dc, p, k, second).map(|(t, _)| t)
     }
 

@@ -52,8 +52,8 @@ use std::sync::atomic::AtomicBool;
 use pulp::Simd;
 
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
-use crate::orbit::interior::model::Model;
 use crate::orbit::interior;
+use crate::orbit::interior::model::Model;
 
 // The lanes hand a step back for either reason with one comparison.
 const _: () = assert!(DER_TINY_Z2 == interior::TINY2);

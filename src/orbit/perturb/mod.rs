@@ -46,6 +46,7 @@
 
 pub(in crate::orbit) mod der;
 mod lanes;
+mod report;
 mod skip;
 pub(in crate::orbit) mod start;
 mod tail;
@@ -54,6 +55,8 @@ mod turns;
 use std::sync::atomic::AtomicBool;
 
 use super::bla::{BlaTable, Step};
+use super::interior::model::Model;
+use super::interior::probe::Probe;
 use super::interior::{Check, Contraction, Decision, Detection};
 use super::reference::Reference;
 use crate::formula::end::Orbit;
@@ -62,10 +65,7 @@ use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 use der::{DER_HI, DER_LO, DER_TINY_Z2, Der};
-use super::interior::model::Model;
-use super::interior::probe::Probe;
 pub use skip::Skip;
-
 
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
 /// reference (bulbs of the minibrot up to this period).
@@ -145,63 +145,63 @@ pub struct Perturbation {
     /// [primary reference, orbit of 0 used after rebasing]; Mandelbrot has only the first
     /// (its reference starts at 0 and serves both).
     /// Shared (`Arc`) with every [`Perturbation::with_spacing`] of it.
-    pub refs: std::sync::Arc<Vec<Reference>>,
+    pub(in crate::orbit) refs: std::sync::Arc<Vec<Reference>>,
     /// BLA tables per reference in FloatExp and f64 (None: BLA off).
-    pub bla_fe: std::sync::Arc<[Option<BlaTable<FloatExp>>; 2]>,
+    pub(in crate::orbit) bla_fe: std::sync::Arc<[Option<BlaTable<FloatExp>>; 2]>,
     /// The same tables for f64 deltas.
-    pub bla_f64: std::sync::Arc<[Option<BlaTable<f64>>; 2]>,
+    pub(in crate::orbit) bla_f64: std::sync::Arc<[Option<BlaTable<f64>>; 2]>,
     /// The largest |δc| (plane units) the tables and `skip` were built for: the view's
     /// extent, spacing × largest offset (times the reach asked for, see
     /// `render::Options::deep_reach`).
-    pub extent: FloatExp,
+    pub(in crate::orbit) extent: FloatExp,
     /// Where the raster's centre lies from the reference point (plane units): zero for a
     /// render of its own; a viewer panning about an older reference sets it.
-    pub origin: [FloatExp; 2],
+    pub(in crate::orbit) origin: [FloatExp; 2],
     /// True for Mandelbrot (δc is the sample offset; the derivative adds the spacing).
-    pub mandelbrot: bool,
+    pub(in crate::orbit) mandelbrot: bool,
     /// Sample spacing.
-    pub spacing: FloatExp,
+    pub(in crate::orbit) spacing: FloatExp,
     /// Largest iteration index.
-    pub max_iter: u32,
+    pub(in crate::orbit) max_iter: u32,
     /// Escape radius squared.
-    pub escape2: f64,
+    pub(in crate::orbit) escape2: f64,
     /// Carry the derivative.
-    pub derivative: bool,
+    pub(in crate::orbit) derivative: bool,
     /// Interior detection's threshold and window (see [`super::interior`]); None: off (not
     /// asked for, or a Julia set whose parameter is not inside the Mandelbrot set).
-    pub interior: Option<Check>,
+    pub(in crate::orbit) interior: Option<Check>,
     /// What the scene asked of interior detection.
-    pub interior_asked: Detection,
+    pub(in crate::orbit) interior_asked: Detection,
     /// What was decided, and why.
-    pub interior_decision: Decision,
+    pub(in crate::orbit) interior_decision: Decision,
     /// For a nucleus's reference of period p: Λ = f^(p-1)'(c) = 2 Z_1 · 2 Z_2 ⋯ 2 Z_(p-1),
     /// the coefficient of the quadratic model f^p(w) ≈ f^p(0) + Λ w² near 0 that interior
     /// detection's first Newton test starts from.
-    pub renormal: Option<[FloatExp; 2]>,
+    pub(in crate::orbit) renormal: Option<[FloatExp; 2]>,
     /// With [`Perturbation::renormal`]: K = Λ ∂Z_p/∂c at the nucleus, which takes a sample's
     /// offset δc to the quadratic model's parameter c' = K δc to first order
     /// (`Perturbation::compute_model_scale`; set once the engine is built).
-    pub model_scale: Option<[FloatExp; 2]>,
+    pub(in crate::orbit) model_scale: Option<[FloatExp; 2]>,
     /// Delta number types.
-    pub numbers: Numbers,
+    pub(in crate::orbit) numbers: Numbers,
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
-    pub skip: Option<Skip>,
+    pub(in crate::orbit) skip: Option<Skip>,
     /// BLA is tried only while |δ|^2 is at most this (f64 phase); above it a sample takes
     /// single steps, which run in vector lanes (see [`single_step_threshold`]); 0 with
     /// BLA off.
-    pub single_d2: f64,
+    pub(in crate::orbit) single_d2: f64,
     /// Take the turns of a nucleus's reference (rebase at its end, a single step, one
     /// period-aligned step back to the end) in a loop of their own; false runs them through
     /// the general loop, which gives the same bits (for tests and measurements).
-    pub turn_loop: bool,
+    pub(in crate::orbit) turn_loop: bool,
     /// Find the samples of a batch that lie in the minibrot's cardioid or bulbs together, by
     /// disks of parameters certified interior (`Perturbation::certified_disks`): true by
     /// default; false iterates each sample, for comparing the two.
-    pub disks: bool,
+    pub(in crate::orbit) disks: bool,
     /// Seconds the reference orbit(s) took.
-    pub orbit_seconds: f64,
+    pub(in crate::orbit) orbit_seconds: f64,
     /// Seconds the BLA tables took.
-    pub tables_seconds: f64,
+    pub(in crate::orbit) tables_seconds: f64,
 }
 
 impl Perturbation {

@@ -4,12 +4,12 @@
 //! interior detection's state (the quadratic model's verdict, which may leave the sample
 //! out of detection from its first step).
 
-use crate::orbit::interior::model::Model;
 use super::{Counters, DOWN, Der, NEVER, Numbers, Perturbation, Sample};
-use crate::orbit::interior::probe::Probe;
 use crate::num::real::{cadd, cconv, cmul, norm2};
 use crate::num::{FloatExp, Real};
 use crate::orbit::interior::Contraction;
+use crate::orbit::interior::model::Model;
+use crate::orbit::interior::probe::Probe;
 
 /// A sample's δc in `T`: the origin plus the spacing times its offset (a zero origin is
 /// not added, which is exact either way: a render of its own is unchanged bit for bit).

@@ -23,12 +23,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use malachite_float::Float;
 
-use fixed::FixedOrbit;
-use packed::{Cursor, Packed, TINY};
 use crate::cancel::Cancelled;
 use crate::num::FloatExp;
 use crate::num::bigfloat::{self, BigComplex};
 use crate::simd_level::SimdLevel;
+use fixed::FixedOrbit;
+use packed::{Cursor, Packed, TINY};
 
 /// Iterations between progress reports and cancellation checks.
 const REPORT_EVERY: u32 = 4096;
