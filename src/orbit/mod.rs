@@ -1,9 +1,45 @@
 //! The deep-zoom engine: an arbitrary-precision reference orbit, perturbation of every
-//! sample against it with rebasing, and bilinear approximation (BLA) to skip iterations.
+//! sample against it with rebasing, bilinear approximation (BLA) to skip iterations, and
+//! interior detection to stop samples caught by an attracting cycle.
 //!
-//! [`prepare`] computes what all tiles share (reference orbits, BLA tables) once per scene;
-//! [`Perturbation::orbit`] then iterates one sample. The loop is generic over the delta's
-//! number type (f64 or `FloatExp`), see [`perturb`].
+//! [`prepare`] computes what all tiles share (reference orbits, BLA tables) once per scene
+//! into a [`Perturbation`]; [`Perturbation::orbit`] and [`Perturbation::orbits`] then
+//! iterate samples. Dependencies run one way: `reference` ← `bla` ← `perturb`, with
+//! `interior` beside the loop (its tests are what the loop calls at a sample's start, at
+//! each turn and for each batch), and `saved` storing `reference`'s orbits in files.
+//!
+//! | wing | file | holds |
+//! |---|---|---|
+//! | | `mod.rs` | [`DeepSpec`] (what the engine needs of a scene), [`Scale`], [`prepare`] |
+//! | reference | `reference/mod.rs` | [`Reference`]: one orbit in big floats, stored densely as f64 pairs with `FloatExp` for tiny values |
+//! | | `reference/fixed.rs` | the step z² + c in fixed point on machine words, optionally shared by two threads |
+//! | | `reference/comba.rs` | the high half of a square by columns on 64-bit limbs (narrow precisions) |
+//! | | `reference/square.rs` | the same in vector lanes on 26-bit digits (wide precisions) |
+//! | | `reference/handover.rs` | where the two threads of a shared step meet, and when sharing stops |
+//! | | `reference/packed.rs` | a long orbit's tail, predictively coded in about a byte per iteration |
+//! | | `reference/mpfr.rs` | the step in MPFR (the `mpfr` feature), for comparison |
+//! | BLA | `bla/mod.rs` | [`BlaTable`]: second-order steps merged in a tree, their validity radii |
+//! | | `bla/tail.rs` | steps of whole blocks past the tree's reach, for long and packed orbits |
+//! | | `bla/tests.rs` | merged steps against single steps |
+//! | perturbation | `perturb/mod.rs` | a sample's state and the loop's passes (single steps, BLA steps, rebasing) |
+//! | | `perturb/drive.rs` | where samples enter, and how they move between number types and lanes |
+//! | | `perturb/start.rs` | a sample's start: its delta, the view-wide skip applied, its derivative |
+//! | | `perturb/skip.rs` | [`Skip`]: the BLA steps every sample of a view takes, as one polynomial |
+//! | | `perturb/der.rs` | the derivative as a mantissa pair with its own exponent |
+//! | | `perturb/lanes.rs` | single steps of several samples in vector lanes (AVX2, AVX-512, NEON) |
+//! | | `perturb/turns.rs` | the turn loop round a nucleus's periodic reference |
+//! | | `perturb/tail.rs` | the loop through a packed tail |
+//! | | `perturb/report.rs` | what a built engine tells its callers (settings, sizes, timings) |
+//! | | `perturb/tests.rs` | every driver and shortcut against one sample at a time |
+//! | interior | `interior/mod.rs` | the contraction test and Newton's test for attracting cycles, and when detection is on |
+//! | | `interior/model.rs` | the quadratic model of a minibrot (renormalisation) |
+//! | | `interior/batch_models.rs` | the models of a batch of samples together |
+//! | | `interior/probe.rs` | the Newton test as the loop runs it at the end of a turn |
+//! | | `interior/disks.rs` | disks of parameters certified interior whole |
+//! | files | `saved.rs` | reference files: orbits computed once, read by every unit and frame |
+//!
+//! The big-float helpers the engine shares with `locate` and `compare` are numbers
+//! ([`crate::num::bigfloat`], [`crate::num::bigcomplex`]).
 
 pub mod bla;
 pub mod interior;
