@@ -46,6 +46,14 @@ impl From<deepfield::render::RenderError> for Failure {
     }
 }
 
+/// The engine that renders `scene` ([`deepfield::render::engine::plan`]). A view no engine
+/// (or not the forced one) can address is bad input; the library's message names the scene
+/// setting, and this adds the flag that sets it.
+fn engine_plan(scene: &deepfield::scene::Scene) -> Result<deepfield::render::engine::EnginePlan, Failure> {
+    deepfield::render::engine::plan(scene)
+        .map_err(|e| Failure::Input(anyhow::anyhow!("{e} (on the command line: --engine)")))
+}
+
 impl Failure {
     fn input(e: impl Into<anyhow::Error>) -> Self {
         Failure::Input(e.into())

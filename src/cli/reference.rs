@@ -14,7 +14,7 @@ use super::args::ReferenceArgs;
 pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
     let cancel = super::render::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
-    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let plan = super::engine_plan(&scene)?;
     let simd = super::simd_level(args.simd.as_deref())?;
     let options = Options { simd, dense_orbit: args.dense_orbit, ..Options::default() };
     let (_, spec) = render::deep_spec(&scene, &plan, &options);

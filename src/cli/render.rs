@@ -20,7 +20,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     // exist before the handler does. Failing to install it only loses Ctrl-C handling.
     let cancel = install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
-    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let plan = super::engine_plan(&scene)?;
     let simd = super::simd_level(args.simd.as_deref())?;
     let png_path = args.output.clone().unwrap_or_else(|| default_output(args.scene.path.as_deref()));
     check_distinct(&args, &png_path)?;
@@ -70,7 +70,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             dense_orbit: args.dense_orbit,
             ..Options::default()
         };
-        render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, encoded| {
+        render::render(&scene, &plan, options, &cancel, &progress, &prepare, move |_strip, encoded| {
             writers.as_mut().ok_or("output already finished")?.write(encoded)
         })
     };
@@ -85,7 +85,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
 }
 
 /// The header comment of an EXR: the engine, why, and the SIMD level.
-pub fn engine_text(plan: &deepfield::scene::EnginePlan, simd: deepfield::simd_level::SimdLevel) -> String {
+pub fn engine_text(plan: &deepfield::render::engine::EnginePlan, simd: deepfield::simd_level::SimdLevel) -> String {
     format!("{}: {}; SIMD: {}", plan.name, plan.reason, simd.describe())
 }
 

@@ -82,8 +82,10 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     let planes = Mutex::new(Vec::new());
     let bar = super::render::bar(args.quiet, scene.height as u64);
     let progress = |p: render::Progress| super::render::show(&bar, p);
+    let plan = super::engine_plan(&scene)?;
     let result = render::render(
         &scene,
+        &plan,
         Options {
             threads: args.threads.unwrap_or(0) as usize,
             exr_channels: ChannelSet::default(),

@@ -44,7 +44,7 @@ pub fn run(args: ViewArgs) -> Result<(), Failure> {
 #[cfg(feature = "viewer")]
 fn reference_for(path: &std::path::Path, scene: &Scene) -> Result<SavedReferences, Failure> {
     let saved = super::reference::read(path)?;
-    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!("{e}")))?;
+    let plan = super::engine_plan(scene)?;
     let Some(spec) = render::deep_spec(scene, &plan, &Options::default()).1 else {
         return Err(Failure::Input(anyhow!(
             "{}: the scene does not use reference orbits ({} engine)",

@@ -93,7 +93,7 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     };
     let finest = center.as_ref().unwrap_or(&deepest);
     // The finest frame's reference orbits, shared by every frame that perturbs.
-    let plan = finest.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
+    let plan = super::engine_plan(finest)?;
     let options = Options { simd, ..Options::default() };
     let references = match (&args.reference, render::deep_spec(finest, &plan, &options).1) {
         (Some(path), _) => Some(Arc::new(super::reference::read(path)?)),
@@ -202,8 +202,8 @@ fn write_frame(
     references: Option<Arc<SavedReferences>>,
     cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<(), Failure> {
-    let plan = scene.engine().map_err(|e| Failure::Input(anyhow!(e)))?;
-    let perturbs = matches!(plan.kind, deepfield::scene::EngineKind::Perturb { .. });
+    let plan = super::engine_plan(scene)?;
+    let perturbs = matches!(plan.kind, deepfield::render::engine::EngineKind::Perturb { .. });
     let engine = super::render::engine_text(&plan, simd);
     let targets = deepfield::io::output::Targets { png: None, exr: Some(path), tile: None, engine: &engine };
     let (mut writers, encoders) = deepfield::io::output::open(scene, targets).map_err(Failure::input)?;
@@ -215,6 +215,6 @@ fn write_frame(
         references: if perturbs { references } else { None },
         ..Options::default()
     };
-    render::render(scene, options, cancel, &|_| {}, &prepare, |_, encoded| writers.write(encoded))?;
+    render::render(scene, &plan, options, cancel, &|_| {}, &prepare, |_, encoded| writers.write(encoded))?;
     writers.finish().map_err(|e| Failure::Runtime(e.into()))
 }

@@ -18,7 +18,8 @@ use super::{
     Measured, Row, RunError, Variant, VariantKind, mark_ill_conditioned, run, sample_pixels, score, suspects, truths,
 };
 use crate::field::INTERIOR;
-use crate::scene::{EngineKind, Scene};
+use crate::render::engine::{self, EngineKind};
+use crate::scene::Scene;
 use crate::simd_level::SimdLevel;
 
 /// The accuracy bar every configuration must meet.
@@ -59,8 +60,7 @@ pub fn configurations(scene: &Scene) -> Vec<Variant> {
             }
             // Direct f64 only where `auto` chooses it: deeper, a forced f64 is a speed
             // setting (`compare` shows what it costs in accuracy), not an exact engine.
-            VariantKind::Engine(EngineKind::Direct) => scene
-                .engine_for(crate::scene::EngineChoice::Auto)
+            VariantKind::Engine(EngineKind::Direct) => engine::plan_for(scene, crate::scene::EngineChoice::Auto)
                 .is_ok_and(|plan| matches!(plan.kind, EngineKind::Direct)),
             VariantKind::Engine(_) => true,
             VariantKind::F32 | VariantKind::Gpu(_) => false,

@@ -32,8 +32,9 @@ use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes, Transform};
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::num::bigfloat;
 use crate::orbit::{self, Numbers};
+use crate::render::engine::{self, EngineKind, EnginePlan};
 use crate::render::{self, Options, Progress};
-use crate::scene::{EngineChoice, EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::scene::{EngineChoice, FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
 
 /// One engine configuration to compare.
@@ -142,13 +143,13 @@ pub fn variants(scene: &Scene) -> Vec<Variant> {
         out.push(Variant { name: "f64".into(), kind: VariantKind::Engine(EngineKind::Direct), dense_orbit: None });
     }
     for (choice, precision) in [(EngineChoice::Gpu, Precision::F32), (EngineChoice::GpuDf, Precision::DoubleFloat)] {
-        if scene.engine_for(choice).is_ok() {
+        if engine::plan_for(scene, choice).is_ok() {
             out.push(Variant { name: precision.name().into(), kind: VariantKind::Gpu(precision), dense_orbit: None });
         }
     }
     let tight = scene.bla.unwrap_or(orbit::DEFAULT_BLA_TOLERANCE);
     let mut numbers = vec![];
-    if scene.engine_for(EngineChoice::PerturbF64).is_ok() {
+    if engine::plan_for(scene, EngineChoice::PerturbF64).is_ok() {
         numbers.push((Numbers::F64, "perturb-f64"));
     }
     numbers.push((Numbers::FloatExp, "perturb-floatexp"));

@@ -8,6 +8,7 @@
 //! encoding overlaps computing. No I/O happens here; cancellation and progress come in as
 //! an atomic flag and a callback.
 
+pub mod engine;
 pub mod frames;
 mod recolor;
 
@@ -27,8 +28,9 @@ use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Pla
 use crate::formula::Family;
 use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec, Perturbation};
-use crate::scene::{EngineError, EngineKind, EnginePlan, FamilySpec, Scene};
+use crate::scene::{FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
+use engine::{EngineError, EngineKind, EnginePlan};
 
 /// Why a render did not complete.
 #[derive(Debug, thiserror::Error)]
@@ -45,10 +47,10 @@ pub enum RenderError {
     /// A reference file was given to a view that needs none.
     #[error("the scene runs the {0} engine, which uses no reference orbit; leave out the reference file")]
     NoReferenceNeeded(&'static str),
-    /// The rows asked for are not the image's.
+    /// The requested rows are not the image's.
     #[error("rows {start}..{end} are not within the image's {height} rows")]
     Rows {
-        /// First row asked for.
+        /// First requested row.
         start: u32,
         /// One past the last.
         end: u32,
@@ -388,15 +390,15 @@ pub fn prepare_field(
 /// formula, iteration limit and centre (or sets its origin); a render checks the rest.
 pub fn prepare_deep(
     scene: &Scene,
+    plan: &EnginePlan,
     options: &Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Option<Arc<Perturbation>>, RenderError> {
-    let plan = scene.engine()?;
     if !matches!(plan.kind, EngineKind::Perturb { .. }) {
         return Ok(None);
     }
-    let (params, _) = prepare_field(scene, &plan, options.clone(), cancel, progress)?;
+    let (params, _) = prepare_field(scene, plan, options.clone(), cancel, progress)?;
     Ok(params.deep)
 }
 
@@ -405,6 +407,7 @@ pub fn prepare_deep(
 /// `progress` receives the number of output rows done.
 pub fn render<P: Send>(
     scene: &Scene,
+    plan: &EnginePlan,
     options: Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
@@ -412,7 +415,6 @@ pub fn render<P: Send>(
     mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
-    let plan = scene.engine()?;
     // The GPU engines iterate on the process-wide device; its absence is an engine error.
     let gpu = match plan.kind {
         EngineKind::Gpu(precision) => Some((gpu::GpuContext::shared()?, precision)),
@@ -423,9 +425,8 @@ pub fn render<P: Send>(
         .build()
         .map_err(|_| RenderError::Threads(options.threads))?;
     // In the pool, so that the shared work (BLA tables, a reference's helper thread) keeps
-    // to the threads asked for.
-    let (params, reference_seconds) =
-        pool.install(|| prepare_field(scene, &plan, options.clone(), cancel, progress))?;
+    // to the requested threads.
+    let (params, reference_seconds) = pool.install(|| prepare_field(scene, plan, options.clone(), cancel, progress))?;
     let counters = Mutex::new(Counters::default());
     let threads = pool.current_num_threads();
     let rows_per = strip_rows(scene);
@@ -603,7 +604,7 @@ pub fn render<P: Send>(
     };
     Ok(Stats {
         engine: plan.name.to_string(),
-        engine_reason: plan.reason,
+        engine_reason: plan.reason.clone(),
         precision,
         glitched_pixels: c.glitches,
         deep,

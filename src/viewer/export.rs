@@ -152,8 +152,10 @@ fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &Atomic
             rows.store(r, Ordering::Relaxed);
         }
     };
+    let plan = render::engine::plan(scene).map_err(|e| e.to_string())?;
     let stats = render::render(
         scene,
+        &plan,
         Options { threads: 0, exr_channels: channels, ..Options::default() },
         cancel,
         &progress,

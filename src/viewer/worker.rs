@@ -17,6 +17,7 @@ use crate::num::{Decimal, FloatExp};
 use crate::orbit::Perturbation;
 use crate::orbit::saved::SavedReferences;
 use crate::palette::color::linear_to_srgb8;
+use crate::render::engine::EnginePlan;
 use crate::render::{self, Options, RenderError};
 use crate::scene::Scene;
 
@@ -246,6 +247,7 @@ fn difference(a: &[Decimal; 2], b: &[Decimal; 2]) -> [FloatExp; 2] {
 /// precision enough); else a new one centred here, which is then cached.
 fn deep_engine(
     scene: &Scene,
+    plan: &EnginePlan,
     cache: &DeepCache,
     cancel: &AtomicBool,
     progress: &(dyn Fn(render::Progress) + Sync),
@@ -260,11 +262,10 @@ fn deep_engine(
         .and_then(|(_, at, d)| d.with_origin(difference(&scene.center, &at)).map(Arc::new));
     let mut options = Options { deep: moved.clone(), deep_reach: Some(DEEP_REACH), ..Options::default() };
     // The file's orbits, where they serve this view.
-    let plan = scene.engine()?;
-    if let (Some(saved), Some(spec)) = (&cache.saved, render::deep_spec(scene, &plan, &options).1) {
+    if let (Some(saved), Some(spec)) = (&cache.saved, render::deep_spec(scene, plan, &options).1) {
         options.references = saved.serves(&spec).is_ok().then(|| saved.clone());
     }
-    let Some(engine) = render::prepare_deep(scene, &options, cancel, progress)? else { return Ok(None) };
+    let Some(engine) = render::prepare_deep(scene, plan, &options, cancel, progress)? else { return Ok(None) };
     let reused = moved.as_ref().is_some_and(|c| c.shares_references(&engine));
     if !reused {
         if cache.saved.as_ref().is_some_and(|s| Arc::ptr_eq(&s.refs, engine.references())) {
@@ -288,7 +289,15 @@ fn run_job(
     // raster, serve every pass (a coarse pass covers the same extent at a larger spacing).
     let rows = u64::from(job.scene.height);
     let progress = |p| report(progress_report(id, rows, p));
-    let deep = match deep_engine(&job.scene, cache, cancel, &progress) {
+    // The engine is chosen once, for the final pass's raster; the coarse passes run the same.
+    let plan = match render::engine::plan(&job.scene) {
+        Ok(plan) => plan,
+        Err(e) => {
+            report(Report::Failed { id, message: e.to_string() });
+            return;
+        }
+    };
+    let deep = match deep_engine(&job.scene, &plan, cache, cancel, &progress) {
         Ok(d) => d,
         Err(RenderError::Cancelled) => return,
         Err(e) => {
@@ -308,7 +317,7 @@ fn run_job(
             scene.aa = 1;
         }
         renders.fetch_add(1, Ordering::Relaxed);
-        match render_pass(id, &scene, last, deep.clone(), cancel, report) {
+        match render_pass(id, &scene, &plan, last, deep.clone(), cancel, report) {
             Ok((rgb8, planes, engine)) => report(Report::Pass(Box::new(Pass {
                 id,
                 nav: job.nav.clone(),
@@ -345,6 +354,7 @@ fn progress_report(id: u64, rows: u64, p: render::Progress) -> Report {
 fn render_pass(
     id: u64,
     scene: &Scene,
+    plan: &EnginePlan,
     keep_planes: bool,
     deep: Option<Arc<Perturbation>>,
     cancel: &AtomicBool,
@@ -359,6 +369,7 @@ fn render_pass(
     };
     let stats = render::render(
         scene,
+        plan,
         Options { threads: 0, exr_channels: ChannelSet::default(), deep, ..Options::default() },
         cancel,
         &progress,

@@ -115,7 +115,7 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
         v.center[0], v.center[1], v.radius, SIZE.0, SIZE.1, v.max_iter, v.engine, v.render
     );
     let s = scene(&text);
-    let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
+    let plan = deepfield::render::engine::plan(&s).unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
     let mut options = Options { dense_orbit: v.dense_orbit, ..Options::with_channels(ChannelSet::default_exr()) };
     if let Some(shift) = v.reference_from {
@@ -127,7 +127,9 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
         });
         let other_text = text.replacen(v.center[0], other[0].text(), 1).replacen(v.center[1], other[1].text(), 1);
         let wide = Options { deep_reach: Some(3.0), ..options.clone() };
-        let engine = render::prepare_deep(&scene(&other_text), &wide, &cancel, &|_| {}).unwrap().expect("deep");
+        let other_scene = scene(&other_text);
+        let other_plan = render::engine::plan(&other_scene).unwrap();
+        let engine = render::prepare_deep(&other_scene, &other_plan, &wide, &cancel, &|_| {}).unwrap().expect("deep");
         let origin: [FloatExp; 2] = std::array::from_fn(|k| {
             let d = s.center[k].to_rational() - other[k].to_rational();
             bigfloat::to_floatexp(&Float::from_rational_prec(d, 64).0)
@@ -136,7 +138,7 @@ fn measure_with_reference(v: &View) -> (Vec<Sample>, String, Option<(u32, u32)>)
     }
     if let Some(radius) = v.reference_radius {
         let deeper = scene(&text.replacen(&format!("radius = \"{}\"", v.radius), &format!("radius = \"{radius}\""), 1));
-        let plan = deeper.engine().unwrap();
+        let plan = deepfield::render::engine::plan(&deeper).unwrap();
         let spec = render::deep_spec(&deeper, &plan, &options).1.expect("deep");
         let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).unwrap();
         let key = deepfield::orbit::saved::key_of(&spec);
@@ -234,7 +236,7 @@ fn assert_targets(name: &str, s: &[Sample], engine: &str, expect_engine: &str, s
 fn auto_leaves_direct_f64_past_zoom_1e5() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/spiral-deep.toml");
     let spiral = super::util::scene(&std::fs::read_to_string(path).expect("shipped scene"));
-    assert_eq!(spiral.engine().expect("an engine").name, "perturb-f64");
+    assert_eq!(deepfield::render::engine::plan(&spiral).expect("an engine").name, "perturb-f64");
     let levels = deepfield::simd_level::SimdLevel::usable();
     let verdict = fuzz::check(&spiral, 24, &levels, fuzz::BAR, &AtomicBool::new(false)).expect("checked");
     let names: Vec<&str> = verdict.rows.iter().map(|r| r.engine.as_str()).collect();
@@ -245,9 +247,10 @@ fn auto_leaves_direct_f64_past_zoom_1e5() {
         let text = format!(
             "version = 1\n[view]\ncenter = [\"{re}\", \"{im}\"]\nzoom = \"{zoom}\"\nwidth = 3840\nheight = 2160\n"
         );
-        let plan = super::util::scene(&text).engine().expect("an engine");
+        let plan = deepfield::render::engine::plan(&super::util::scene(&text)).expect("an engine");
         assert_eq!(plan.name, engine, "zoom {zoom}: {}", plan.reason);
-        let forced = super::util::scene(&format!("{text}[render]\nengine = \"f64\"\n")).engine();
+        let forced =
+            deepfield::render::engine::plan(&super::util::scene(&format!("{text}[render]\nengine = \"f64\"\n")));
         assert_eq!(forced.expect("forced f64 resolves the view").name, "f64", "zoom {zoom}");
     }
 }
@@ -498,7 +501,7 @@ fn julia_sets_at_1e40_and_1e310() {
 /// Renders a view with an engine and returns its planes.
 fn planes(text: &str) -> (field::Planes, String) {
     let s = scene(text);
-    let plan = s.engine().unwrap_or_else(|e| panic!("{e}"));
+    let plan = deepfield::render::engine::plan(&s).unwrap_or_else(|e| panic!("{e}"));
     let cancel = AtomicBool::new(false);
     let (params, _) =
         render::prepare_field(&s, &plan, Options::with_channels(ChannelSet::default_exr()), &cancel, &|_| {})

@@ -23,8 +23,10 @@ pub fn render_rgb8(text: &str, threads: usize) -> (u32, u32, Vec<u8>) {
     let out = Mutex::new(Vec::new());
     let cancel = AtomicBool::new(false);
     let prepare = |strip: &render::RenderedStrip| Ok(enc.encode(&strip.rgb));
+    let plan = render::engine::plan(&s).expect("an engine");
     render::render(
         &s,
+        &plan,
         Options { threads, exr_channels: ChannelSet::default(), ..Options::default() },
         &cancel,
         &|_| {},

@@ -213,7 +213,7 @@ fn where_f32_and_double_float_stop_agreeing() {
             MISIUREWICZ[0], MISIUREWICZ[1]
         );
         let scene = util::scene(&text);
-        let plan = scene.engine_for(EngineChoice::PerturbF64).expect("perturbation");
+        let plan = deepfield::render::engine::plan_for(&scene, EngineChoice::PerturbF64).expect("perturbation");
         let cancel = AtomicBool::new(false);
         let (deep, _) =
             render::prepare_field(&scene, &plan, render::Options::default(), &cancel, &|_| {}).expect("reference");

@@ -59,7 +59,8 @@ fn render_n(text: &str, simd: SimdLevel) -> (Vec<u32>, Stats) {
     let s = scene(text);
     let n = Mutex::new(Vec::new());
     let options = Options { simd, exr_channels: ChannelSet::default(), ..Options::default() };
-    let stats = render::render(&s, options, &AtomicBool::new(false), &|_| {}, &|_| Ok(()), |strip, ()| {
+    let plan = render::engine::plan(&s).expect("an engine");
+    let stats = render::render(&s, &plan, options, &AtomicBool::new(false), &|_| {}, &|_| Ok(()), |strip, ()| {
         n.lock().unwrap().extend_from_slice(&strip.planes.n);
         Ok(())
     })

@@ -93,7 +93,7 @@ pub struct Blocks {
 /// What [`Blocks`] builds: [dense part past the tree, packed tail] in both number types.
 #[derive(Debug, Default)]
 pub struct Parts {
-    /// The FloatExp steps (None unless asked for).
+    /// The FloatExp steps (None unless requested).
     pub fe: [Option<TailSteps<FloatExp>>; 2],
     /// The f64 steps.
     pub f64: [Option<TailSteps<f64>>; 2],

@@ -100,7 +100,7 @@ fn steps_of_blocks_match_iterated_steps_dense_and_packed() {
         BlaTable::build_with_tree(&refs[0], 1, how, 1000).with_blocks(refs, 0, true)
     };
     let (td, tp) = (tables(dense.clone()), tables(packed.clone()));
-    assert!(td.built().is_none(), "built only when first asked for");
+    assert!(td.built().is_none(), "built only when first needed");
     let never = &cancel::NEVER;
     let (bd, bp) = (
         td.blocks(never).unwrap().expect("blocks past the tree"),

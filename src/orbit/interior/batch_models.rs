@@ -74,7 +74,7 @@ pub(in crate::orbit) enum Fate {
     /// It came back near an earlier point (Brent's test, anchors at powers of two): it has
     /// settled on a cycle near this point, or lingers where it moves slowly.
     Settled([f64; 2]),
-    /// Neither within the iterations asked for (nor ever, for a c that is not a number):
+    /// Neither within the requested iterations (nor ever, for a c that is not a number):
     /// where the orbit was then.
     Open([f64; 2]),
 }

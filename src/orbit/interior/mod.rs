@@ -259,7 +259,7 @@ pub struct Turn {
     pub z: [f64; 2],
     /// d(f^p)/dw.
     pub d1: [FloatExp; 2],
-    /// d^2(f^p)/dw^2, when it was asked for.
+    /// d^2(f^p)/dw^2, when it was requested.
     pub d2: Option<[FloatExp; 2]>,
 }
 

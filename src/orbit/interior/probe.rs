@@ -256,7 +256,7 @@ impl Perturbation {
         let mut z = w;
         // d1 as an f64 pair with its own exponent (FloatExp for each product would double
         // the cost of the turn); d2 likewise ([`Scaled`]: only its size enters Newton's
-        // bound), and only when asked for; e and f likewise.
+        // bound), and only when requested; e and f likewise.
         let mut d1 = Der { mant: [1.0, 0.0], exp: 0, add: 0.0 };
         let (mut d2, mut e, mut f) = (Scaled::ZERO, Scaled::ZERO, Scaled::ZERO);
         for _ in 0..k {

@@ -153,7 +153,7 @@ pub struct Perturbation {
     /// The same tables for f64 deltas.
     pub(in crate::orbit) bla_f64: std::sync::Arc<[Option<BlaTable<f64>>; 2]>,
     /// The largest |δc| (plane units) the tables and `skip` were built for: the view's
-    /// extent, spacing × largest offset (times the reach asked for, see
+    /// extent, spacing × largest offset (times the requested reach, see
     /// `render::Options::deep_reach`).
     pub(in crate::orbit) extent: FloatExp,
     /// Where the raster's centre lies from the reference point (plane units): zero for a
@@ -170,7 +170,7 @@ pub struct Perturbation {
     /// Carry the derivative.
     pub(in crate::orbit) derivative: bool,
     /// Interior detection's threshold and window (see [`super::interior`]); None: off (not
-    /// asked for, or a Julia set whose parameter is not inside the Mandelbrot set).
+    /// requested, or a Julia set whose parameter is not inside the Mandelbrot set).
     pub(in crate::orbit) interior: Option<Check>,
     /// What the scene asked of interior detection.
     pub(in crate::orbit) interior_asked: Detection,
@@ -263,8 +263,8 @@ pub const SINGLE_STEP_FRACTION: f64 = 0.3;
 /// (about 20 ns), so the sample goes to the lanes. The median, not the largest radius:
 /// second-order radii vary by orders of magnitude along an orbit (up to sqrt(ε |Z|)), and a
 /// threshold at the largest kept samples in scalar single steps wherever BLA had nothing.
-/// Measured at 800x600 (`deepfield render --stats`, two threads, alternating settings; this
-/// VM's timings vary by ±20%): against 0.1 times the largest radius of 2-iteration steps,
+/// Measured at 800x600 (`deepfield render --stats`, two threads, alternating settings; that
+/// machine's timings vary by ±20%): against 0.1 times the largest radius of 2-iteration steps,
 /// bench-e14 0.29-0.35 s → 0.19-0.25 s, bench-e50 and liiiines within the noise (median
 /// of 8-step radii at fraction 1 and of 16-step radii at fraction 1 were similar).
 pub fn single_step_threshold(tables: &[Option<BlaTable<f64>>]) -> f64 {

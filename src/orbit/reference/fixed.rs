@@ -23,7 +23,7 @@
 //! the helper squares y and the upper part, each publishes what it computed and takes the
 //! other's, and both join the parts exactly and finish the same step: the same bits as one
 //! thread, with one hand-over each way per step, made at the same moment (a request and an
-//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core VM, in every step).
+//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core machine, in every step).
 //! Where the machine is busier than its cores, the helper is often descheduled and every
 //! step would wait for it: there the caller steps alone for stretches ([`super::handover`]).
 //! `cargo bench --bench reference` compares this with malachite-float (and MPFR through

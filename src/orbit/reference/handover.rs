@@ -7,7 +7,7 @@
 //! the machine is busier than its cores (another render, a compiler, a fuzzer), the partner
 //! is often descheduled, and every step then waits for it to be scheduled again: the e1086
 //! benchmark's orbit took 17–22 s shared against 1.7 s on one thread beside Fraktaler-3
-//! rendering on both cores of the 2-core VM. So the caller watches its waits
+//! rendering on both cores of a 2-core machine. So the caller watches its waits
 //! ([`Contention`]): when a few steps in a short window had to give up the core before the
 //! helper answered, it sends the helper to sleep and steps alone for a while (four times
 //! longer each time sharing fails again, shorter again after clean stretches of sharing),
@@ -32,7 +32,7 @@ const WINDOW: u32 = 64;
 /// scheduler's time slice, milliseconds, so few are let through).
 const SLOW_LIMIT: u32 = 2;
 /// The shortest and longest stretch of steps the caller takes alone before trying again
-/// (at 3700 bits, about 2 ms and 0.5 s on the 2-core VM), and the factor between one
+/// (at 3700 bits, about 2 ms and 0.5 s on a 2-core machine), and the factor between one
 /// stretch and the next while sharing keeps failing.
 const ALONE_MIN: u32 = 1 << 10;
 const ALONE_MAX: u32 = 1 << 18;
