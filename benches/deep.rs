@@ -30,7 +30,7 @@ fn scene(name: &str) -> Scene {
 /// Reference, tables and every sample row, in parallel strips of 16 rows.
 fn run(scene: &Scene) -> u64 {
     let cancel = AtomicBool::new(false);
-    let plan = deepfield::render::engine::plan(&scene).expect("engine");
+    let plan = deepfield::render::engine::plan(scene).expect("engine");
     let (params, _) =
         render::prepare_field(scene, &plan, render::Options::default(), &cancel, &|_| {}).expect("prepared");
     let rows = params.grid.height;

@@ -37,7 +37,7 @@ fn scene(path: &str, detection: Detection) -> Scene {
 /// The deep engine of `s` and every sample's offset.
 fn engine(s: &Scene) -> (Perturbation, Vec<[f64; 2]>) {
     let cancel = AtomicBool::new(false);
-    let plan = deepfield::render::engine::plan(&s).expect("engine");
+    let plan = deepfield::render::engine::plan(s).expect("engine");
     let (params, _) = render::prepare_field(s, &plan, Options::default(), &cancel, &|_| {}).expect("prepared");
     let deep = params.deep.expect("a deep view");
     let g = &params.grid;

@@ -276,7 +276,7 @@ fn stripe_average_at_depth_agrees_with_direct() {
     let direct = scene(&text);
     let deep = scene(&format!("{}[render]\nengine = \"perturb-f64\"\n", text));
     let plane = |s: &deepfield::scene::Scene| {
-        let plan = deepfield::render::engine::plan(&s).unwrap();
+        let plan = deepfield::render::engine::plan(s).unwrap();
         let (params, _) =
             render::prepare_field(s, &plan, render::Options::default(), &AtomicBool::new(false), &|_| {}).unwrap();
         let strip = field::compute_strip(&params, 0..54, &AtomicBool::new(false)).unwrap();
