@@ -1,4 +1,4 @@
-//! What plain f64 iteration loses at each depth: the table in the README.
+//! What plain f64 iteration loses at each depth: the table in docs/engine-notes.md.
 //!
 //! `cargo run --release --example f64_loss [SAMPLES]` renders random pixels of a ladder of
 //! zooms centred on the seahorse-valley spiral with the f64 engine (the real render path)

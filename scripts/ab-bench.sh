@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A/B timing of kernel bench binaries on a noisy machine: runs each binary's divan bench in
 # turn, ROUNDS times, and prints per binary the "fastest" and "median" items/s of each round.
-# Alternating matters: this VM's speed drifts by ±5% within minutes.
+# Alternating matters: a shared machine's speed drifts by ±5% within minutes.
 #
 #   cargo bench --bench kernels --no-run      # then copy target/release/deps/kernels-<hash>
 #   scripts/ab-bench.sh n_only 3 /tmp/kernels-old /tmp/kernels-new

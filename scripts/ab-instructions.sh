@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Instructions executed by `deepfield render` builds, counted by valgrind (cachegrind, no
-# cache simulation), one thread: a measure of work that this noisy VM's load does not move,
+# cache simulation), one thread: a measure of work that a noisy machine's load does not move,
 # for changes too small for wall-clock A/B runs (scripts/ab-render.sh) to resolve. Needs
 # valgrind (Debian: apt-get install valgrind); about 50x slower than a plain run, so use a
 # small size.

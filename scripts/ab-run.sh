@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Alternating A/B runs of deepfield builds on a noisy machine (this VM's speed drifts within
+# Alternating A/B runs of deepfield builds on a noisy machine (its speed drifts within
 # minutes, so builds are compared within a round): runs `BINARY ARGS... -o TMP.png` with each
 # binary in turn, ROUNDS times, and prints per binary the median, fastest and slowest wall
 # time and the peak memory. `ab-render.sh` and `ab-recolor.sh` are this with their command.

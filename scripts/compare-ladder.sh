@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's speed/accuracy ladder: `deepfield compare` at zooms 1e0 ... 1e320 around the
+# The speed/accuracy ladder of docs/engine-notes.md: `deepfield compare` at zooms 1e0 ... 1e320 around the
 # liiiines location's centre (-2 + 1.6e-102 + 1.4e-211 i, given to 340 digits) and at 1e1000
 # next to -2 (-2 + 3e-1000 + 1e-1000 i; beyond its digits the liiiines centre is a generic
 # point whose neighbourhood is featureless), printed as one Markdown table.

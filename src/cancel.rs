@@ -9,6 +9,6 @@ use std::sync::atomic::AtomicBool;
 #[error("cancelled")]
 pub struct Cancelled;
 
-/// A flag nobody raises: for work asked for outside any job that can be cancelled (the
+/// A flag nobody raises: for work requested outside any job that can be cancelled (the
 /// engine's own set-up, the Newton tests' return maps, tests and benchmarks).
 pub static NEVER: AtomicBool = AtomicBool::new(false);

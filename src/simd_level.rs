@@ -28,7 +28,7 @@ pub enum SimdLevel {
     Neon,
 }
 
-/// What the user asked for: the best available level, or one in particular.
+/// What the user requested: the best available level, or one in particular.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SimdChoice {
     /// The best level this CPU has.
@@ -38,11 +38,11 @@ pub enum SimdChoice {
     Level(SimdLevel),
 }
 
-/// A level was asked for that this CPU (or this build's target) cannot run.
+/// A level was requested that this CPU (or this build's target) cannot run.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("--simd {asked}: {why}; this CPU runs {available}")]
 pub struct SimdUnavailable {
-    /// The level asked for (its flag spelling).
+    /// The level requested (its flag spelling).
     pub asked: &'static str,
     /// Why it cannot run.
     pub why: &'static str,
@@ -176,7 +176,7 @@ impl SimdChoice {
         SimdLevel::ALL.into_iter().find(|l| l.name() == text).map(SimdChoice::Level)
     }
 
-    /// The level to run: the best one for `Auto`, else the one asked for if this CPU runs it.
+    /// The level to run: the best one for `Auto`, else the one requested if this CPU runs it.
     pub fn resolve(self) -> Result<SimdLevel, SimdUnavailable> {
         match self {
             SimdChoice::Auto => Ok(SimdLevel::detect()),

@@ -144,7 +144,7 @@ impl TrapPlane {
     }
 }
 
-/// Raw planes of `width * rows` samples, row-major. Planes not asked for are empty.
+/// Raw planes of `width * rows` samples, row-major. Planes not requested are empty.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Planes {
     /// Samples per row.

@@ -2,7 +2,7 @@
 //! IFS kernels.
 //!
 //! One invocation computes one sample and writes `words` 32-bit words (plane-major within
-//! the chunk: word w of sample k at `w * count + k`). The grid rows asked for are cut into
+//! the chunk: word w of sample k at `w * count + k`). The grid rows requested are cut into
 //! chunks of whole rows that respect the device's storage-binding and buffer limits and a
 //! fixed cap of [`CHUNK_SAMPLES`] (so no single dispatch runs long enough to trip a
 //! desktop driver's watchdog at moderate iteration counts, and the readback buffers stay

@@ -13,7 +13,7 @@ pub enum PaletteError {
     /// Neither a built-in name nor a readable file.
     #[error("unknown palette `{name}`: not a built-in palette ({}) and no such file", builtin_names().join(", "))]
     Unknown {
-        /// What was asked for.
+        /// What was requested.
         name: String,
     },
     /// The file could not be read.

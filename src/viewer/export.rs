@@ -13,7 +13,7 @@ use crate::field::ChannelSet;
 use crate::render::{self, Options};
 use crate::scene::Scene;
 
-/// What the user asked for.
+/// What the user requested.
 #[derive(Debug, Clone)]
 pub struct ExportRequest {
     /// PNG path.

@@ -186,7 +186,7 @@ fn shallow_views_with_interior() {
 }
 
 /// A Julia set whose parameter is outside the Mandelbrot set has no interior, and samples
-/// near a preimage of 0 contract on their way out: detection stays off even when asked for.
+/// near a preimage of 0 contract on their way out: detection stays off even when turned on.
 #[test]
 fn julia_set_without_interior_is_not_checked() {
     let v = View::small(["0", "0"], "1.5", Some(["0.28", "0.008"]));
