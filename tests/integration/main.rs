@@ -11,6 +11,7 @@ mod golden;
 mod gpu;
 mod import;
 mod interior;
+mod layout;
 mod locate;
 mod reference;
 mod units;
