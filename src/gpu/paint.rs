@@ -2,11 +2,12 @@
 //! straight into the egui frame with a fragment shader, one orbit per physical pixel.
 //!
 //! The fragment shader (`paint.wgsl`) is built from the same WGSL text as the compute
-//! kernel (`escape.wgsl`), so the viewer and `--engine gpu` iterate identically. It
-//! colours by smooth iteration nu = N + NF through a palette table (linear RGBA sampled
-//! from a [`Palette`] with [`palette_table`]) at position nu * density + offset (the table
-//! repeats), and can multiply Inigo Quilez's soft distance shading clamp((k d)^0.2, 0, 1)
-//! over it (d in physical pixels, the grey read as sRGB as the CPU's distance layer does).
+//! kernel (`escape.wgsl` after a precision's number prelude), so the viewer and `--engine
+//! gpu` iterate identically. It colours by smooth iteration nu = N + NF through a palette
+//! table (linear RGBA sampled from a [`Palette`] with [`palette_table`]) at position nu *
+//! density + offset (the table repeats), and can multiply Inigo Quilez's soft distance
+//! shading clamp((k d)^0.2, 0, 1) over it (d in physical pixels, the grey read as sRGB as
+//! the CPU's distance layer does).
 //! Output is opaque (premultiplied colour over black) and encoded for the target: linear
 //! when the target format is sRGB (the hardware encodes), sRGB-encoded otherwise; egui-wgpu
 //! prefers `Rgba8Unorm`/`Bgra8Unorm` targets, so the shader usually encodes.
@@ -145,18 +146,19 @@ impl PaintResources {
                 label: Some("deepfield paint"),
                 entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), storage(1), storage(3)],
             });
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("deepfield paint"),
-                source: wgpu::ShaderSource::Wgsl(shaders::paint_module().into()),
-            });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("deepfield paint"),
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-            let pipeline = |entry: &str| {
+            let pipeline = |precision: Precision| {
+                let label = Some(precision.describe());
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label,
+                    source: wgpu::ShaderSource::Wgsl(shaders::paint_module(precision).into()),
+                });
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
+                    label,
                     layout: Some(&pipeline_layout),
                     vertex: wgpu::VertexState {
                         module: &module,
@@ -175,7 +177,7 @@ impl PaintResources {
                     multisample: wgpu::MultisampleState { count: samples.max(1), ..Default::default() },
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
-                        entry_point: Some(entry),
+                        entry_point: Some(shaders::PAINT_FS_ENTRY),
                         compilation_options: Default::default(),
                         targets: &[Some(wgpu::ColorTargetState {
                             format,
@@ -193,8 +195,8 @@ impl PaintResources {
                 usage: wgpu::BufferUsages::STORAGE,
             });
             Self {
-                f32_pipeline: pipeline(shaders::PAINT_F32_ENTRY),
-                df_pipeline: pipeline(shaders::PAINT_DF_ENTRY),
+                f32_pipeline: pipeline(Precision::F32),
+                df_pipeline: pipeline(Precision::DoubleFloat),
                 layout,
                 texels,
                 slots: Vec::new(),
