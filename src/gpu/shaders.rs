@@ -4,10 +4,11 @@
 //! text: the double-float helpers (`df.wgsl`), the uniform block and sample raster
 //! (`uniforms.wgsl`), a number prelude that gives the orbit its arithmetic
 //! (`num_f32.wgsl` or `num_df.wgsl`: the type `Num` and the same few functions on it,
-//! [`number_wgsl`]), the orbit loop and its compute entry point (`escape.wgsl`, written
-//! once against those functions), and on top of those either the paint callback's vertex
-//! and fragment shaders (`paint.wgsl`) or the IFS field (`ifs.wgsl`). The compute image
-//! and the viewer therefore iterate with the very same text, in either precision.
+//! [`number_wgsl`]), and the orbit loop and its compute entry point (`escape.wgsl`,
+//! written once against those functions); or, for the IFS field, the first two and
+//! `ifs.wgsl`. The viewer's paint shader (`src/viewer/paint.wgsl`) is appended to
+//! [`escape_module`], so the compute image and the viewer iterate with the very same
+//! text, in either precision.
 
 use super::Precision;
 
@@ -21,8 +22,6 @@ pub const NUM_F32_WGSL: &str = include_str!("num_f32.wgsl");
 pub const NUM_DF_WGSL: &str = include_str!("num_df.wgsl");
 /// Escape-time orbits, per-sample quantities, bitmap trap; the compute entry point.
 pub const ESCAPE_WGSL: &str = include_str!("escape.wgsl");
-/// The viewer's paint callback: full-viewport triangle, palette, distance shading.
-pub const PAINT_WGSL: &str = include_str!("paint.wgsl");
 /// The IFS density field.
 pub const IFS_WGSL: &str = include_str!("ifs.wgsl");
 
@@ -30,10 +29,6 @@ pub const IFS_WGSL: &str = include_str!("ifs.wgsl");
 pub const ESCAPE_ENTRY: &str = "escape_main";
 /// Compute entry point of the IFS field.
 pub const IFS_ENTRY: &str = "ifs_main";
-/// Vertex entry point of the paint callback.
-pub const PAINT_VS_ENTRY: &str = "paint_vs";
-/// Fragment entry point of the paint callback (either precision's module).
-pub const PAINT_FS_ENTRY: &str = "paint_fs";
 
 /// The number prelude of `precision`: the orbit loop's arithmetic.
 pub fn number_wgsl(precision: Precision) -> &'static str {
@@ -46,11 +41,6 @@ pub fn number_wgsl(precision: Precision) -> &'static str {
 /// The escape-time compute module, iterating in `precision`.
 pub fn escape_module(precision: Precision) -> String {
     [DF_WGSL, UNIFORMS_WGSL, number_wgsl(precision), ESCAPE_WGSL].concat()
-}
-
-/// The paint module: the escape-time module plus the vertex and fragment shaders.
-pub fn paint_module(precision: Precision) -> String {
-    [escape_module(precision).as_str(), PAINT_WGSL].concat()
 }
 
 /// The IFS compute module.
