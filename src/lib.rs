@@ -15,6 +15,7 @@ pub mod field;
 pub mod formula;
 pub mod gpu;
 pub mod io;
+pub mod kf_text;
 pub mod locate;
 pub mod num;
 pub mod orbit;

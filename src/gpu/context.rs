@@ -118,28 +118,30 @@ impl GpuContext {
         &self.queue
     }
 
-    /// The compute pipeline of `entry` in the module `source` builds, built once.
+    /// The compute pipeline of `entry` in the module `source` builds, built once and cached
+    /// under `name` (one name per module and entry point).
     pub(crate) fn compute_pipeline(
         &self,
-        source: fn() -> String,
+        name: &'static str,
+        source: impl FnOnce() -> String,
         entry: &'static str,
     ) -> Result<Arc<wgpu::ComputePipeline>, GpuError> {
         let mut cache = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = cache.get(entry) {
+        if let Some(p) = cache.get(name) {
             return Ok(p.clone());
         }
         let pipeline = self.checked(|| {
             let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(entry),
+                label: Some(name),
                 source: wgpu::ShaderSource::Wgsl(source().into()),
             });
             let layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
+                label: Some(name),
                 bind_group_layouts: &[Some(&self.layout)],
                 immediate_size: 0,
             });
             self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
+                label: Some(name),
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some(entry),
@@ -148,7 +150,7 @@ impl GpuContext {
             })
         })?;
         let pipeline = Arc::new(pipeline);
-        cache.insert(entry, pipeline.clone());
+        cache.insert(name, pipeline.clone());
         Ok(pipeline)
     }
 

@@ -1,9 +1,11 @@
 // Escape-time iteration of z -> z^2 + c, one invocation per sample, in f32 or in
-// double-float, with the per-sample quantities of docs/design.md (N, NF, T, DEX/DEY) and the
-// bitmap orbit trap. Written after GLSL versions of Inigo Quilez's "Bitmap Orbit Traps" and "Distance
-// Rendering for Fractals", with their slips fixed: the Mandelbrot derivative adds 1 (not (1, 1)), the
-// Julia derivative adds nothing, escape is |z| > R with the scene's R (not 2), and the
-// distance is measured in pixels. The semantics follow src/field (scalar kernel):
+// double-float (whichever number prelude, num_f32.wgsl or num_df.wgsl, precedes this
+// text), with the per-sample quantities of docs/design.md (N, NF, T, DEX/DEY) and the
+// bitmap orbit trap. Written after GLSL versions of Inigo Quilez's "Bitmap Orbit Traps"
+// and "Distance Rendering for Fractals", with their slips fixed: the Mandelbrot
+// derivative adds 1 (not (1, 1)), the Julia derivative adds nothing, escape is |z| > R
+// with the scene's R (not 2), and the distance is measured in pixels. The semantics
+// follow src/field (scalar kernel):
 //
 // * Mandelbrot starts at z_1 = c, dz_1 = 1 (n = 1); Julia at z_0 = pixel, dz_0 = 1 (n = 0).
 // * Each step first lets the trap see z_n (n >= 1), then tests |z_n|^2 > R^2 (escape with
@@ -79,66 +81,23 @@ fn no_escape() -> Escape {
     return Escape(INTERIOR, vec2<f32>(0.0), vec2<f32>(0.0), vec4<f32>(0.0));
 }
 
-// One orbit in f32 arithmetic from the sample point p.
-fn escape_f32(p: vec2<f32>) -> Escape {
+// One orbit from the sample point p = (x_hi, x_lo, y_hi, y_lo), in the number type `Num` of
+// the prelude the module was built with (num_f32.wgsl or num_df.wgsl). Only z and c are in
+// `Num`: the escape test, the trap and the derivative read z's f32 value, which is all
+// they need.
+fn escape(p: vec4<f32>) -> Escape {
     var e = no_escape();
     let de = (P.flags & FLAG_DERIVATIVE) != 0u;
     let trap = (P.flags & FLAG_TRAP) != 0u;
-    var z = p;
-    var c = p;
+    var zx = num_from_df(p.xy);
+    var zy = num_from_df(p.zw);
+    var cx = zx;
+    var cy = zy;
     var n = 1u;
     var add = P.spacing_hi;
     if P.family == FAMILY_JULIA {
-        c = vec2<f32>(P.julia_x_hi, P.julia_y_hi);
-        n = 0u;
-        add = 0.0;
-    } else if !trap && in_main_components(p) {
-        return e;
-    }
-    var dz = vec2<f32>(P.spacing_hi, 0.0);
-    var hit = false;
-    loop {
-        if trap && !hit && n >= 1u {
-            let s = trap_sample(z);
-            if s.w > P.trap_threshold {
-                e.trap = s;
-                hit = true;
-            }
-        }
-        if z.x * z.x + z.y * z.y > P.escape_r2 {
-            e.n = n;
-            e.z = z;
-            e.dz = dz;
-            return e;
-        }
-        if n >= P.max_iter {
-            return e;
-        }
-        if de {
-            dz = vec2<f32>(2.0 * (z.x * dz.x - z.y * dz.y) + add, 2.0 * (z.x * dz.y + z.y * dz.x));
-        }
-        z = vec2<f32>(z.x * z.x - z.y * z.y + c.x, 2.0 * z.x * z.y + c.y);
-        n += 1u;
-    }
-    return e;
-}
-
-// One orbit in double-float arithmetic from the sample point p = (x_hi, x_lo, y_hi, y_lo).
-// Only z is double-float: the escape test, the trap and the derivative read its f32 value,
-// which is all they need.
-fn escape_df(p: vec4<f32>) -> Escape {
-    var e = no_escape();
-    let de = (P.flags & FLAG_DERIVATIVE) != 0u;
-    let trap = (P.flags & FLAG_TRAP) != 0u;
-    var zx = p.xy;
-    var zy = p.zw;
-    var cx = p.xy;
-    var cy = p.zw;
-    var n = 1u;
-    var add = P.spacing_hi;
-    if P.family == FAMILY_JULIA {
-        cx = vec2<f32>(P.julia_x_hi, P.julia_x_lo);
-        cy = vec2<f32>(P.julia_y_hi, P.julia_y_lo);
+        cx = num_from_df(vec2<f32>(P.julia_x_hi, P.julia_x_lo));
+        cy = num_from_df(vec2<f32>(P.julia_y_hi, P.julia_y_lo));
         n = 0u;
         add = 0.0;
     } else if !trap && in_main_components(vec2<f32>(p.x, p.z)) {
@@ -147,7 +106,7 @@ fn escape_df(p: vec4<f32>) -> Escape {
     var dz = vec2<f32>(P.spacing_hi, 0.0);
     var hit = false;
     loop {
-        let z = vec2<f32>(zx.x, zy.x);
+        let z = vec2<f32>(num_f32(zx), num_f32(zy));
         if trap && !hit && n >= 1u {
             let s = trap_sample(z);
             if s.w > P.trap_threshold {
@@ -167,9 +126,9 @@ fn escape_df(p: vec4<f32>) -> Escape {
         if de {
             dz = vec2<f32>(2.0 * (z.x * dz.x - z.y * dz.y) + add, 2.0 * (z.x * dz.y + z.y * dz.x));
         }
-        let xy = df_mul(zx, zy);
-        zx = df_add(df_sub(df_sqr(zx), df_sqr(zy)), cx);
-        zy = df_add(xy * 2.0, cy);
+        let xy2 = num_twice_mul(zx, zy);
+        zx = num_add(num_sub(num_sqr(zx), num_sqr(zy)), cx);
+        zy = num_add(xy2, cy);
         n += 1u;
     }
     return e;
@@ -272,22 +231,11 @@ fn chunk_sample(id: vec3<u32>, groups: vec3<u32>) -> vec3<u32> {
 }
 
 @compute @workgroup_size(64)
-fn escape_f32_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn escape_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     df_one = P.one;
     let s = chunk_sample(id, groups);
     if s.x >= P.count {
         return;
     }
-    let p = sample_point(s.y, s.z);
-    store(s.x, escape_f32(vec2<f32>(p.x, p.z)));
-}
-
-@compute @workgroup_size(64)
-fn escape_df_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    df_one = P.one;
-    let s = chunk_sample(id, groups);
-    if s.x >= P.count {
-        return;
-    }
-    store(s.x, escape_df(sample_point(s.y, s.z)));
+    store(s.x, escape(sample_point(s.y, s.z)));
 }

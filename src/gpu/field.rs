@@ -149,11 +149,11 @@ pub fn compute_planes(
         return Ok(planes);
     }
     let uniforms = field_uniforms(params, trap);
-    let entry = match precision {
-        Precision::F32 => shaders::ESCAPE_F32_ENTRY,
-        Precision::DoubleFloat => shaders::ESCAPE_DF_ENTRY,
+    let name = match precision {
+        Precision::F32 => "escape f32",
+        Precision::DoubleFloat => "escape double-float",
     };
-    let pipeline = ctx.compute_pipeline(shaders::escape_module, entry)?;
+    let pipeline = ctx.compute_pipeline(name, || shaders::escape_module(precision), shaders::ESCAPE_ENTRY)?;
     let dummy = [[0.0f32; 4]];
     let texels = match trap {
         Some(t) if !t.bitmap.texels.is_empty() => t.bitmap.texels.as_slice(),

@@ -45,7 +45,7 @@ pub fn compute_ifs(
     u.ifs_strength = params.strength;
     u.ifs_decay = params.decay;
     u.ifs_scale = params.scale;
-    let pipeline = ctx.compute_pipeline(shaders::ifs_module, shaders::IFS_ENTRY)?;
+    let pipeline = ctx.compute_pipeline("ifs", shaders::ifs_module, shaders::IFS_ENTRY)?;
     let width = grid.width as usize;
     let mut out = vec![0.0f32; width * rows.len()];
     let job = Job { pipeline: &pipeline, uniforms: u, texels: &[[0.0; 4]], width: grid.width, rows, words: 1 };

@@ -1,5 +1,5 @@
-//! GPU paths: WGSL versions of the 2D escape-time field, the IFS density field and the
-//! viewer's paint callback, run through wgpu.
+//! GPU paths: WGSL versions of the 2D escape-time field and the IFS density field, run
+//! through wgpu.
 //!
 //! The GPU computes the same per-sample quantities as [`crate::field`] (N, NF, T,
 //! DEX/DEY, a bitmap trap's colour) for views that 24-bit floats can address, in two
@@ -7,7 +7,9 @@
 //! (an unevaluated sum of two f32s, about 46 bits), which reaches roughly 10^7 times
 //! deeper at a fraction of the speed. Neither replaces the f64 or perturbation engines:
 //! renders use the GPU only when asked (`--engine gpu` or `gpu-df`), and `auto` never
-//! picks it. The viewer draws with it ([`paint`]) because it is interactive at any size.
+//! picks it. The viewer draws with it (its paint callback, `src/viewer/paint.rs`, which
+//! appends a fragment shader to [`shaders::escape_module`]) because it is interactive at
+//! any size. Nothing here knows egui or eframe.
 //!
 //! * [`GpuContext`]: a headless device (any backend, a software rasteriser such as
 //!   lavapipe included) and the compute pipelines, built once and cached.
@@ -15,12 +17,11 @@
 //! * [`shaders`]: the WGSL text and how modules are assembled from shared pieces.
 //! * [`field`]: raw planes of a strip of the sample grid ([`field::compute_planes`]).
 //! * [`ifs`]: the minimal IFS density field (p ← abs(p)/dot(p,p) + offset), on the CPU and on the GPU.
-//! * [`paint`]: the egui paint callback that draws the escape-time image in the viewer.
 //! * `runner`: chunked compute dispatches with readback.
 //!
-//! Everything that opens a device or draws (the context, the runner, [`ifs`]'s dispatch,
-//! [`paint`]) is compiled only with the `gpu` cargo feature (and [`paint`] with `viewer`),
-//! both on by default; the precisions, limits and shader text are always here, so scenes
+//! Everything that opens a device (the context, the runner, [`ifs`]'s dispatch) is
+//! compiled only with the `gpu` cargo feature, on by default; the precisions, limits and
+//! shader text are always here, so scenes
 //! and `--engine` parse the same in a headless build, which refuses the GPU engines with
 //! [`GpuError::NotBuilt`].
 //!
@@ -34,8 +35,6 @@ mod context;
 pub mod field;
 #[cfg(feature = "gpu")]
 pub mod ifs;
-#[cfg(feature = "viewer")]
-pub mod paint;
 #[cfg(feature = "gpu")]
 mod runner;
 pub mod shaders;
@@ -45,8 +44,11 @@ pub mod uniforms;
 pub use absent::GpuContext;
 #[cfg(feature = "gpu")]
 pub use context::GpuContext;
-#[cfg(feature = "gpu")]
+// For the viewer's paint callback, which builds its render pipelines on this device code.
+#[cfg(feature = "viewer")]
 pub(crate) use context::{checked, uniform_entry};
+#[cfg(feature = "viewer")]
+pub(crate) use runner::read_back;
 
 /// Arithmetic of the GPU orbit loop.
 ///

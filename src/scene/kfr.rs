@@ -61,10 +61,12 @@
 //! deepfield's image (axis up) is KF's mirrored top to bottom; and KF's sample grid may sit
 //! half a pixel from deepfield's pixel centres (invisible at any zoom).
 //!
-//! Lines may end in CRLF or LF; a leading byte-order mark, blank lines and spaces around keys
-//! and values are allowed. A line without a `:` is an error, and so is a key given twice
-//! among those this module reads (KF would silently take the first).
+//! The lines are read by [`crate::kf_text`] (shared with the palette importer): CRLF or LF
+//! line ends, a leading byte-order mark, blank lines and spaces around keys and values are
+//! allowed; a line without a `:` is an error, and so is a key given twice among those this
+//! module reads (KF would silently take the first).
 
+use crate::kf_text::{Entry, KfText};
 use crate::num::Decimal;
 use crate::scene::{MAX_ITER_LIMIT, MAX_SIDE};
 use crate::source::SourceError;
@@ -101,83 +103,24 @@ const KNOWN: &[&str] = &[
     "InteriorColor",
 ];
 
-/// One `Key: value` line.
-struct Entry<'a> {
-    key: &'a str,
-    value: &'a str,
-    /// Byte offset of the key in the text.
-    key_at: usize,
-    /// Byte offset of the value (just after the colon when the value is empty).
-    value_at: usize,
-}
-
 /// The parsed lines, with error construction bound to the source.
 struct Kfr<'a> {
     origin: &'a str,
     text: &'a str,
-    entries: Vec<Entry<'a>>,
+    lines: KfText<'a>,
 }
 
 impl<'a> Kfr<'a> {
     fn parse(origin: &'a str, text: &'a str) -> Result<Self, SourceError> {
-        let mut entries: Vec<Entry<'a>> = Vec::new();
-        let mut start = 0;
-        for raw in text.split_inclusive('\n') {
-            let line_start = start;
-            start += raw.len();
-            let mut line = raw.trim_end_matches(['\n', '\r']);
-            let mut base = line_start;
-            if line_start == 0
-                && let Some(rest) = line.strip_prefix('\u{feff}')
-            {
-                base += line.len() - rest.len();
-                line = rest;
-            }
-            if line.trim().is_empty() {
-                continue;
-            }
-            let lead = line.len() - line.trim_start().len();
-            let Some(colon) = line.find(':') else {
-                let shown: String = line.trim().chars().take(40).collect();
-                return Err(SourceError::at(
-                    origin,
-                    text,
-                    Some(base + lead..base + lead),
-                    format!(
-                        "expected a Kalles Fraktaler location line `Key: value` (like `Re: -0.75`), found `{shown}` with no `:`"
-                    ),
-                ));
-            };
-            let key = line[..colon].trim();
-            if key.is_empty() {
-                return Err(SourceError::at(
-                    origin,
-                    text,
-                    Some(base + lead..base + lead),
-                    "expected a key before `:` (a line `Key: value`, like `Re: -0.75`)",
-                ));
-            }
-            let after = &line[colon + 1..];
-            let value = after.trim();
-            let value_at = base + colon + 1 + (after.len() - after.trim_start().len());
-            if KNOWN.contains(&key)
-                && let Some(first) = entries.iter().find(|e| e.key == key)
-            {
-                let first_line = crate::source::Position::of(text, first.key_at).line;
-                return Err(SourceError::at(
-                    origin,
-                    text,
-                    Some(base + lead..base + lead),
-                    format!("`{key}` is given twice (first on line {first_line}); expected it once"),
-                ));
-            }
-            entries.push(Entry { key, value, key_at: base + lead, value_at });
-        }
-        Ok(Self { origin, text, entries })
+        let lines = KfText::parse(text, KNOWN).map_err(|e| {
+            let at = e.at();
+            SourceError::at(origin, text, Some(at..at), e.to_string())
+        })?;
+        Ok(Self { origin, text, lines })
     }
 
     fn get(&self, key: &str) -> Option<&Entry<'a>> {
-        self.entries.iter().find(|e| e.key == key)
+        self.lines.get(key)
     }
 
     fn error_at(&self, at: usize, message: impl Into<String>) -> SourceError {

@@ -234,7 +234,7 @@ impl ViewerApp {
         // Deep views work in the viewer as in `render`; the GPU paint path needs a wgpu
         // render state (eframe's wgpu renderer provides it).
         if let Some(rs) = cc.wgpu_render_state.as_ref()
-            && let Err(e) = crate::gpu::paint::register(rs)
+            && let Err(e) = crate::viewer::paint::register(rs)
         {
             app.error = Some(format!("GPU paint path unavailable: {e}"));
         }

@@ -8,7 +8,8 @@
 //! - [`app`]: the window: image, panels, input, recolouring, Julia preview, GPU modes;
 //! - [`layers_panel`]: the layers panel, a control for every key each layer's kind takes;
 //! - [`palette_editor`], [`export`]: the palette editor and PNG/EXR export;
-//! - [`difference`]: the CPU-vs-GPU per-pixel difference view.
+//! - [`difference`]: the CPU-vs-GPU per-pixel difference view;
+//! - [`paint`]: the egui paint callback that draws the escape-time image with the GPU.
 //!
 //! eframe (and egui) live only here, as docs/design.md lays out; the rest of the crate never sees them.
 
@@ -18,6 +19,7 @@ pub mod export;
 pub mod layers_panel;
 pub mod nav;
 pub mod newton;
+pub mod paint;
 pub mod palette_editor;
 pub mod worker;
 

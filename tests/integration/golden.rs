@@ -3,8 +3,10 @@
 //! Tolerance: at most 0.5% of channel values may differ from the golden image by more than
 //! 2 levels (of 255), and none by more than 24. Everything is computed in IEEE arithmetic
 //! with the same operations on every machine; the slack only covers libm differences in
-//! ln/pow/atan2 between platforms. On failure the actual image is written beside the
-//! scratch folder and its path printed; `DEEPFIELD_BLESS=1 cargo test` regenerates goldens.
+//! ln/pow/atan2 between platforms. A test that compares several images compares them all
+//! before failing: each image outside the tolerance has its actual render written to the
+//! scratch folder, and the one failure lists them all with their paths.
+//! `DEEPFIELD_BLESS=1 cargo test` regenerates goldens.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -40,27 +42,66 @@ pub fn render_rgb8(text: &str, threads: usize) -> (u32, u32, Vec<u8>) {
     (s.width, s.height, out.into_inner().unwrap())
 }
 
-fn golden(name: &str, text: &str) {
+/// Renders `text` and compares it with the golden image `name`; on a mismatch writes the
+/// actual image to the scratch folder and returns what differs (None: within tolerance,
+/// or blessed).
+fn mismatch(name: &str, text: &str) -> Option<String> {
     let (w, h, actual) = render_rgb8(text, 2);
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"));
     if std::env::var_os("DEEPFIELD_BLESS").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         image::save_buffer(&path, &actual, w, h, image::ColorType::Rgb8).unwrap();
-        return;
+        return None;
     }
-    let expected = image::open(&path)
-        .unwrap_or_else(|e| panic!("golden {} missing ({e}); run with DEEPFIELD_BLESS=1 to create it", path.display()))
-        .to_rgb8();
-    assert_eq!(expected.dimensions(), (w, h), "{name}: size");
+    let expected = match image::open(&path) {
+        Ok(image) => image.to_rgb8(),
+        Err(e) => {
+            return Some(format!("golden {} missing ({e}); run with DEEPFIELD_BLESS=1 to create it", path.display()));
+        }
+    };
+    let save_actual = || {
+        let dir = scratch(&format!("golden-{name}"));
+        let out = dir.join(format!("{name}.actual.png"));
+        image::save_buffer(&out, &actual, w, h, image::ColorType::Rgb8).unwrap();
+        out
+    };
+    if expected.dimensions() != (w, h) {
+        let out = save_actual();
+        return Some(format!(
+            "{name}: size {w}x{h}, golden {}x{}; actual image: {}",
+            expected.width(),
+            expected.height(),
+            out.display()
+        ));
+    }
     let diffs: Vec<u8> = expected.as_raw().iter().zip(&actual).map(|(a, b)| a.abs_diff(*b)).collect();
     let over = diffs.iter().filter(|&&d| d > 2).count();
     let worst = diffs.iter().copied().max().unwrap_or(0);
     if over * 200 > diffs.len() || worst > 24 {
-        let dir = scratch(&format!("golden-{name}"));
-        let out = dir.join(format!("{name}.actual.png"));
-        image::save_buffer(&out, &actual, w, h, image::ColorType::Rgb8).unwrap();
-        panic!("{name}: {over} values differ by more than 2 (worst {worst}); actual image: {}", out.display());
+        let out = save_actual();
+        return Some(format!(
+            "{name}: {over} values differ by more than 2 (worst {worst}); actual image: {}",
+            out.display()
+        ));
     }
+    None
+}
+
+/// Compares every `(name, scene text)` case, then fails once, listing each image outside
+/// the tolerance (so one run shows every broken golden, not only the first).
+fn goldens<N: AsRef<str>, T: AsRef<str>>(cases: impl IntoIterator<Item = (N, T)>) {
+    let mut count = 0;
+    let mut failures = Vec::new();
+    for (name, text) in cases {
+        count += 1;
+        failures.extend(mismatch(name.as_ref(), text.as_ref()));
+    }
+    assert!(failures.is_empty(), "{} of {count} golden images differ:\n{}", failures.len(), failures.join("\n"));
+}
+
+/// One golden image.
+fn golden(name: &str, text: &str) {
+    goldens([(name, text)]);
 }
 
 const VIEW: &str = "[view]\ncenter = [\"-0.75\", \"0\"]\nzoom = \"1.5\"\nwidth = 96\nheight = 72\n";
@@ -162,9 +203,9 @@ fn golden_colourings() {
         ),
         ("ifs", "kind = \"ifs\"\npalette = \"electric\"\nscale = 0.8\nslice = 0.2\n"),
     ];
-    for (name, layer) in cases {
-        golden(&format!("coloring-{name}"), &format!("version = 1\n{VIEW}[iteration]\nmax = 300\n[[layer]]\n{layer}"));
-    }
+    goldens(cases.iter().map(|(name, layer)| {
+        (format!("coloring-{name}"), format!("version = 1\n{VIEW}[iteration]\nmax = 300\n[[layer]]\n{layer}"))
+    }));
 }
 
 /// A layer mask: slope lighting only within 3 pixels of the set, over smooth iteration.
@@ -190,7 +231,7 @@ fn golden_sprite_frame() {
 /// Every blend mode: a soft-distance layer at 80% over smooth iteration.
 #[test]
 fn golden_blend_modes() {
-    for mode in [
+    let modes = [
         "normal",
         "multiply",
         "screen",
@@ -204,12 +245,13 @@ fn golden_blend_modes() {
         "color-burn",
         "exclusion",
         "plus",
-    ] {
-        golden(
-            &format!("blend-{mode}"),
-            &format!(
+    ];
+    goldens(modes.map(|mode| {
+        (
+            format!("blend-{mode}"),
+            format!(
                 "version = 1\n{VIEW}[[layer]]\nkind = \"smooth\"\npalette = \"twilight\"\n[[layer]]\nkind = \"distance\"\nk = 0.3\npalette = \"copper\"\nblend = \"{mode}\"\nopacity = 0.8\n"
             ),
-        );
-    }
+        )
+    }));
 }

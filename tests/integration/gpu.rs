@@ -17,13 +17,13 @@ use deepfield::field::{self, ChannelSet, FieldParams, INTERIOR, Needs, Planes, S
 use deepfield::formula::Family;
 use deepfield::gpu::field::compute_planes;
 use deepfield::gpu::ifs::{self, IfsParams};
-use deepfield::gpu::paint::{self, PaintParams};
 use deepfield::gpu::uniforms::{UNIFORMS_SIZE, Uniforms};
 use deepfield::gpu::{GpuContext, Precision, shaders};
 use deepfield::palette::{self, color};
 use deepfield::render;
 use deepfield::scene::EngineChoice;
 use deepfield::trap::{Bitmap, BitmapTrap, Frame, Trap};
+use deepfield::viewer::paint::{self, PaintParams};
 
 use super::util::{self, scratch};
 

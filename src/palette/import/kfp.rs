@@ -1,11 +1,13 @@
 //! Kalles Fraktaler palettes and locations (`.kfp`, `.kfr`).
 //!
 //! Both are the same text (`CFraktalSFT::ToText` in KF's `Parameter.cpp`): lines
-//! `Key: value`; a palette file is a location file loaded without its location. The
-//! colours are the `Colors:` line, a comma-separated list of byte values, three per key
-//! colour, usually with a trailing comma. We also read `ColorOffset:` (0..1023, the
-//! palette's rotation in 1024ths); every other key (iterations, `IterDiv`, slopes, the
-//! multi-wave colouring `MultiColor`/`MultiColors`, textures...) is ignored.
+//! `Key: value`, read by [`crate::kf_text`] as for a location (a malformed line, or
+//! `Colors` or `ColorOffset` given twice, is an error); a palette file is a location file
+//! loaded without its location. The colours are the `Colors:` line, a comma-separated
+//! list of byte values, three per key colour, usually with a trailing comma. We also read
+//! `ColorOffset:` (0..1023, the palette's rotation in 1024ths); every other key
+//! (iterations, `IterDiv`, slopes, the multi-wave colouring `MultiColor`/`MultiColors`,
+//! textures...) is ignored.
 //!
 //! Channel order is blue, green, red. KF's key colours are `COLOR14 { r, g, b }` structs,
 //! written and read as `r,g,b` in that order, but the field named `r` holds blue and `b`
@@ -24,6 +26,7 @@
 //! palette offset `ColorOffset / 1024` (KF looks up table entry `index + ColorOffset`).
 
 use super::{Ctx, ImportError, Rgba, StopList, palette_name};
+use crate::kf_text::{Entry, KfText};
 use crate::palette::{Mode, Palette};
 
 /// Entries in KF's colour table.
@@ -31,25 +34,15 @@ const TABLE: f64 = 1024.0;
 
 /// The palette in a `.kfp` or `.kfr` file.
 pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
-    let mut keys: Option<Vec<[f64; 3]>> = None;
+    let lines = KfText::parse(ctx.text, &["Colors", "ColorOffset"]).map_err(|e| ctx.err(e.at(), e.to_string()))?;
+    let keys = lines.get("Colors").map(|e| colors(ctx, e)).transpose()?;
     let mut offset = 0.0;
-    for (start, line) in super::lines(ctx.text) {
-        let Some(colon) = line.find(':') else { continue };
-        let key = line[..colon].trim();
-        let value = &line[colon + 1..];
-        let value_at = start + colon + 1;
-        match key {
-            "Colors" => keys = Some(colors(ctx, value_at, value)?),
-            "ColorOffset" => {
-                let word = value.trim();
-                let at = value_at + (value.len() - value.trim_start().len());
-                let v: i64 =
-                    word.parse().map_err(|_| ctx.err(at, format!("expected a whole number, found `{word}`")))?;
-                // KF resets an offset outside 0..1023 to 0.
-                offset = if (0..1024).contains(&v) { v as f64 / TABLE } else { 0.0 };
-            }
-            _ => {}
-        }
+    if let Some(e) = lines.get("ColorOffset") {
+        let word = e.value;
+        let v: i64 =
+            word.parse().map_err(|_| ctx.err(e.value_at, format!("expected a whole number, found `{word}`")))?;
+        // KF resets an offset outside 0..1023 to 0.
+        offset = if (0..1024).contains(&v) { v as f64 / TABLE } else { 0.0 };
     }
     let Some(keys) = keys else {
         return Err(ctx.err_file("no `Colors:` line: not a Kalles Fraktaler palette or location"));
@@ -75,11 +68,11 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
     Ok(vec![ctx.palette(palette_name(&ctx.stem), &detail, Mode::Repeat, stops).adjusted(offset, 1.0)])
 }
 
-/// The key colours of a `Colors:` value starting at byte `at`: `B,G,R,` triples.
-fn colors(ctx: &Ctx<'_>, at: usize, value: &str) -> Result<Vec<[f64; 3]>, ImportError> {
+/// The key colours of a `Colors:` line: `B,G,R,` triples.
+fn colors(ctx: &Ctx<'_>, line: &Entry<'_>) -> Result<Vec<[f64; 3]>, ImportError> {
     let mut bytes = Vec::new();
-    let mut pos = at;
-    let parts: Vec<&str> = value.split(',').collect();
+    let mut pos = line.value_at;
+    let parts: Vec<&str> = line.value.split(',').collect();
     for (k, part) in parts.iter().enumerate() {
         let word = part.trim();
         let word_at = pos + (part.len() - part.trim_start().len());
@@ -95,7 +88,8 @@ fn colors(ctx: &Ctx<'_>, at: usize, value: &str) -> Result<Vec<[f64; 3]>, Import
         bytes.push(v as f64 / 255.0);
     }
     if bytes.len() % 3 != 0 {
-        return Err(ctx.err(at, format!("`Colors:` holds {} values, not a whole number of B,G,R triples", bytes.len())));
+        let message = format!("`Colors:` holds {} values, not a whole number of B,G,R triples", bytes.len());
+        return Err(ctx.err(line.colon_at + 1, message));
     }
     Ok(bytes.chunks(3).map(|c| [c[2], c[1], c[0]]).collect())
 }
@@ -137,6 +131,8 @@ mod tests {
             ("Colors: 1,2,3,4,\n", "x.kfp:1:8:", "triples"),
             ("Colors: 1,,3,\n", "x.kfp:1:11:", "found ``"),
             ("Colors: 1,2,3,\nColorOffset: many\n", "x.kfp:2:14:", "whole number"),
+            ("Zoom: 1\n  no colon\nColors: 1,2,3,\n", "x.kfp:2:3:", "Key: value"),
+            ("Colors: 1,2,3,\nColors: 4,5,6,\n", "x.kfp:2:1:", "twice"),
         ];
         for (text, at, what) in bad {
             let e = import_text(Format::Kfp, "x.kfp", text).unwrap_err().to_string();

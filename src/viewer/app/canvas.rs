@@ -156,14 +156,14 @@ impl ViewerApp {
                 if let Some(g) = gpu_rect
                     && let Some(params) = self.gpu_params(rect, g, ppp)
                 {
-                    ui.painter_at(g).add(crate::gpu::paint::paint_callback(g, params));
+                    ui.painter_at(g).add(crate::viewer::paint::paint_callback(g, params));
                 }
             }
         }
     }
 
     /// The paint callback's parameters for drawing the part `rect` of the image area `full`.
-    pub(super) fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::gpu::paint::PaintParams> {
+    pub(super) fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::viewer::paint::PaintParams> {
         let scene = self.scene.as_ref()?;
         // The paint shader draws unrotated, unstretched views only.
         if !scene.transform.is_identity() {
@@ -210,8 +210,8 @@ impl ViewerApp {
         });
         // One period of the layer's palette position (the palette's own density, offset and
         // mode applied); the shader wraps position = nu * density + offset into it.
-        let lut = crate::gpu::paint::palette_table(&palette, 1024);
-        Some(crate::gpu::paint::PaintParams {
+        let lut = crate::viewer::paint::palette_table(&palette, 1024);
+        Some(crate::viewer::paint::PaintParams {
             center: centre,
             spacing,
             size_px: [(rect.width() * ppp) as u32, (rect.height() * ppp) as u32],

@@ -1,12 +1,13 @@
 //! The viewer's GPU drawing: an egui paint callback that renders the escape-time image
 //! straight into the egui frame with a fragment shader, one orbit per physical pixel.
 //!
-//! The fragment shader (`paint.wgsl`) is built from the same WGSL text as the compute
-//! kernel (`escape.wgsl`), so the viewer and `--engine gpu` iterate identically. It
-//! colours by smooth iteration nu = N + NF through a palette table (linear RGBA sampled
-//! from a [`Palette`] with [`palette_table`]) at position nu * density + offset (the table
-//! repeats), and can multiply Inigo Quilez's soft distance shading clamp((k d)^0.2, 0, 1)
-//! over it (d in physical pixels, the grey read as sRGB as the CPU's distance layer does).
+//! The fragment shader (`paint.wgsl`) is appended to the compute kernel's own text
+//! (`src/gpu/escape.wgsl` after a precision's number prelude), so the viewer and `--engine
+//! gpu` iterate identically. It colours by smooth iteration nu = N + NF through a palette
+//! table (linear RGBA sampled from a [`Palette`] with [`palette_table`]) at position nu *
+//! density + offset (the table repeats), and can multiply Inigo Quilez's soft distance
+//! shading clamp((k d)^0.2, 0, 1) over it (d in physical pixels, the grey read as sRGB as
+//! the CPU's distance layer does).
 //! Output is opaque (premultiplied colour over black) and encoded for the target: linear
 //! when the target format is sRGB (the hardware encodes), sRGB-encoded otherwise; egui-wgpu
 //! prefers `Rgba8Unorm`/`Bgra8Unorm` targets, so the shader usually encodes.
@@ -22,11 +23,26 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use eframe::egui;
 use eframe::egui_wgpu;
-use wgpu::util::DeviceExt;
+// wgpu through eframe's re-export (the same crate `crate::gpu` uses): the viewer depends on eframe alone.
+use eframe::egui_wgpu::wgpu::{self, util::DeviceExt};
 
-use super::uniforms::{self, Uniforms};
-use super::{GpuContext, GpuError, MAX_ESCAPE_RADIUS, Precision, shaders};
+use crate::gpu::uniforms::{self, Uniforms};
+use crate::gpu::{GpuContext, GpuError, MAX_ESCAPE_RADIUS, Precision, shaders};
 use crate::palette::Palette;
+
+/// The vertex and fragment shaders; the rest of the module is the escape-time compute
+/// module's text ([`shaders::escape_module`]).
+const PAINT_WGSL: &str = include_str!("paint.wgsl");
+/// Vertex entry point.
+const PAINT_VS_ENTRY: &str = "paint_vs";
+/// Fragment entry point (either precision's module).
+const PAINT_FS_ENTRY: &str = "paint_fs";
+
+/// The paint module of `precision`: the escape-time module plus the vertex and fragment
+/// shaders, so the image iterates with the compute kernel's own text.
+fn paint_module(precision: Precision) -> String {
+    [shaders::escape_module(precision).as_str(), PAINT_WGSL].concat()
+}
 
 /// What the paint callback draws.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,7 +146,7 @@ impl PaintResources {
         samples: u32,
         depth: Option<wgpu::TextureFormat>,
     ) -> Result<Self, GpuError> {
-        super::checked(device, || {
+        crate::gpu::checked(device, || {
             let storage = |binding| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::FRAGMENT,
@@ -143,24 +159,25 @@ impl PaintResources {
             };
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("deepfield paint"),
-                entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), storage(1), storage(3)],
-            });
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("deepfield paint"),
-                source: wgpu::ShaderSource::Wgsl(shaders::paint_module().into()),
+                entries: &[crate::gpu::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), storage(1), storage(3)],
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("deepfield paint"),
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-            let pipeline = |entry: &str| {
+            let pipeline = |precision: Precision| {
+                let label = Some(precision.describe());
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label,
+                    source: wgpu::ShaderSource::Wgsl(paint_module(precision).into()),
+                });
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
+                    label,
                     layout: Some(&pipeline_layout),
                     vertex: wgpu::VertexState {
                         module: &module,
-                        entry_point: Some(shaders::PAINT_VS_ENTRY),
+                        entry_point: Some(PAINT_VS_ENTRY),
                         compilation_options: Default::default(),
                         buffers: &[],
                     },
@@ -175,7 +192,7 @@ impl PaintResources {
                     multisample: wgpu::MultisampleState { count: samples.max(1), ..Default::default() },
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
-                        entry_point: Some(entry),
+                        entry_point: Some(PAINT_FS_ENTRY),
                         compilation_options: Default::default(),
                         targets: &[Some(wgpu::ColorTargetState {
                             format,
@@ -193,8 +210,8 @@ impl PaintResources {
                 usage: wgpu::BufferUsages::STORAGE,
             });
             Self {
-                f32_pipeline: pipeline(shaders::PAINT_F32_ENTRY),
-                df_pipeline: pipeline(shaders::PAINT_DF_ENTRY),
+                f32_pipeline: pipeline(Precision::F32),
+                df_pipeline: pipeline(Precision::DoubleFloat),
                 layout,
                 texels,
                 slots: Vec::new(),
@@ -399,7 +416,7 @@ pub fn render_offscreen(
         staging
     })?;
     let mut words = Vec::new();
-    super::runner::read_back(ctx, &staging, bytes, &mut words)?;
+    crate::gpu::read_back(ctx, &staging, bytes, &mut words)?;
     let row_words = (padded / 4) as usize;
     Ok(words.chunks(row_words).flat_map(|row| row[..w as usize].iter().map(|v| v.to_le_bytes())).collect())
 }

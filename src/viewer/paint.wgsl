@@ -1,6 +1,6 @@
 // Draws the escape-time image straight into a render target (the egui frame): one
 // fragment per physical pixel runs the same orbit code as the compute shader
-// (escape.wgsl), colours it by smooth iteration through a palette table, optionally
+// (escape.wgsl, after the number prelude of the chosen precision), colours it by smooth iteration through a palette table, optionally
 // multiplies Inigo Quilez's soft distance shading over it, and encodes for the target.
 
 @group(0) @binding(3) var<storage, read> palette: array<vec4<f32>>;
@@ -81,16 +81,8 @@ fn encode(c: vec4<f32>) -> vec4<f32> {
 }
 
 @fragment
-fn paint_f32_fs(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+fn paint_fs(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     df_one = P.one;
     let ij = pixel(frag);
-    let p = sample_point(ij.x, ij.y);
-    return encode(colour(escape_f32(vec2<f32>(p.x, p.z))));
-}
-
-@fragment
-fn paint_df_fs(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    df_one = P.one;
-    let ij = pixel(frag);
-    return encode(colour(escape_df(sample_point(ij.x, ij.y))));
+    return encode(colour(escape(sample_point(ij.x, ij.y))));
 }
