@@ -7,7 +7,7 @@
 //! viewer).
 //!
 //! Imports are read from the text: `crate::NAME` (and `crate::{A, B}`) in a module's files,
-//! leaving out test code (files named `tests.rs` and `#[cfg(test)] mod tests` blocks) and
+//! leaving out test code (files named `tests.rs` and inline `#[cfg(test)] mod tests { .. }` blocks) and
 //! comments.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -41,7 +41,7 @@ fn code(path: &Path) -> String {
         return String::new();
     }
     let text = std::fs::read_to_string(path).unwrap();
-    let text = match text.find("#[cfg(test)]\nmod tests") {
+    let text = match text.find("#[cfg(test)]\nmod tests {") {
         Some(i) => &text[..i],
         None => &text[..],
     };
