@@ -8,7 +8,8 @@
 
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{self, ChannelSet, INTERIOR};
+use deepfield::field::{self, ChannelSet};
+use deepfield::formula::end::INTERIOR;
 use deepfield::scene::Scene;
 
 #[path = "../tests/integration/reference.rs"]

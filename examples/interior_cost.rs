@@ -17,7 +17,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use deepfield::field::{INTERIOR, Orbit};
+use deepfield::formula::end::{INTERIOR, Orbit};
 use deepfield::orbit::interior::Detection;
 use deepfield::orbit::{Counters, Perturbation};
 use deepfield::render::{self, Options};

@@ -20,7 +20,8 @@ pub use mask::{MASK_FEATHER, Mask, MaskQuantity};
 pub use shading::{DistanceStyle, Light};
 pub use transfer::Transfer;
 
-use crate::field::{INTERIOR, Needs, Planes, TrapPlane};
+use crate::field::{Needs, Planes, TrapPlane};
+use crate::formula::end::INTERIOR;
 use crate::palette::{Palette, color};
 use crate::simd_level::SimdLevel;
 

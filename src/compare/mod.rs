@@ -28,7 +28,9 @@ use rayon::prelude::*;
 
 pub use truth::Truth;
 
-use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes, Transform};
+use crate::cancel::Cancelled;
+use crate::field::{self, ChannelSet, Planes, Transform};
+use crate::formula::end::INTERIOR;
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::orbit::{self, Numbers, bigfloat};
 use crate::render::{self, Options, Progress};

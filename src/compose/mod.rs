@@ -392,7 +392,7 @@ mod tests {
     #[test]
     fn stacks_give_tiny_skias_bytes() {
         use crate::coloring::{DistanceStyle, Light, Transfer};
-        use crate::field::INTERIOR;
+        use crate::formula::end::INTERIOR;
         let (w, rows) = (61, 23);
         let needs = Needs { nf: true, de: true, ..Needs::default() };
         let mut planes = Planes::new(w, rows, &needs);

@@ -23,7 +23,8 @@ use crate::coloring::Context;
 use crate::compose;
 use std::sync::{Arc, Mutex};
 
-use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
+use crate::cancel::Cancelled;
+use crate::field::{self, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
 use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec, Perturbation};

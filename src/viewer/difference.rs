@@ -5,7 +5,8 @@
 
 use std::sync::mpsc::{self, Receiver};
 
-use crate::field::{ChannelSet, INTERIOR, Planes};
+use crate::field::{ChannelSet, Planes};
+use crate::formula::end::INTERIOR;
 use crate::gpu::{self, Precision};
 use crate::render;
 use crate::scene::Scene;

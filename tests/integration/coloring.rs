@@ -7,7 +7,8 @@ use std::process::{Command, Output};
 use std::sync::atomic::AtomicBool;
 
 use deepfield::coloring::{Histogram, Mask, MaskQuantity};
-use deepfield::field::{self, ChannelSet, INTERIOR, TrapPlane};
+use deepfield::field::{self, ChannelSet, TrapPlane};
+use deepfield::formula::end::INTERIOR;
 use deepfield::palette::color::linear_to_srgb8 as srgb8;
 use deepfield::render;
 
