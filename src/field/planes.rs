@@ -50,13 +50,18 @@ impl fmt::Display for Channel {
     }
 }
 
+/// A channel name that is none of [`Channel::ALL`]'s.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown channel `{0}`; expected one of N, NF, T, DEX, DEY, TRAPS, RGB")]
+pub struct UnknownChannel(pub String);
+
 impl FromStr for Channel {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownChannel;
+    fn from_str(s: &str) -> Result<Self, UnknownChannel> {
         Channel::ALL
             .into_iter()
             .find(|c| c.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown channel `{s}`; expected one of N, NF, T, DEX, DEY, TRAPS, RGB"))
+            .ok_or_else(|| UnknownChannel(s.to_string()))
     }
 }
 
