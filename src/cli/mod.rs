@@ -16,6 +16,7 @@ mod reference;
 mod render;
 mod scene;
 mod sheet;
+mod terminal;
 mod view;
 mod zoom;
 

@@ -33,7 +33,7 @@ use super::args::ZoomArgs;
 
 /// Runs `deepfield zoom`.
 pub fn run(args: ZoomArgs) -> Result<(), Failure> {
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     let simd = super::simd_level(args.simd.as_deref())?;
     let deepest = super::scene::load(&args.scene)?;
     let factor_text = match (&args.factor, args.scene.exponential_map) {
