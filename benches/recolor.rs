@@ -35,7 +35,7 @@ fn view() -> String {
 fn scene(layers: &str) -> Scene {
     let text = format!("{}{layers}", view());
     let file = Scene::parse_file("bench", &text).expect("parses");
-    Scene::validate(file, "bench", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).expect("valid")
+    Scene::validate(file, "bench", &text, std::path::Path::new("."), deepfield::io::load_bitmap).expect("valid")
 }
 
 /// The planes every colouring may read (N, NF, T, DE), 32-row strips.

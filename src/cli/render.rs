@@ -54,8 +54,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     };
     let bar = bar(args.quiet, rows.as_ref().map_or(scene.height, |r| r.end - r.start) as u64);
     let progress = |p: render::Progress| show(&bar, p);
-    let prepare =
-        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
+    let prepare = |strip: &render::RenderedStrip| {
+        Ok(encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref())?)
+    };
     let mut writers = Some(writers);
     let result = {
         let writers = &mut writers;
@@ -69,7 +70,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             ..Options::default()
         };
         render::render(&scene, options, &cancel, &progress, &prepare, move |_strip, encoded| {
-            writers.as_mut().ok_or("output already finished")?.write(encoded)
+            Ok(writers.as_mut().ok_or("output already finished")?.write(encoded)?)
         })
     };
     if let Some(b) = &bar {

@@ -31,6 +31,11 @@ use crate::orbit::{self, Counters, DeepSpec, Perturbation};
 use crate::scene::{EngineError, EngineKind, EnginePlan, FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
 
+/// What the caller's `prepare` and `sink` report when they fail: their own error, kept
+/// whole so that the caller can look at it again (an [`crate::io::IoError`] for a full
+/// disk, say).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
 /// Why a render did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -59,9 +64,12 @@ pub enum RenderError {
     /// The GPU failed or is missing.
     #[error(transparent)]
     Gpu(#[from] gpu::GpuError),
-    /// The sink (the caller's output writer) failed, with its message.
-    #[error("{0}")]
-    Sink(String),
+    /// The caller's `prepare` or `sink` (its encoders and output writers) failed.
+    #[error(transparent)]
+    Sink(SinkError),
+    /// The thread running the caller's sink panicked.
+    #[error("the output writer panicked")]
+    SinkPanicked,
     /// The thread pool could not be built.
     #[error("cannot start {0} worker threads")]
     Threads(usize),
@@ -418,8 +426,8 @@ pub fn render<P: Send>(
     options: Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
-    prepare: &(dyn Fn(&RenderedStrip) -> Result<P, String> + Sync),
-    mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
+    prepare: &(dyn Fn(&RenderedStrip) -> Result<P, SinkError> + Sync),
+    mut sink: impl FnMut(RenderedStrip, P) -> Result<(), SinkError> + Send,
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
     let plan = scene.engine()?;
@@ -508,9 +516,9 @@ pub fn render<P: Send>(
         // Stops it when the strips are done, or when they unwind (the scope would wait
         // for it forever).
         let stop = Stop(&finished, watcher.as_ref().map(|w| w.thread().clone()));
-        let writer = s.spawn(move || -> Result<(), String> {
+        let writer = s.spawn(move || -> Result<(), RenderError> {
             for (strip, prepared) in rx {
-                sink(strip, prepared)?;
+                sink(strip, prepared).map_err(RenderError::Sink)?;
             }
             Ok(())
         });
@@ -559,8 +567,8 @@ pub fn render<P: Send>(
         });
         drop(tx);
         drop(stop);
-        let written = writer.join().unwrap_or_else(|_| Err("output writer panicked".into()));
-        computed.and(written.map_err(RenderError::Sink))
+        let written = writer.join().unwrap_or(Err(RenderError::SinkPanicked));
+        computed.and(written)
     });
     result?;
     let wall = start.elapsed().as_secs_f64();

@@ -13,6 +13,7 @@ mod import;
 mod interior;
 mod locate;
 mod reference;
+mod sink;
 mod units;
 mod util;
 #[cfg(feature = "viewer")]
