@@ -233,7 +233,8 @@ impl Colouring {
                 }
             })?;
         super::recolor::check_fits(&scene, &raw.header, path)?;
-        let strips = pool.install(|| deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa));
+        let strips =
+            pool.install(|| deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa)).map_err(Failure::input)?;
         Ok(Keyframe { width: scene.width as usize, height: scene.height as usize, rgb: strips.concat() })
     }
 }

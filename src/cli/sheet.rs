@@ -109,7 +109,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     for (label, count) in cells {
         let stack =
             Stack { layers: layers.by_ref().take(count).collect::<Vec<Layer>>(), background: scene.stack.background };
-        let rgb = render::recolor(&stack, &planes, scene.aa).concat();
+        let rgb = render::recolor(&stack, &planes, scene.aa).map_err(|e| Failure::Runtime(e.into()))?.concat();
         images.push(Cell { label, rgb });
     }
     let overlays = Overlays {

@@ -368,8 +368,10 @@ impl ViewerApp {
         if let Some((strips, old)) = &self.planes
             && recolourable(old, &scene)
             && self.image.as_ref().is_some_and(|(_, n, _)| *n == self.nav)
+            // Planes whose traps do not serve the new layers are computed again.
+            && let Ok(rgb8) = render::recolor_rgb8(&scene.stack, strips, old.aa)
         {
-            let rgb8 = render::recolor_rgb8(&scene.stack, strips, old.aa).concat();
+            let rgb8 = rgb8.concat();
             let (w, h) = (old.width as usize, old.height as usize);
             if let Some((tex, _, _)) = &mut self.image {
                 tex.set(ColorImage::from_rgb([w, h], &rgb8), egui::TextureOptions::LINEAR);
