@@ -209,18 +209,21 @@ impl ExrWriter {
 
     /// Queues encoded blocks for writing.
     pub fn write(&mut self, chunks: Vec<(usize, Chunk)>) -> Result<(), IoError> {
-        let file = self.file.as_ref().expect("an unfinished writer has its file");
-        let sender = self.sender.as_ref().expect("an unfinished writer has its thread");
-        for c in chunks {
-            if sender.send(c).is_err() {
-                let dest = file.dest().to_path_buf();
-                return Err(match self.stop() {
-                    Err(e) => e.at(&dest),
-                    Ok(()) => IoError::new(&dest, "the EXR writer stopped"),
-                });
+        // No sender once a write has failed: the thread is gone.
+        let outcome = match &self.sender {
+            Some(sender) => {
+                if chunks.into_iter().all(|c| sender.send(c).is_ok()) {
+                    return Ok(());
+                }
+                self.stop()
             }
-        }
-        Ok(())
+            None => Ok(()),
+        };
+        let dest = self.file.as_ref().expect("an unfinished writer has its file").dest();
+        Err(match outcome {
+            Err(e) => e.at(dest),
+            Ok(()) => IoError::new(dest, "the EXR writer stopped"),
+        })
     }
 
     /// Ends the writing thread and takes the final flush's outcome.
