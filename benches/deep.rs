@@ -24,7 +24,7 @@ fn scene(name: &str) -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
     let text = std::fs::read_to_string(&path).expect("scene");
     let file = Scene::parse_file(name, &text).expect("parses");
-    Scene::validate(file, name, &text, path.parent().unwrap(), &deepfield::io::load_bitmap).expect("valid")
+    Scene::validate(file, name, &text, path.parent().unwrap(), deepfield::io::load_bitmap).expect("valid")
 }
 
 /// Reference, tables and every sample row, in parallel strips of 16 rows.

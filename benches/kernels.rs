@@ -27,7 +27,7 @@ fn params(needs: Needs) -> FieldParams {
     let text = std::fs::read_to_string(&path).expect("scene");
     let file = Scene::parse_file(SCENE, &text).expect("parses");
     let mut scene =
-        Scene::validate(file, SCENE, &text, path.parent().unwrap(), &deepfield::io::load_bitmap).expect("valid");
+        Scene::validate(file, SCENE, &text, path.parent().unwrap(), deepfield::io::load_bitmap).expect("valid");
     (scene.width, scene.height) = (common::side(scene.width), common::side(scene.height));
     let mut p = deepfield::render::field_params(&scene, Default::default());
     p.needs = needs;

@@ -35,7 +35,7 @@ fn view() -> String {
 fn scene(layers: &str) -> Scene {
     let text = format!("{}{layers}", view());
     let file = Scene::parse_file("bench", &text).expect("parses");
-    Scene::validate(file, "bench", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).expect("valid")
+    Scene::validate(file, "bench", &text, std::path::Path::new("."), deepfield::io::load_bitmap).expect("valid")
 }
 
 /// The planes every colouring may read (N, NF, T, DE), 32-row strips.
@@ -57,9 +57,15 @@ fn bench_layers(bencher: divan::Bencher<'_, '_>, layers: &str) {
     let planes = planes();
     // The bytes are those of the general path (linear pixels, then encoded): checked here.
     let enc = PngEncoder::new(8);
-    let slow: Vec<Vec<u8>> =
-        deepfield::render::recolor(&s.stack, planes, 1).par_iter().map(|p| enc.encode(p)).collect();
-    assert!(slow == deepfield::render::recolor_rgb8(&s.stack, planes, 1), "fast path differs");
+    let slow: Vec<Vec<u8>> = deepfield::render::recolor(&s.stack, planes, 1)
+        .expect("planes of the scene")
+        .par_iter()
+        .map(|p| enc.encode(p))
+        .collect();
+    assert!(
+        slow == deepfield::render::recolor_rgb8(&s.stack, planes, 1).expect("planes of the scene"),
+        "fast path differs"
+    );
     bencher
         .counter(ItemsCount::new((s.width * s.height) as u64))
         .bench(|| deepfield::render::recolor_rgb8(&s.stack, planes, 1));

@@ -8,7 +8,8 @@
 
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{self, ChannelSet, INTERIOR};
+use deepfield::field::{self, ChannelSet};
+use deepfield::formula::end::INTERIOR;
 use deepfield::scene::Scene;
 
 #[path = "../tests/integration/reference.rs"]
@@ -32,7 +33,7 @@ fn main() {
         );
         let file = Scene::parse_file("ladder", &text).unwrap();
         let scene =
-            Scene::validate(file, "ladder", &text, std::path::Path::new("."), &deepfield::io::load_bitmap).unwrap();
+            Scene::validate(file, "ladder", &text, std::path::Path::new("."), deepfield::io::load_bitmap).unwrap();
         let params = deepfield::render::field_params(&scene, ChannelSet::default_exr());
         let spacing = params.grid.spacing();
         let ln_r = params.orbit.escape_radius.ln();

@@ -17,7 +17,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use deepfield::field::{INTERIOR, Orbit};
+use deepfield::formula::end::{INTERIOR, Orbit};
 use deepfield::orbit::interior::Detection;
 use deepfield::orbit::{Counters, Perturbation};
 use deepfield::render::{self, Options};
@@ -29,7 +29,7 @@ fn scene(path: &str, detection: Detection) -> Scene {
     let text = std::fs::read_to_string(path).expect("scene file");
     let file = Scene::parse_file(path, &text).expect("parses");
     let dir = std::path::Path::new(path).parent().unwrap_or(std::path::Path::new("."));
-    let mut s = Scene::validate(file, path, &text, dir, &deepfield::io::load_bitmap).expect("valid");
+    let mut s = Scene::validate(file, path, &text, dir, deepfield::io::load_bitmap).expect("valid");
     s.interior_detection = detection;
     s
 }

@@ -27,7 +27,7 @@ fn main() {
     let src = deepfield::io::read_scene_source(std::path::Path::new(&path)).expect("scene");
     let file = Scene::parse_file(&src.origin, &src.text).expect("parses");
     let mut scene =
-        Scene::validate(file, &src.origin, &src.text, &src.base_dir, &deepfield::io::load_bitmap).expect("valid");
+        Scene::validate(file, &src.origin, &src.text, &src.base_dir, deepfield::io::load_bitmap).expect("valid");
     scene.width = w;
     scene.height = h;
     let mut worker = Worker::spawn(Arc::new(|| {}), None);

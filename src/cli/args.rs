@@ -545,5 +545,5 @@ fn parse_tolerance(s: &str) -> Result<f64, String> {
 }
 
 fn parse_channels(s: &str) -> Result<ChannelSet, String> {
-    s.split(',').filter(|p| !p.trim().is_empty()).map(|p| p.parse::<Channel>()).collect()
+    s.split(',').filter(|p| !p.trim().is_empty()).map(|p| p.parse::<Channel>().map_err(|e| e.to_string())).collect()
 }

@@ -11,7 +11,7 @@ use super::args::CompareArgs;
 
 /// Runs `deepfield compare`.
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
     if !scene.projection.is_flat() {
         return Err(Failure::Input(anyhow::anyhow!(

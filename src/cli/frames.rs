@@ -25,7 +25,7 @@ use super::args::FramesArgs;
 
 /// Runs `deepfield frames`.
 pub fn run(args: FramesArgs) -> Result<(), Failure> {
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     if !(args.fps.is_finite() && (0.1..=1000.0).contains(&args.fps)) {
         return Err(Failure::Input(anyhow!("--fps must be between 0.1 and 1000, got {}", args.fps)));
     }
@@ -233,7 +233,8 @@ impl Colouring {
                 }
             })?;
         super::recolor::check_fits(&scene, &raw.header, path)?;
-        let strips = pool.install(|| deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa));
+        let strips =
+            pool.install(|| deepfield::render::recolor(&scene.stack, &raw.strips, scene.aa)).map_err(Failure::input)?;
         Ok(Keyframe { width: scene.width as usize, height: scene.height as usize, rgb: strips.concat() })
     }
 }

@@ -4,7 +4,8 @@
 //! [`render`] builds the scene and the output writers from them and runs the library.
 //! Errors carry an exit code: 2 for bad input of any kind (flags, scene files, missing
 //! files, unwritable outputs, a view the engines cannot address), 1 for failures while
-//! working, 130 for a cancelled run. `main` prints `error: {:#}` and never panics on input.
+//! working, 130 for a cancelled run. `main` prints `error: ` and the chain of causes
+//! ([`describe`]) and never panics on input.
 
 mod args;
 mod compare;
@@ -16,6 +17,7 @@ mod reference;
 mod render;
 mod scene;
 mod sheet;
+mod terminal;
 mod view;
 mod zoom;
 
@@ -119,14 +121,14 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", describe(&e));
             ExitCode::from(2)
         }
         Err(Failure::Runtime(e)) => {
             if is_broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", describe(&e));
             ExitCode::from(1)
         }
         Err(Failure::Cancelled) => {
@@ -136,6 +138,38 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The error and its causes, joined by `: ` as `{:#}` joins them, each said once: a
+/// library error that quotes its cause in its message (as the I/O layer's errors quote the
+/// system's) is followed by that cause in the chain.
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for link in e.chain() {
+        let said = link.to_string();
+        if text.ends_with(&said) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&said);
+    }
+    text
+}
+
 fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A message that quotes its cause is not followed by the cause again.
+    #[test]
+    fn each_cause_is_said_once() {
+        let quoted = anyhow::Error::new(std::io::Error::other("disk full")).context("out.png: disk full");
+        assert_eq!(describe(&quoted), "out.png: disk full");
+        let plain = anyhow::Error::new(std::io::Error::other("disk full")).context("out.png");
+        assert_eq!(describe(&plain), "out.png: disk full");
+    }
 }

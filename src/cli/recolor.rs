@@ -13,12 +13,11 @@ use std::time::Instant;
 use anyhow::anyhow;
 use deepfield::coloring::Context;
 use deepfield::field::{Channel, Needs, Planes};
-use deepfield::io::{ExrStrips, PngEncoder, PngWriter, RawHeader, TrapKind};
+use deepfield::io::{ExrStrips, PngEncoder, PngWriter, RawHeader};
 use deepfield::render;
 use deepfield::scene::Scene;
 use deepfield::scene::raw::cli;
 use deepfield::simd_level::SimdLevel;
-use deepfield::trap::Trap;
 
 use super::Failure;
 use super::args::RecolorArgs;
@@ -173,12 +172,7 @@ pub(super) fn check_fits(scene: &Scene, raw: &RawHeader, data: &Path) -> Result<
     }
     let kinds = &raw.traps;
     for (k, trap) in scene.traps.iter().enumerate() {
-        let want = match trap {
-            Trap::Geometric(_) => TrapKind::Distance,
-            Trap::Stripe(_) => TrapKind::Stripe,
-            Trap::Bitmap(_) => TrapKind::Color,
-            Trap::Ifs(_) => TrapKind::Density,
-        };
+        let want = trap.plane_kind();
         if kinds.get(k) != Some(&want) {
             return Err(Failure::Input(anyhow!(
                 "{name} has no {want:?} data for trap {k}, which the layers need (trap and stripe data are computed while iterating: render with the layers that use them)"

@@ -12,7 +12,7 @@ use super::args::ReferenceArgs;
 
 /// Runs `deepfield reference`.
 pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
     let plan = super::engine_plan(&scene)?;
     let simd = super::simd_level(args.simd.as_deref())?;
@@ -26,7 +26,7 @@ pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
     };
     // Opened first: an unwritable path fails before the work.
     let opened = deepfield::io::AtomicFile::create(&args.output).map_err(Failure::input)?;
-    let bar = super::render::bar(args.quiet, spec.max_iter as u64);
+    let bar = super::terminal::bar(args.quiet, spec.max_iter as u64);
     let progress = |done: u64, _total: u64| {
         if let Some(b) = &bar {
             b.set_position(done);

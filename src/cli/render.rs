@@ -1,18 +1,16 @@
 //! `deepfield render`: scene + flags -> PNG (+ EXR), with progress, cancel and statistics.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::anyhow;
 use deepfield::field::ChannelSet;
 use deepfield::io;
 use deepfield::render::{self, Options, Stats};
-use indicatif::{ProgressBar, ProgressStyle};
 
 use super::Failure;
 use super::args::RenderArgs;
+use super::terminal::{bar, install_ctrlc, show};
 
 /// Runs `deepfield render`.
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
@@ -56,8 +54,9 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     };
     let bar = bar(args.quiet, rows.as_ref().map_or(scene.height, |r| r.end - r.start) as u64);
     let progress = |p: render::Progress| show(&bar, p);
-    let prepare =
-        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
+    let prepare = |strip: &render::RenderedStrip| {
+        Ok(encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref())?)
+    };
     let mut writers = Some(writers);
     let result = {
         let writers = &mut writers;
@@ -71,7 +70,7 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             ..Options::default()
         };
         render::render(&scene, &plan, options, &cancel, &progress, &prepare, move |_strip, encoded| {
-            writers.as_mut().ok_or("output already finished")?.write(encoded)
+            Ok(writers.as_mut().ok_or("output already finished")?.write(encoded)?)
         })
     };
     if let Some(b) = &bar {
@@ -115,44 +114,6 @@ fn check_distinct(args: &RenderArgs, png: &Path) -> Result<(), Failure> {
         }
     }
     Ok(())
-}
-
-/// Installs the Ctrl-C handler: the flag it sets is polled by the kernels. Failing to
-/// install it only loses Ctrl-C handling.
-pub fn install_ctrlc() -> Arc<AtomicBool> {
-    let cancel = Arc::new(AtomicBool::new(false));
-    let flag = cancel.clone();
-    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
-    cancel
-}
-
-/// Shows render progress on the bar, if there is one.
-pub fn show(bar: &Option<ProgressBar>, p: render::Progress) {
-    if let Some(b) = bar {
-        match p {
-            render::Progress::Reference { done, total } => b.set_message(format!("{} {done}/{total}", p.name())),
-            render::Progress::Blocks { done, total } => {
-                b.set_message(format!("{} {:.0}%", p.name(), 100.0 * done as f64 / total as f64));
-            }
-            render::Progress::Rows(rows) => {
-                b.set_message("");
-                b.set_position(rows);
-            }
-        }
-    }
-}
-
-/// A progress bar over `rows` output rows, on a terminal only.
-pub fn bar(quiet: bool, rows: u64) -> Option<ProgressBar> {
-    if quiet || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = ProgressBar::new(rows);
-    let style =
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} rows, ETA {eta} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style);
-    Some(bar)
 }
 
 fn report(

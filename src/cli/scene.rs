@@ -36,7 +36,7 @@ pub fn load_text(
 ) -> Result<Scene, Failure> {
     let mut file = Scene::parse_file(origin, text).map_err(Failure::input)?;
     edit(&mut file);
-    Scene::validate(file, origin, text, base_dir, &io::load_bitmap).map_err(Failure::input)
+    Scene::validate(file, origin, text, base_dir, io::load_bitmap).map_err(Failure::input)
 }
 
 /// The scene text of a file: a TOML scene, a .kfr location (converted), or the scene

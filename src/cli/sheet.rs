@@ -37,7 +37,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
             preset_names()
         )));
     }
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     let base = super::scene::load(&args.scene)?;
     let colorings: Vec<String> = if args.colorings.is_empty() { vec!["scene".into()] } else { args.colorings.clone() };
     // `--palette` colours every cell; `--palettes` makes one cell per palette.
@@ -80,8 +80,8 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     let scene = super::scene::load_text(&base.origin, &text, &base.base_dir, |file| file.layers = all)?;
 
     let planes = Mutex::new(Vec::new());
-    let bar = super::render::bar(args.quiet, scene.height as u64);
-    let progress = |p: render::Progress| super::render::show(&bar, p);
+    let bar = super::terminal::bar(args.quiet, scene.height as u64);
+    let progress = |p: render::Progress| super::terminal::show(&bar, p);
     let plan = super::engine_plan(&scene)?;
     let result = render::render(
         &scene,
@@ -111,7 +111,7 @@ pub fn run(args: SheetArgs) -> Result<(), Failure> {
     for (label, count) in cells {
         let stack =
             Stack { layers: layers.by_ref().take(count).collect::<Vec<Layer>>(), background: scene.stack.background };
-        let rgb = render::recolor(&stack, &planes, scene.aa).concat();
+        let rgb = render::recolor(&stack, &planes, scene.aa).map_err(|e| Failure::Runtime(e.into()))?.concat();
         images.push(Cell { label, rgb });
     }
     let overlays = Overlays {

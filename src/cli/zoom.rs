@@ -33,7 +33,7 @@ use super::args::ZoomArgs;
 
 /// Runs `deepfield zoom`.
 pub fn run(args: ZoomArgs) -> Result<(), Failure> {
-    let cancel = super::render::install_ctrlc();
+    let cancel = super::terminal::install_ctrlc();
     let simd = super::simd_level(args.simd.as_deref())?;
     let deepest = super::scene::load(&args.scene)?;
     let factor_text = match (&args.factor, args.scene.exponential_map) {
@@ -207,14 +207,15 @@ fn write_frame(
     let engine = super::render::engine_text(&plan, simd);
     let targets = deepfield::io::output::Targets { png: None, exr: Some(path), tile: None, engine: &engine };
     let (mut writers, encoders) = deepfield::io::output::open(scene, targets).map_err(Failure::input)?;
-    let prepare =
-        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
+    let prepare = |strip: &render::RenderedStrip| {
+        Ok(encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref())?)
+    };
     let options = Options {
         exr_channels: scene.channels,
         simd,
         references: if perturbs { references } else { None },
         ..Options::default()
     };
-    render::render(scene, &plan, options, cancel, &|_| {}, &prepare, |_, encoded| writers.write(encoded))?;
+    render::render(scene, &plan, options, cancel, &|_| {}, &prepare, |_, encoded| Ok(writers.write(encoded)?))?;
     writers.finish().map_err(|e| Failure::Runtime(e.into()))
 }

@@ -7,7 +7,8 @@
 //! N and N + 1 the position moves linearly with NF, which makes it continuous across
 //! iteration bands exactly as the smooth iteration count is.
 
-use crate::field::{INTERIOR, Planes};
+use crate::field::Planes;
+use crate::formula::end::INTERIOR;
 
 /// Cumulative distribution of escape counts over an image.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,7 +5,8 @@
 //! only near the boundary (distance <= 8 px), a palette only on late bands (iteration >=
 //! 500), a colouring only inside the set.
 
-use crate::field::{INTERIOR, Planes};
+use crate::field::Planes;
+use crate::formula::end::INTERIOR;
 
 /// A mask's feather where the scene gives none: hard edges.
 pub const MASK_FEATHER: f64 = 0.0;

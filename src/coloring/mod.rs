@@ -20,7 +20,8 @@ pub use mask::{MASK_FEATHER, Mask, MaskQuantity};
 pub use shading::{DistanceStyle, Light};
 pub use transfer::Transfer;
 
-use crate::field::{INTERIOR, Needs, Planes, TrapPlane};
+use crate::field::{Needs, Planes, TrapKind, TrapPlane};
+use crate::formula::end::INTERIOR;
 use crate::palette::{Palette, color};
 use crate::simd_level::SimdLevel;
 
@@ -180,6 +181,21 @@ impl Coloring {
             | Coloring::BitmapTrap { .. }
             | Coloring::Ifs { .. }
             | Coloring::Interior { .. } => Needs::default(),
+        }
+    }
+
+    /// The trap plane the colouring reads, if any: the trap's index and what its plane
+    /// must hold (a plane of another kind would paint nothing; [`crate::compose::Stack::check_traps`]
+    /// refuses it first).
+    pub fn trap_plane(&self) -> Option<(usize, TrapKind)> {
+        match self {
+            Coloring::Stripe { trap, .. } => Some((*trap, TrapKind::Stripe)),
+            Coloring::TrapDistance { trap, .. } | Coloring::Interior { fill: InteriorFill::Trap { trap, .. } } => {
+                Some((*trap, TrapKind::Distance))
+            }
+            Coloring::BitmapTrap { trap } => Some((*trap, TrapKind::Color)),
+            Coloring::Ifs { trap, .. } => Some((*trap, TrapKind::Density)),
+            _ => None,
         }
     }
 

@@ -17,7 +17,7 @@ use std::sync::atomic::AtomicBool;
 use super::{
     Measured, Row, RunError, Variant, VariantKind, mark_ill_conditioned, run, sample_pixels, score, suspects, truths,
 };
-use crate::field::INTERIOR;
+use crate::formula::end::INTERIOR;
 use crate::render::engine::{self, EngineKind};
 use crate::scene::Scene;
 use crate::simd_level::SimdLevel;

@@ -28,7 +28,9 @@ use rayon::prelude::*;
 
 pub use truth::Truth;
 
-use crate::field::{self, Cancelled, ChannelSet, INTERIOR, Planes, Transform};
+use crate::cancel::Cancelled;
+use crate::field::{self, ChannelSet, Planes, Transform};
+use crate::formula::end::INTERIOR;
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::num::bigfloat;
 use crate::orbit::{self, Numbers};
@@ -572,7 +574,7 @@ mod tests {
         let text = include_str!("../../scenes/julia-deep-e40.toml");
         let file = Scene::parse_file("julia-deep-e40", text).unwrap();
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-        let scene = Scene::validate(file, "julia-deep-e40", text, &dir, &crate::io::load_bitmap).unwrap();
+        let scene = Scene::validate(file, "julia-deep-e40", text, &dir, crate::io::load_bitmap).unwrap();
         let pixels = [(506, 307), (100, 100)];
         let cancel = AtomicBool::new(false);
         let mut truths = truths(&scene, &pixels, &cancel, &|_| {}).unwrap();

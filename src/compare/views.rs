@@ -290,8 +290,10 @@ pub fn generate(seed: u64, draw: u32, spec: &ViewSpec) -> Option<GeneratedView> 
     let toml = scene_text(&center, radius, julia.as_ref(), max_iter, spec);
     let name = format!("{}-{seed}-{draw}", spec.kind.name());
     let file = Scene::parse_file(&name, &toml).ok()?;
-    let no_bitmaps = |_: &std::path::Path| Err("no bitmaps".to_string());
-    let scene = Scene::validate(file, &name, &toml, std::path::Path::new("."), &no_bitmaps).ok()?;
+    let no_bitmaps = |_: &std::path::Path| {
+        Err(std::io::Error::new(std::io::ErrorKind::Unsupported, "generated views have no bitmap layers"))
+    };
+    let scene = Scene::validate(file, &name, &toml, std::path::Path::new("."), no_bitmaps).ok()?;
     Some(GeneratedView { name, toml, scene })
 }
 

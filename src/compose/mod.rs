@@ -13,7 +13,7 @@ pub mod text;
 use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
 use crate::coloring::{Coloring, Context, Histogram, Mask};
-use crate::field::{Needs, Planes};
+use crate::field::{Needs, Planes, TrapKind};
 use crate::palette::color::{Srgb8Encoder, linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
 use crate::trap::Trap;
 
@@ -106,6 +106,25 @@ pub struct Layer {
     pub mask: Option<Mask>,
 }
 
+/// A layer that colours from a trap plane of another kind than the planes hold (see
+/// [`Stack::check_traps`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "layer {layer} colours from trap {trap}'s {} data, but the planes hold {}",
+    wanted.name(),
+    match found { Some(kind) => format!("{} data for trap {trap}", kind.name()), None => format!("no trap {trap}") }
+)]
+pub struct TrapMismatch {
+    /// The layer, counted from 1 at the bottom as in the scene file.
+    pub layer: usize,
+    /// The trap's index.
+    pub trap: usize,
+    /// What the layer colours from.
+    pub wanted: TrapKind,
+    /// What the planes hold for that trap, if anything.
+    pub found: Option<TrapKind>,
+}
+
 /// An ordered stack of layers over an opaque background.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stack {
@@ -116,6 +135,21 @@ pub struct Stack {
 }
 
 impl Stack {
+    /// Refuses trap planes (their kinds, trap by trap) that do not hold what a layer
+    /// colours from: such a layer would paint nothing, without a word. Planes computed
+    /// for the stack's own scene always pass; planes read from elsewhere (an EXR of
+    /// another scene) may not.
+    pub fn check_traps(&self, kinds: &[TrapKind]) -> Result<(), TrapMismatch> {
+        for (k, layer) in self.layers.iter().enumerate() {
+            if let Some((trap, wanted)) = layer.coloring.trap_plane()
+                && kinds.get(trap) != Some(&wanted)
+            {
+                return Err(TrapMismatch { layer: k + 1, trap, wanted, found: kinds.get(trap).copied() });
+            }
+        }
+        Ok(())
+    }
+
     /// Everything the layers read.
     pub fn needs(&self, traps: &[Trap]) -> Needs {
         let mut needs = Needs::default();
@@ -392,7 +426,7 @@ mod tests {
     #[test]
     fn stacks_give_tiny_skias_bytes() {
         use crate::coloring::{DistanceStyle, Light, Transfer};
-        use crate::field::INTERIOR;
+        use crate::formula::end::INTERIOR;
         let (w, rows) = (61, 23);
         let needs = Needs { nf: true, de: true, ..Needs::default() };
         let mut planes = Planes::new(w, rows, &needs);

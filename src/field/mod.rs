@@ -22,17 +22,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 
 pub use grid::{SampleGrid, image_offset};
-pub use planes::{Channel, ChannelSet, Planes, TrapPlane};
+pub use planes::{Channel, ChannelSet, Planes, TrapKind, TrapPlane, UnknownChannel};
 pub use projection::Projection;
 pub use transform::Transform;
 
+use crate::cancel::Cancelled;
 use crate::formula::Family;
+use crate::formula::end::{INTERIOR, Orbit};
 use crate::orbit::{Counters, Perturbation};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
-
-pub use crate::cancel::Cancelled;
-pub use crate::formula::end::{INTERIOR, Orbit};
 
 /// Parameters of the orbit loop itself.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -50,13 +50,18 @@ impl fmt::Display for Channel {
     }
 }
 
+/// A channel name that is none of [`Channel::ALL`]'s.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown channel `{0}`; expected one of N, NF, T, DEX, DEY, TRAPS, RGB")]
+pub struct UnknownChannel(pub String);
+
 impl FromStr for Channel {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownChannel;
+    fn from_str(s: &str) -> Result<Self, UnknownChannel> {
         Channel::ALL
             .into_iter()
             .find(|c| c.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown channel `{s}`; expected one of N, NF, T, DEX, DEY, TRAPS, RGB"))
+            .ok_or_else(|| UnknownChannel(s.to_string()))
     }
 }
 
@@ -126,7 +131,43 @@ pub enum TrapPlane {
     },
 }
 
+/// What one trap's plane holds (and its EXR channels: `trapK.D`, `trapK.STRIPE`,
+/// `trapK.R/G/B/A`, `trapK.IFS`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrapKind {
+    /// Distances ([`TrapPlane::Distance`]).
+    Distance,
+    /// Stripe averages ([`TrapPlane::Stripe`]).
+    Stripe,
+    /// Colours ([`TrapPlane::Color`]).
+    Color,
+    /// IFS densities ([`TrapPlane::Density`]).
+    Density,
+}
+
+impl TrapKind {
+    /// The kind in words, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            TrapKind::Distance => "distance",
+            TrapKind::Stripe => "stripe",
+            TrapKind::Color => "colour",
+            TrapKind::Density => "density",
+        }
+    }
+}
+
 impl TrapPlane {
+    /// What the plane holds.
+    pub fn kind(&self) -> TrapKind {
+        match self {
+            TrapPlane::Distance(_) => TrapKind::Distance,
+            TrapPlane::Color(_) => TrapKind::Color,
+            TrapPlane::Density(_) => TrapKind::Density,
+            TrapPlane::Stripe { .. } => TrapKind::Stripe,
+        }
+    }
+
     /// Stores sample `k`'s final trap state.
     #[inline]
     pub fn store(&mut self, k: usize, state: &crate::trap::TrapState) {

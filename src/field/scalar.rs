@@ -11,7 +11,9 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::{Cancelled, INTERIOR, Orbit, OrbitParams, TrapPlane};
+use super::{OrbitParams, TrapPlane};
+use crate::cancel::Cancelled;
+use crate::formula::end::{INTERIOR, Orbit};
 use crate::formula::{self, Family};
 use crate::trap::{Trap, TrapState};
 

@@ -30,7 +30,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use pulp::{Simd, WithSimd};
 
-use super::{Cancelled, Orbit, OrbitParams};
+use super::OrbitParams;
+use crate::cancel::Cancelled;
+use crate::formula::end::Orbit;
 use crate::formula::{self, Family};
 use crate::trap::Shape;
 
@@ -770,7 +772,7 @@ mod tests {
             assert_eq!(*o, want, "{simd} at {p:?}");
         }
         // Periodicity detection may stop interior orbits at different points; escapes agree.
-        if out.iter().all(|o| o.n != crate::field::INTERIOR) {
+        if out.iter().all(|o| o.n != crate::formula::end::INTERIOR) {
             assert_eq!(its, total);
         }
         // Asking for N alone gives the same N (and the same work).

@@ -2,8 +2,9 @@
 //! to compute a view. It exists so that `deepfield compare` can show what 24-bit arithmetic
 //! costs in accuracy (it is what a plain GPU shader does); renders never choose it.
 
-use super::{INTERIOR, Orbit, OrbitParams};
+use super::OrbitParams;
 use crate::formula::Family;
+use crate::formula::end::{INTERIOR, Orbit};
 
 /// Iterates one sample in f32; returns the orbit's end (z and dz widened to f64) and the
 /// iterations performed.

@@ -221,7 +221,7 @@ pub fn estimated_iterations(params: &FieldParams, rows: Range<u32>, planes: &Pla
         .iter()
         .enumerate()
         .map(|(k, &n)| {
-            if n != crate::field::INTERIOR {
+            if n != crate::formula::end::INTERIOR {
                 return n.saturating_sub(start) as u64;
             }
             let j = rows.start + (k / width) as u32;

@@ -23,23 +23,27 @@ impl AtomicFile {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        // Said before the system is asked, which would name neither the folder nor the fix.
         if !dir.is_dir() {
-            return Err(IoError::new(dest, format!("cannot write: folder {} does not exist", dir.display())));
+            let missing =
+                std::io::Error::new(std::io::ErrorKind::NotFound, format!("folder {} does not exist", dir.display()));
+            return Err(IoError::context(dest, "cannot write", missing));
         }
         if dest.is_dir() {
-            return Err(IoError::new(dest, "cannot write: it is a folder; give a file name"));
+            let folder = std::io::Error::new(std::io::ErrorKind::IsADirectory, "it is a folder; give a file name");
+            return Err(IoError::context(dest, "cannot write", folder));
         }
         static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let serial = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "output".into());
         let temp = dir.join(format!(".{name}.{}-{serial}.partial", std::process::id()));
-        let file = File::create(&temp).map_err(|e| IoError::new(dest, format!("cannot write: {e}")))?;
+        let file = File::create(&temp).map_err(|e| IoError::context(dest, "cannot write", e))?;
         Ok((Self { dest: dest.to_path_buf(), temp, committed: false }, BufWriter::with_capacity(1 << 20, file)))
     }
 
     /// Renames the already flushed and synced file into place.
     pub fn commit_written(mut self) -> Result<(), IoError> {
-        std::fs::rename(&self.temp, &self.dest).map_err(|e| IoError::new(&self.dest, e))?;
+        std::fs::rename(&self.temp, &self.dest).map_err(|e| IoError::caused(&self.dest, e))?;
         self.committed = true;
         Ok(())
     }
@@ -63,11 +67,11 @@ impl Drop for AtomicFile {
 /// shared slot returned by [`Tail::new`].
 pub(crate) struct Tail {
     inner: Option<BufWriter<File>>,
-    error: Arc<Mutex<Option<String>>>,
+    error: TailError,
 }
 
 /// Where a [`Tail`] reports the failure of its final flush.
-pub(crate) type TailError = Arc<Mutex<Option<String>>>;
+pub(crate) type TailError = Arc<Mutex<Option<std::io::Error>>>;
 
 impl Tail {
     pub(crate) fn new(inner: BufWriter<File>) -> (Self, TailError) {
@@ -77,7 +81,7 @@ impl Tail {
 }
 
 /// Takes the failure a [`Tail`] reported, if any.
-pub(crate) fn take_tail_error(slot: &TailError) -> Option<String> {
+pub(crate) fn take_tail_error(slot: &TailError) -> Option<std::io::Error> {
     slot.lock().ok().and_then(|mut e| e.take())
 }
 
@@ -99,8 +103,7 @@ impl Seek for Tail {
 impl Drop for Tail {
     fn drop(&mut self) {
         if let Some(w) = self.inner.take() {
-            let result =
-                w.into_inner().map_err(|e| e.error().to_string()).and_then(|f| f.sync_all().map_err(|e| e.to_string()));
+            let result = w.into_inner().map_err(std::io::IntoInnerError::into_error).and_then(|f| f.sync_all());
             if let (Err(e), Ok(mut slot)) = (result, self.error.lock()) {
                 *slot = Some(e);
             }

@@ -2,18 +2,19 @@
 
 use std::path::Path;
 
+use super::IoError;
 use crate::palette::color::srgb_to_linear;
 use crate::trap::Bitmap;
 
 /// Loads an image file (PNG) as a trap bitmap.
-pub fn load_bitmap(path: &Path) -> Result<Bitmap, String> {
+pub fn load_bitmap(path: &Path) -> Result<Bitmap, IoError> {
     if !path.exists() {
-        return Err("no such file".into());
+        return Err(IoError::caused(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file")));
     }
-    let img = image::open(path).map_err(|e| e.to_string())?.to_rgba8();
+    let img = image::open(path).map_err(|e| IoError::caused(path, e))?.to_rgba8();
     let (w, h) = img.dimensions();
     if w == 0 || h == 0 {
-        return Err("the image is empty".into());
+        return Err(IoError::new(path, "the image is empty"));
     }
     let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
     let texels = img

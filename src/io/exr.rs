@@ -5,7 +5,7 @@
 //! thread that owns the file, because the exr crate's block writer drives the file from a
 //! closure. The scene TOML and the engine's choice go into the header as text attributes.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
@@ -17,8 +17,8 @@ use ::exr::meta::header::Header;
 use ::exr::meta::{BlockDescription, Headers};
 use ::exr::prelude::{Compression, LineOrder, SmallVec};
 
-use super::IoError;
 use super::atomic::{AtomicFile, Tail, TailError, take_tail_error};
+use super::{Cause, IoError};
 use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
 use crate::trap::Trap;
 
@@ -131,7 +131,7 @@ impl ExrLayout {
 /// Writes the planes of a sample raster, strip by strip, top to bottom.
 pub struct ExrWriter {
     sender: Option<mpsc::SyncSender<(usize, Chunk)>>,
-    thread: Option<JoinHandle<Result<(), String>>>,
+    thread: Option<JoinHandle<Result<(), ::exr::error::Error>>>,
     tail_error: TailError,
     file: Option<AtomicFile>,
 }
@@ -139,6 +139,8 @@ pub struct ExrWriter {
 /// Builds and compresses blocks for an [`ExrWriter`]; shareable across threads.
 #[derive(Debug, Clone)]
 pub struct ExrEncoder {
+    /// The file the blocks are for, named in errors.
+    path: PathBuf,
     headers: Headers,
     layout: ExrLayout,
     width: usize,
@@ -160,7 +162,7 @@ impl ExrWriter {
         }
         let header = layout.header(width as usize, height as usize, scene_toml, engine);
         let (writer, headers) = Self::with_header(path, header)?;
-        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+        Ok((writer, ExrEncoder { path: path.to_path_buf(), headers, layout, width: width as usize }))
     }
 
     /// [`ExrWriter::create`] for one work unit of `render --tile`: `rows` sample rows of
@@ -181,7 +183,7 @@ impl ExrWriter {
         let mut header = layout.header(width as usize, rows as usize, scene_toml, engine);
         header.own_attributes.other.insert(Text::from(TILE_ATTRIBUTE), AttributeValue::Text(utf8_text(tile)));
         let (writer, headers) = Self::with_header(path, header)?;
-        Ok((writer, ExrEncoder { headers, layout, width: width as usize }))
+        Ok((writer, ExrEncoder { path: path.to_path_buf(), headers, layout, width: width as usize }))
     }
 
     /// Starts a file with this header (written atomically); returns the writer and the
@@ -200,32 +202,40 @@ impl ExrWriter {
                 }
                 Ok(())
             })
-            .map_err(|e| e.to_string())
         });
         let writer = Self { sender: Some(sender), thread: Some(thread), tail_error, file: Some(file) };
         Ok((writer, headers))
     }
 
     /// Queues encoded blocks for writing.
-    pub fn write(&mut self, chunks: Vec<(usize, Chunk)>) -> Result<(), String> {
-        let sender = self.sender.as_ref().ok_or("EXR writer already finished")?;
-        for c in chunks {
-            if sender.send(c).is_err() {
-                return Err(self.stop().err().unwrap_or_else(|| "EXR writer stopped".into()));
+    pub fn write(&mut self, chunks: Vec<(usize, Chunk)>) -> Result<(), IoError> {
+        // No sender once a write has failed: the thread is gone.
+        let outcome = match &self.sender {
+            Some(sender) => {
+                if chunks.into_iter().all(|c| sender.send(c).is_ok()) {
+                    return Ok(());
+                }
+                self.stop()
             }
-        }
-        Ok(())
-    }
-
-    fn stop(&mut self) -> Result<(), String> {
-        self.sender = None;
-        let result = match self.thread.take() {
-            Some(t) => t.join().unwrap_or_else(|_| Err("EXR writer thread panicked".into())),
             None => Ok(()),
         };
-        result?;
+        let dest = self.file.as_ref().expect("an unfinished writer has its file").dest();
+        Err(match outcome {
+            Err(e) => e.at(dest),
+            Ok(()) => IoError::new(dest, "the EXR writer stopped"),
+        })
+    }
+
+    /// Ends the writing thread and takes the final flush's outcome.
+    fn stop(&mut self) -> Result<(), Stopped> {
+        self.sender = None;
+        match self.thread.take().map(JoinHandle::join) {
+            Some(Ok(Err(e))) => return Err(Stopped::Failed(e.into())),
+            Some(Err(_)) => return Err(Stopped::Panicked),
+            Some(Ok(Ok(()))) | None => {}
+        }
         match take_tail_error(&self.tail_error) {
-            Some(e) => Err(e),
+            Some(e) => Err(Stopped::Failed(e.into())),
             None => Ok(()),
         }
     }
@@ -234,9 +244,27 @@ impl ExrWriter {
     pub fn finish(mut self) -> Result<(), IoError> {
         let file = self.file.take().expect("finish is called once");
         if let Err(e) = self.stop() {
-            return Err(IoError::new(file.dest(), e));
+            return Err(e.at(file.dest()));
         }
         file.commit_written()
+    }
+}
+
+/// Why the writing thread ended badly.
+enum Stopped {
+    /// The codec or the system failed.
+    Failed(Cause),
+    /// The thread panicked.
+    Panicked,
+}
+
+impl Stopped {
+    /// The failure, told about the file at `path`.
+    fn at(self, path: &Path) -> IoError {
+        match self {
+            Stopped::Failed(cause) => IoError::caused(path, cause),
+            Stopped::Panicked => IoError::new(path, "the EXR writer thread panicked"),
+        }
     }
 }
 
@@ -256,7 +284,7 @@ impl ExrEncoder {
         row: usize,
         planes: &Planes,
         colors: Option<&[[f32; 3]]>,
-    ) -> Result<Vec<(usize, Chunk)>, String> {
+    ) -> Result<Vec<(usize, Chunk)>, IoError> {
         let mut out = Vec::new();
         let w = self.width;
         let block_rows = COMPRESSION.scan_lines_per_block();
@@ -279,7 +307,9 @@ impl ExrEncoder {
                             TrapPlane::Color(_) => push_f32(&mut data, &vec![0.0; w]),
                         },
                         Source::Color(i) => {
-                            let c = colors.ok_or("the RGB channels need the composited colours")?;
+                            let c = colors.ok_or_else(|| {
+                                IoError::new(&self.path, "the RGB channels need the composited colours")
+                            })?;
                             c[r.clone()].iter().for_each(|p| {
                                 data.extend_from_slice(&::exr::prelude::f16::from_f32(p[i]).to_ne_bytes())
                             });
@@ -303,7 +333,7 @@ impl ExrEncoder {
                 },
                 data,
             };
-            let chunk = block.compress_to_chunk(&self.headers).map_err(|e| e.to_string())?;
+            let chunk = block.compress_to_chunk(&self.headers).map_err(|e| IoError::caused(&self.path, e))?;
             out.push((y / block_rows, chunk));
         }
         Ok(out)
@@ -324,7 +354,7 @@ fn push_f32(data: &mut Vec<u8>, values: &[f32]) {
 
 /// The scene TOML stored in an EXR written by deepfield, if any.
 pub fn read_exr_scene(path: &Path) -> Result<Option<String>, IoError> {
-    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::new(path, e))?;
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::caused(path, e))?;
     Ok(meta.headers.first().and_then(|h| match h.own_attributes.other.get(&Text::from(SCENE_ATTRIBUTE)) {
         Some(AttributeValue::Text(t)) => Some(String::from_utf8_lossy(t.bytes()).into_owned()),
         _ => None,

@@ -17,6 +17,7 @@ use ::exr::block::reader::{AllChunksReader, ChunksReader};
 use ::exr::math::Vec2;
 use ::exr::meta::MetaData;
 
+use super::exr_fault::LineFault;
 use super::exr_lines::{Layout, lock};
 use crate::field::Planes;
 
@@ -32,7 +33,7 @@ struct Pending {
 }
 
 /// A damaged file's first fault, kept while the other tasks wind down.
-type Fault = Mutex<Option<String>>;
+type Fault = Mutex<Option<LineFault>>;
 
 /// Decompresses the blocks of a scan-line file on the current rayon pool, converts their
 /// lines into strips and hands each complete strip to `done`. The thread reading the file
@@ -42,7 +43,7 @@ pub(super) fn decode_blocks(
     chunks: AllChunksReader<BufReader<File>>,
     layout: &Layout<'_>,
     done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-) -> Result<(), String> {
+) -> Result<(), LineFault> {
     let (height, rows_per) = (layout.header.height, layout.rows_per);
     let meta = chunks.meta_data().clone();
     let spare = Mutex::new(Vec::new());
@@ -51,9 +52,9 @@ pub(super) fn decode_blocks(
     let failed = AtomicBool::new(false);
     let in_flight = AtomicUsize::new(0);
     let limit = 4 * rayon::current_num_threads();
-    let fail = |message: String| {
+    let fail = |found: LineFault| {
         failed.store(true, Ordering::Relaxed);
-        lock(&fault).get_or_insert(message);
+        lock(&fault).get_or_insert(found);
     };
     let (meta, pending, fail, in_flight, spare) = (&meta, &pending, &fail, &in_flight, &spare);
     rayon::scope(|s| {
@@ -64,7 +65,7 @@ pub(super) fn decode_blocks(
             let chunk = match chunk {
                 Ok(c) => c,
                 Err(e) => {
-                    fail(e.to_string());
+                    fail(e.into());
                     break;
                 }
             };
@@ -82,12 +83,12 @@ pub(super) fn decode_blocks(
             });
         }
     });
-    if let Some(message) = fault.into_inner().unwrap_or_else(PoisonError::into_inner) {
-        return Err(message);
+    if let Some(fault) = fault.into_inner().unwrap_or_else(PoisonError::into_inner) {
+        return Err(fault);
     }
     let lines: usize = pending.iter().map(|p| lock(p).count).sum();
     if lines != height {
-        return Err(format!("the file holds {lines} of its {height} scan lines: it is damaged"));
+        return Err(LineFault::Missing { lines, height });
     }
     Ok(())
 }
@@ -111,8 +112,8 @@ fn decode_block(
     pending: &[Mutex<Pending>],
     spare: &Mutex<Vec<Planes>>,
     done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-) -> Result<(), String> {
-    let block = UncompressedBlock::decompress_chunk(chunk, meta, false).map_err(|e| e.to_string())?;
+) -> Result<(), LineFault> {
+    let block = UncompressedBlock::decompress_chunk(chunk, meta, false)?;
     let index = block.index;
     let (width, height, rows_per) = (layout.header.width, layout.header.height, layout.rows_per);
     if index.layer != 0 || index.level != Vec2(0, 0) {
@@ -120,12 +121,12 @@ fn decode_block(
     }
     let lines = index.pixel_size.1;
     if index.pixel_position.0 != 0 || index.pixel_size.0 != width || block.data.len() != lines * layout.line_bytes {
-        return Err("a scan-line block of the wrong size".into());
+        return Err(LineFault::WrongSize);
     }
     for (l, line) in block.data.chunks_exact(layout.line_bytes).enumerate() {
         let y = index.pixel_position.1 + l;
         if y >= height {
-            return Err("a scan line outside the data window".into());
+            return Err(LineFault::OutsideWindow);
         }
         let (k, row) = (y / rows_per, y % rows_per);
         let rows = rows_per.min(height - k * rows_per);
@@ -136,9 +137,9 @@ fn decode_block(
                 p.planes = Some(layout.planes_from(rows, spare));
             }
             if std::mem::replace(&mut p.seen[row], true) {
-                return Err(format!("scan line {y} appears twice"));
+                return Err(LineFault::Twice(y));
             }
-            let Some(planes) = p.planes.as_mut() else { return Err(format!("scan line {y} appears twice")) };
+            let Some(planes) = p.planes.as_mut() else { return Err(LineFault::Twice(y)) };
             layout.insert_line(planes, row, line);
             p.count += 1;
             if p.count == rows { p.planes.take() } else { None }

@@ -11,8 +11,8 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 use ::exr::meta::attribute::SampleType;
 use ::exr::prelude::f16;
 
-use super::exr_raw::{RawHeader, TrapKind};
-use crate::field::{Channel, Planes, TrapPlane};
+use super::exr_raw::RawHeader;
+use crate::field::{Channel, Planes, TrapKind, TrapPlane};
 
 /// A mutex's guard, whether or not another thread panicked while holding it (the data is
 /// plain samples, valid either way).

@@ -31,6 +31,7 @@ use ::exr::compression::Compression;
 use ::exr::meta::MetaData;
 use ::exr::meta::header::Header;
 
+use super::exr_fault::LineFault;
 use super::exr_lines::{Layout, lock};
 use crate::field::Planes;
 
@@ -114,11 +115,11 @@ impl PlainBlocks {
         &self,
         layout: &Layout<'_>,
         done: &(impl Fn(usize, Planes) -> Option<Planes> + Sync),
-    ) -> Result<(), String> {
+    ) -> Result<(), LineFault> {
         let count = layout.header.height.div_ceil(layout.rows_per);
         let next = AtomicUsize::new(0);
         let failed = AtomicBool::new(false);
-        let fault: Mutex<Option<String>> = Mutex::new(None);
+        let fault: Mutex<Option<LineFault>> = Mutex::new(None);
         let spare = Mutex::new(Vec::new());
         rayon::scope(|s| {
             for _ in 0..rayon::current_num_threads().min(count) {
@@ -145,7 +146,7 @@ impl PlainBlocks {
             }
         });
         match fault.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner) {
-            Some(message) => Err(message),
+            Some(fault) => Err(fault),
             None => Ok(()),
         }
     }
@@ -157,20 +158,18 @@ impl PlainBlocks {
         layout: &Layout<'_>,
         line: &mut [u8],
         spare: &Mutex<Vec<Planes>>,
-    ) -> Result<Planes, String> {
+    ) -> Result<Planes, LineFault> {
         let (height, rows_per) = (layout.header.height, layout.rows_per);
         let rows = rows_per.min(height - k * rows_per);
         let mut planes = layout.planes_from(rows, spare);
         for row in 0..rows {
             let y = k * rows_per + row;
-            read_exact_at(&self.file, line, self.offsets[y]).map_err(|e| format!("scan line {y}: {e}"))?;
+            read_exact_at(&self.file, line, self.offsets[y]).map_err(|source| LineFault::Read { line: y, source })?;
             let (head, samples) = line.split_at(BLOCK_HEAD);
             let at = i32::from_le_bytes([head[0], head[1], head[2], head[3]]);
             let size = i32::from_le_bytes([head[4], head[5], head[6], head[7]]);
             if i64::from(at) != self.y0 + y as i64 || usize::try_from(size) != Ok(samples.len()) {
-                return Err(format!(
-                    "the block the offset table gives for scan line {y} holds line {at} of {size} bytes: the file is damaged"
-                ));
+                return Err(LineFault::Misplaced { line: y, found: at, size });
             }
             layout.insert_line(&mut planes, row, samples);
         }

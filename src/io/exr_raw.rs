@@ -5,7 +5,7 @@
 //! uncompressed files depend on these types, not on the module that chooses between them
 //! (`exr_read`, which also holds the whole-image fallback).
 
-use crate::field::{ChannelSet, Planes};
+use crate::field::{ChannelSet, Planes, TrapKind};
 
 /// What a raw-data EXR's header says: enough to check that a scene fits the data before
 /// any block is read.
@@ -30,17 +30,4 @@ pub struct RawData {
     pub header: RawHeader,
     /// The planes, in strips of whole rows, top to bottom.
     pub strips: Vec<Planes>,
-}
-
-/// What one trap's channels hold.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TrapKind {
-    /// `trapK.D`.
-    Distance,
-    /// `trapK.STRIPE`.
-    Stripe,
-    /// `trapK.R/G/B/A`.
-    Color,
-    /// `trapK.IFS`.
-    Density,
 }

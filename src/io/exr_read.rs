@@ -27,8 +27,8 @@ use super::exr::SCENE_ATTRIBUTE;
 use super::exr_blocks::decode_blocks;
 use super::exr_lines::{Layout, Slot, lock, slot_of};
 use super::exr_plain::PlainBlocks;
-pub use super::exr_raw::{RawData, RawHeader, TrapKind};
-use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
+pub use super::exr_raw::{RawData, RawHeader};
+use crate::field::{Channel, ChannelSet, Planes, TrapKind, TrapPlane};
 
 /// The most a compressed EXR can expand: deflate (ZIP) reaches ~1032:1, the other
 /// compressions less, so a file claiming more decoded bytes than this many times its size
@@ -38,7 +38,7 @@ const MAX_EXPANSION: u64 = 1100;
 /// Refuses, before anything is allocated, a file whose header claims more decoded data than
 /// its bytes can hold.
 fn check_decoded_size(path: &Path, meta: &MetaData) -> Result<(), IoError> {
-    let file_len = std::fs::metadata(path).map_err(|e| IoError::new(path, e))?.len();
+    let file_len = std::fs::metadata(path).map_err(|e| IoError::caused(path, e))?.len();
     let mut claimed: u64 = 0;
     for h in meta.headers.iter() {
         let pixels = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
@@ -99,8 +99,8 @@ enum LineReader {
 impl ExrStrips {
     /// Opens `path` and reads its header; the strips will hold `strip_rows` rows (at least 1).
     pub fn open(path: &Path, strip_rows: usize) -> Result<Self, IoError> {
-        let file = File::open(path).map_err(|e| IoError::new(path, e))?;
-        let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::new(path, e))?;
+        let file = File::open(path).map_err(|e| IoError::caused(path, e))?;
+        let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::caused(path, e))?;
         check_decoded_size(path, reader.meta_data())?;
         let rows_per = strip_rows.max(1);
         if let Some(strips) = open_scanlines(path, reader, rows_per, true)? {
@@ -150,7 +150,7 @@ impl ExrStrips {
                     LineReader::Blocks(chunks) => decode_blocks(*chunks, &layout, done),
                     LineReader::InPlace(blocks) => blocks.read_strips(&layout, done),
                 }
-                .map_err(|e| IoError::new(&self.path, e))
+                .map_err(|fault| fault.at(&self.path))
             }
         }
     }
@@ -221,8 +221,8 @@ fn open_scanlines(
     rows_per: usize,
     in_place: bool,
 ) -> Result<Option<ExrStrips>, IoError> {
-    let err = |e: ::exr::error::Error| IoError::new(path, e);
-    let err_io = |e: std::io::Error| IoError::new(path, e);
+    let err = |e: ::exr::error::Error| IoError::caused(path, e);
+    let err_io = |e: std::io::Error| IoError::caused(path, e);
     let header = match reader.headers() {
         [h] => h.clone(),
         _ => return Ok(None),
@@ -266,7 +266,7 @@ fn read_whole_image(path: &Path, strip_rows: usize) -> Result<RawData, IoError> 
         .first_valid_layer()
         .all_attributes()
         .from_file(path)
-        .map_err(|e| IoError::new(path, e))?;
+        .map_err(|e| IoError::caused(path, e))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.0, layer.size.1);
     let scene = scene_text(&layer.attributes);

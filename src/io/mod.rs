@@ -7,8 +7,10 @@
 
 mod atomic;
 mod bitmap;
+mod error;
 mod exr;
 mod exr_blocks;
+mod exr_fault;
 mod exr_lines;
 mod exr_plain;
 mod exr_raw;
@@ -23,25 +25,10 @@ mod tile_exr;
 
 pub use atomic::AtomicFile;
 pub use bitmap::load_bitmap;
+pub use error::{Cause, IoError};
 pub use exr::{ExrEncoder, ExrLayout, ExrWriter, TILE_ATTRIBUTE, read_exr_scene};
-pub use exr_read::{ExrStrips, RawData, RawHeader, TrapKind, read_exr_planes};
+pub use exr_read::{ExrStrips, RawData, RawHeader, read_exr_planes};
 pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene, write_png_rgb8};
 pub use scene_source::{SceneSource, read_scene_source};
 pub use tile::{TILE_KEYWORD, assemble_png, band_rows, tile_text};
 pub use tile_exr::assemble_exr;
-
-/// An I/O failure with the path it concerns.
-#[derive(Debug, thiserror::Error)]
-#[error("{path}: {message}")]
-pub struct IoError {
-    /// The file.
-    pub path: String,
-    /// What went wrong.
-    pub message: String,
-}
-
-impl IoError {
-    pub(crate) fn new(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
-        Self { path: path.display().to_string(), message: message.to_string() }
-    }
-}

@@ -106,7 +106,7 @@ impl Encoders {
         rgb: &[[f32; 3]],
         planes: &Planes,
         samples: Option<&[[f32; 3]]>,
-    ) -> Result<Encoded, String> {
+    ) -> Result<Encoded, IoError> {
         let png = self.png.as_ref().map(|e| e.encode(rgb));
         let exr = match &self.exr {
             Some(e) => Some(e.encode(row as usize * self.aa - self.first_sample, planes, samples)?),
@@ -118,9 +118,9 @@ impl Encoders {
 
 impl Writers {
     /// Appends an encoded strip (strips in order).
-    pub fn write(&mut self, strip: Encoded) -> Result<(), String> {
+    pub fn write(&mut self, strip: Encoded) -> Result<(), IoError> {
         if let (Some(w), Some(bytes)) = (self.png.as_mut(), strip.png) {
-            w.write_encoded(&bytes).map_err(|e| e.to_string())?;
+            w.write_encoded(&bytes)?;
         }
         if let (Some(w), Some(chunks)) = (self.exr.as_mut(), strip.exr) {
             w.write(chunks)?;

@@ -75,20 +75,20 @@ impl PngWriter {
         // size (three smaller), the 4K seahorse recolour's 3% smaller, and 1.5e8 fewer
         // instructions there (valgrind). `Fastest` (the Up filter) was 4-8% larger.
         enc.set_filter(::png::Filter::Paeth);
-        enc.add_itxt_chunk(SCENE_KEYWORD.into(), scene_toml.into()).map_err(|e| IoError::new(path, e))?;
+        enc.add_itxt_chunk(SCENE_KEYWORD.into(), scene_toml.into()).map_err(|e| IoError::caused(path, e))?;
         for (key, text) in extra {
-            enc.add_itxt_chunk((*key).into(), text.clone()).map_err(|e| IoError::new(path, e))?;
+            enc.add_itxt_chunk((*key).into(), text.clone()).map_err(|e| IoError::caused(path, e))?;
         }
         enc.add_text_chunk("Software".into(), format!("deepfield {}", env!("CARGO_PKG_VERSION")))
-            .map_err(|e| IoError::new(path, e))?;
-        let writer = enc.write_header().map_err(|e| IoError::new(path, e))?;
-        let stream = writer.into_stream_writer().map_err(|e| IoError::new(path, e))?;
+            .map_err(|e| IoError::caused(path, e))?;
+        let writer = enc.write_header().map_err(|e| IoError::caused(path, e))?;
+        let stream = writer.into_stream_writer().map_err(|e| IoError::caused(path, e))?;
         Ok(Self { file, stream, tail_error })
     }
 
     /// Appends rows encoded by a [`PngEncoder`] of the same bit depth.
     pub fn write_encoded(&mut self, bytes: &[u8]) -> Result<(), IoError> {
-        self.stream.write_all(bytes).map_err(|e| IoError::new(self.file.dest(), e))
+        self.stream.write_all(bytes).map_err(|e| IoError::caused(self.file.dest(), e))
     }
 
     /// Completes the file and moves it into place.
@@ -96,9 +96,9 @@ impl PngWriter {
         let dest = self.file.dest().to_path_buf();
         // The png crate consumes its writer on finish; `Tail` flushes and syncs the file
         // when dropped and reports any failure through `tail_error`.
-        self.stream.finish().map_err(|e| IoError::new(&dest, e))?;
+        self.stream.finish().map_err(|e| IoError::caused(&dest, e))?;
         if let Some(e) = super::atomic::take_tail_error(&self.tail_error) {
-            return Err(IoError::new(&dest, e));
+            return Err(IoError::caused(&dest, e));
         }
         self.file.commit_written()
     }
@@ -114,13 +114,13 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8], scene_to
 
 /// The scene TOML stored in a PNG written by deepfield, if any.
 pub fn read_png_scene(path: &Path) -> Result<Option<String>, IoError> {
-    let file = File::open(path).map_err(|e| IoError::new(path, e))?;
+    let file = File::open(path).map_err(|e| IoError::caused(path, e))?;
     let decoder = ::png::Decoder::new(BufReader::new(file));
-    let reader = decoder.read_info().map_err(|e| IoError::new(path, format!("not a readable PNG: {e}")))?;
+    let reader = decoder.read_info().map_err(|e| IoError::context(path, "not a readable PNG", e))?;
     let info = reader.info();
     for chunk in &info.utf8_text {
         if chunk.keyword == SCENE_KEYWORD {
-            return chunk.get_text().map(Some).map_err(|e| IoError::new(path, e));
+            return chunk.get_text().map(Some).map_err(|e| IoError::caused(path, e));
         }
     }
     Ok(None)

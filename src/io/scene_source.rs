@@ -35,11 +35,11 @@ pub fn read_scene_source(path: &Path) -> Result<SceneSource, IoError> {
     } else if head >= 4 && magic[..4] == [0x76, 0x2f, 0x31, 0x01] {
         embedded(super::read_exr_scene(path)?, "EXR")?
     } else {
-        std::fs::read_to_string(path).map_err(|e| IoError::new(path, format!("cannot read scene: {e}")))?
+        std::fs::read_to_string(path).map_err(|e| IoError::context(path, "cannot read scene", e))?
     };
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("kfr")) {
         // Validated as the scene it converts to; the converter checked what it read.
-        let toml = kfr::kfr_to_toml(&origin, &text).map_err(|e| IoError::new(path, e))?;
+        let toml = kfr::kfr_to_toml(&origin, &text).map_err(|e| IoError::caused(path, e))?;
         return Ok(SceneSource { origin: format!("{origin} (as a scene)"), text: toml, base_dir });
     }
     Ok(SceneSource { origin, text, base_dir })

@@ -61,14 +61,14 @@ pub(super) fn parse_tile_text(path: &Path, t: &str) -> Result<(u32, u32, u32, u3
 }
 
 fn read_band(path: &Path) -> Result<Band, IoError> {
-    let file = File::open(path).map_err(|e| IoError::new(path, e))?;
+    let file = File::open(path).map_err(|e| IoError::caused(path, e))?;
     let reader = ::png::Decoder::new(BufReader::new(file))
         .read_info()
-        .map_err(|e| IoError::new(path, format!("not a readable PNG: {e}")))?;
+        .map_err(|e| IoError::context(path, "not a readable PNG", e))?;
     let info = reader.info();
     let text = |key: &str| -> Result<Option<String>, IoError> {
         match info.utf8_text.iter().find(|c| c.keyword == key) {
-            Some(c) => c.get_text().map(Some).map_err(|e| IoError::new(path, e)),
+            Some(c) => c.get_text().map(Some).map_err(|e| IoError::caused(path, e)),
             None => Ok(None),
         }
     };
@@ -137,11 +137,11 @@ pub fn assemble_png(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) 
     let mut writer = PngWriter::create(out, b0.width, b0.height, b0.bits, &b0.scene)?;
     let mut done = 0;
     for b in &bands {
-        let file = File::open(&b.path).map_err(|e| IoError::new(&b.path, e))?;
+        let file = File::open(&b.path).map_err(|e| IoError::caused(&b.path, e))?;
         let mut decoder = ::png::Decoder::new(BufReader::new(file));
         decoder.set_transformations(::png::Transformations::IDENTITY);
-        let mut reader = decoder.read_info().map_err(|e| IoError::new(&b.path, e))?;
-        while let Some(row) = reader.next_row().map_err(|e| IoError::new(&b.path, e))? {
+        let mut reader = decoder.read_info().map_err(|e| IoError::caused(&b.path, e))?;
+        while let Some(row) = reader.next_row().map_err(|e| IoError::caused(&b.path, e))? {
             writer.write_encoded(row.data())?;
             done += 1;
             progress(done, b0.height);

@@ -48,8 +48,8 @@ fn text_attribute(header: &Header, name: &str) -> Option<String> {
 }
 
 fn read_unit(path: &Path) -> Result<Unit, IoError> {
-    let file = File::open(path).map_err(|e| IoError::new(path, e))?;
-    let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::new(path, e))?;
+    let file = File::open(path).map_err(|e| IoError::caused(path, e))?;
+    let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::caused(path, e))?;
     let header = match reader.headers() {
         [h] if matches!(h.blocks, BlockDescription::ScanLines) && !h.deep => h.clone(),
         _ => return Err(IoError::new(path, "not a work unit: deepfield's units are single-part scan-line files")),
@@ -101,18 +101,18 @@ pub fn assemble_exr(paths: &[PathBuf], out: &Path, progress: &dyn Fn(u32, u32)) 
     let mut batch: Vec<(usize, Vec<u8>)> = Vec::new();
     let mut next_line = 0usize;
     let flush = |batch: &mut Vec<(usize, Vec<u8>)>, writer: &mut ExrWriter| -> Result<(), IoError> {
-        let chunks =
-            compress(&headers, w, line_bytes, block_lines, std::mem::take(batch)).map_err(|e| IoError::new(out, e))?;
-        writer.write(chunks).map_err(|e| IoError::new(out, e))
+        let chunks = compress(&headers, w, line_bytes, block_lines, std::mem::take(batch))
+            .map_err(|e| IoError::caused(out, e))?;
+        writer.write(chunks)
     };
     for u in &units {
         let path = &u.band.path;
-        let file = File::open(path).map_err(|e| IoError::new(path, e))?;
-        let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::new(path, e))?;
+        let file = File::open(path).map_err(|e| IoError::caused(path, e))?;
+        let reader = ::exr::block::read(BufReader::new(file), false).map_err(|e| IoError::caused(path, e))?;
         let mut expect = 0usize;
         let total = u.header.layer_size.1;
-        for block in reader.all_chunks(false).map_err(|e| IoError::new(path, e))?.sequential_decompressor(false) {
-            let block = block.map_err(|e| IoError::new(path, e))?;
+        for block in reader.all_chunks(false).map_err(|e| IoError::caused(path, e))?.sequential_decompressor(false) {
+            let block = block.map_err(|e| IoError::caused(path, e))?;
             let lines = block.index.pixel_size.1;
             if block.index.pixel_position.1 != expect || block.data.len() != lines * line_bytes {
                 return Err(IoError::new(path, "its blocks are not the scan lines of its band in order"));
@@ -147,7 +147,7 @@ fn compress(
     line_bytes: usize,
     block_lines: usize,
     blocks: Vec<(usize, Vec<u8>)>,
-) -> Result<Vec<(usize, Chunk)>, String> {
+) -> Result<Vec<(usize, Chunk)>, ::exr::error::Error> {
     blocks
         .into_par_iter()
         .map(|(y, data)| {
@@ -157,7 +157,7 @@ fn compress(
                 pixel_size: Vec2(width, data.len() / line_bytes),
                 level: Vec2(0, 0),
             };
-            let chunk = UncompressedBlock { index, data }.compress_to_chunk(headers).map_err(|e| e.to_string())?;
+            let chunk = UncompressedBlock { index, data }.compress_to_chunk(headers)?;
             Ok((y / block_lines, chunk))
         })
         .collect()

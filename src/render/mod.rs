@@ -24,13 +24,19 @@ use crate::coloring::Context;
 use crate::compose;
 use std::sync::{Arc, Mutex};
 
-use crate::field::{self, Cancelled, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
+use crate::cancel::Cancelled;
+use crate::field::{self, Channel, ChannelSet, FieldParams, Needs, Planes, SampleGrid};
 use crate::formula::Family;
 use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec, Perturbation};
 use crate::scene::{FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
 use engine::{EngineError, EngineKind, EnginePlan};
+
+/// What the caller's `prepare` and `sink` report when they fail: their own error, kept
+/// whole so that the caller can look at it again (an [`crate::io::IoError`] for a full
+/// disk, say).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Why a render did not complete.
 #[derive(Debug, thiserror::Error)]
@@ -60,9 +66,12 @@ pub enum RenderError {
     /// The GPU failed or is missing.
     #[error(transparent)]
     Gpu(#[from] gpu::GpuError),
-    /// The sink (the caller's output writer) failed, with its message.
-    #[error("{0}")]
-    Sink(String),
+    /// The caller's `prepare` or `sink` (its encoders and output writers) failed.
+    #[error(transparent)]
+    Sink(SinkError),
+    /// The thread running the caller's sink panicked.
+    #[error("the output writer panicked")]
+    SinkPanicked,
     /// The thread pool could not be built.
     #[error("cannot start {0} worker threads")]
     Threads(usize),
@@ -411,8 +420,8 @@ pub fn render<P: Send>(
     options: Options,
     cancel: &AtomicBool,
     progress: &(dyn Fn(Progress) + Sync),
-    prepare: &(dyn Fn(&RenderedStrip) -> Result<P, String> + Sync),
-    mut sink: impl FnMut(RenderedStrip, P) -> Result<(), String> + Send,
+    prepare: &(dyn Fn(&RenderedStrip) -> Result<P, SinkError> + Sync),
+    mut sink: impl FnMut(RenderedStrip, P) -> Result<(), SinkError> + Send,
 ) -> Result<Stats, RenderError> {
     let start = Instant::now();
     // The GPU engines iterate on the process-wide device; its absence is an engine error.
@@ -499,9 +508,9 @@ pub fn render<P: Send>(
         // Stops it when the strips are done, or when they unwind (the scope would wait
         // for it forever).
         let stop = Stop(&finished, watcher.as_ref().map(|w| w.thread().clone()));
-        let writer = s.spawn(move || -> Result<(), String> {
+        let writer = s.spawn(move || -> Result<(), RenderError> {
             for (strip, prepared) in rx {
-                sink(strip, prepared)?;
+                sink(strip, prepared).map_err(RenderError::Sink)?;
             }
             Ok(())
         });
@@ -550,8 +559,8 @@ pub fn render<P: Send>(
         });
         drop(tx);
         drop(stop);
-        let written = writer.join().unwrap_or_else(|_| Err("output writer panicked".into()));
-        computed.and(written.map_err(RenderError::Sink))
+        let written = writer.join().unwrap_or(Err(RenderError::SinkPanicked));
+        computed.and(written)
     });
     result?;
     let wall = start.elapsed().as_secs_f64();

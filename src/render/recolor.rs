@@ -6,23 +6,35 @@
 use rayon::prelude::*;
 
 use crate::coloring::Context;
-use crate::compose::{self, Stack};
-use crate::field::Planes;
+use crate::compose::{self, Stack, TrapMismatch};
+use crate::field::{Planes, TrapKind, TrapPlane};
 use crate::palette::color::linear_to_srgb8;
 
 /// Colours every strip (sample rows a multiple of `aa`) and downsamples it: linear RGB
-/// output pixels per strip, in order.
-pub fn recolor(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<[f32; 3]>> {
+/// output pixels per strip, in order. Refuses strips whose trap planes do not serve the
+/// layers ([`Stack::check_traps`]).
+pub fn recolor(stack: &Stack, strips: &[Planes], aa: u32) -> Result<Vec<Vec<[f32; 3]>>, TrapMismatch> {
+    check(stack, strips)?;
     let ctx = context(stack, strips);
-    strips.par_iter().map(|planes| strip_linear(stack, planes, aa, &ctx)).collect()
+    Ok(strips.par_iter().map(|planes| strip_linear(stack, planes, aa, &ctx)).collect())
 }
 
 /// Like [`recolor`], for 8-bit output: sRGB bytes per strip, identical to encoding
 /// [`recolor`]'s pixels, and faster at one sample per pixel (no round trip through linear
 /// light where the compositor already holds sRGB bytes).
-pub fn recolor_rgb8(stack: &Stack, strips: &[Planes], aa: u32) -> Vec<Vec<u8>> {
+pub fn recolor_rgb8(stack: &Stack, strips: &[Planes], aa: u32) -> Result<Vec<Vec<u8>>, TrapMismatch> {
+    check(stack, strips)?;
     let ctx = context(stack, strips);
-    strips.par_iter().map(|planes| strip_rgb8(stack, planes, aa, &ctx)).collect()
+    Ok(strips.par_iter().map(|planes| strip_rgb8(stack, planes, aa, &ctx)).collect())
+}
+
+/// [`Stack::check_traps`] on every strip's trap planes.
+fn check(stack: &Stack, strips: &[Planes]) -> Result<(), TrapMismatch> {
+    for planes in strips {
+        let kinds: Vec<TrapKind> = planes.traps.iter().map(TrapPlane::kind).collect();
+        stack.check_traps(&kinds)?;
+    }
+    Ok(())
 }
 
 /// The image-wide data the layers need ([`Stack::context`]), built once from every strip;

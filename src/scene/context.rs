@@ -18,8 +18,12 @@ use crate::palette::color;
 use crate::source::SourceError;
 use crate::trap::Bitmap;
 
-/// Loads a bitmap for a bitmap trap (provided by the I/O layer).
-pub type BitmapLoader<'a> = dyn Fn(&Path) -> Result<Bitmap, String> + 'a;
+/// Loads a bitmap for a bitmap trap (provided by the I/O layer, whose error names the file
+/// and keeps the system's or the codec's failure beneath).
+pub type BitmapLoader<'a> = dyn Fn(&Path) -> Result<Bitmap, BitmapLoadError> + 'a;
+
+/// Why a [`BitmapLoader`] could not load a bitmap: the loader's own error, whole.
+pub type BitmapLoadError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Where the scene being validated came from, so that every error can name the file, line
 /// and column of the offending value (or say it came from the command line).

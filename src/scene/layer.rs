@@ -443,8 +443,7 @@ pub(super) fn layer(
                 );
             };
             let path = base_dir.join(image.get_ref());
-            let bitmap = bitmaps(&path)
-                .or_else(|e| cx.err(image.span(), format!("cannot load bitmap {}: {e}", path.display())))?;
+            let bitmap = bitmaps(&path).or_else(|e| cx.err(image.span(), format!("cannot load bitmap: {e}")))?;
             let size = num(&l.size, "size", 1e-300, 1e6, "size")?;
             let frame = frame(cx, l, bitmap.width)?;
             let a = angle()?.to_radians();

@@ -14,7 +14,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-pub use context::BitmapLoader;
+pub use context::{BitmapLoadError, BitmapLoader};
 pub use layer::{COMMON_KEYS, DefaultValue, LAYER_KINDS, default_value, kind_keys, kind_list, uses_palette};
 pub use raw::SceneFile;
 
@@ -145,15 +145,18 @@ impl Scene {
     }
 
     /// Validates a scene file (possibly with command-line overrides written into it).
-    /// `text` is the file's text, used to turn spans into lines and columns.
-    pub fn validate(
+    /// `text` is the file's text, used to turn spans into lines and columns; `bitmaps`
+    /// loads bitmap traps' images (the I/O layer's `load_bitmap`), its error quoted in the
+    /// scene's.
+    pub fn validate<E: Into<BitmapLoadError>>(
         file: SceneFile,
         origin: &str,
         text: &str,
         base_dir: &Path,
-        bitmaps: &BitmapLoader<'_>,
+        bitmaps: impl Fn(&Path) -> Result<crate::trap::Bitmap, E>,
     ) -> Result<Scene, SourceError> {
-        validate::validate(file, origin, text, base_dir, bitmaps)
+        let load = |path: &Path| bitmaps(path).map_err(Into::into);
+        validate::validate(file, origin, text, base_dir, &load)
     }
 
     /// The scene as TOML text (what PNG and EXR metadata carry).

@@ -82,8 +82,10 @@ mod tests {
         for (name, _, text) in PRESETS {
             let text = format!("version = 1\n{text}");
             let file = Scene::parse_file(name, &text).unwrap();
-            let loader = |_: &std::path::Path| Err("no bitmaps".to_string());
-            Scene::validate(file, name, &text, std::path::Path::new("."), &loader).unwrap();
+            let loader = |_: &std::path::Path| {
+                Err(std::io::Error::new(std::io::ErrorKind::Unsupported, "the presets have no bitmap layers"))
+            };
+            Scene::validate(file, name, &text, std::path::Path::new("."), loader).unwrap();
             assert!(preset(name).is_some_and(|l| !l.is_empty()));
         }
         assert!(preset("nope").is_none());

@@ -172,7 +172,7 @@ pub(super) fn validate(
         Some(list) => {
             let mut set = ChannelSet::default();
             for name in list.get_ref() {
-                set.insert(name.parse::<Channel>().or_else(|e| cx.err(list.span(), e))?);
+                set.insert(name.parse::<Channel>().or_else(|e| cx.err(list.span(), e.to_string()))?);
             }
             set
         }

@@ -31,6 +31,17 @@ pub enum Trap {
 }
 
 impl Trap {
+    /// What the trap's plane holds.
+    pub fn plane_kind(&self) -> crate::field::TrapKind {
+        use crate::field::TrapKind;
+        match self {
+            Trap::Geometric(_) => TrapKind::Distance,
+            Trap::Stripe(_) => TrapKind::Stripe,
+            Trap::Bitmap(_) => TrapKind::Color,
+            Trap::Ifs(_) => TrapKind::Density,
+        }
+    }
+
     /// True when the trap observes the orbit (every kind but the IFS field).
     pub fn observes_orbit(&self) -> bool {
         !matches!(self, Trap::Ifs(_))

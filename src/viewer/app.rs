@@ -339,7 +339,7 @@ impl ViewerApp {
         file.view.width = cli(self.size_px[0].max(1) as i64);
         file.view.height = cli(self.size_px[1].max(1) as i64);
         let text = toml::to_string(&file).map_err(|e| e.to_string())?;
-        let mut scene = Scene::validate(file, &self.origin, &text, &self.base_dir, &crate::io::load_bitmap)
+        let mut scene = Scene::validate(file, &self.origin, &text, &self.base_dir, crate::io::load_bitmap)
             .map_err(|e| e.to_string())?;
         for (k, p) in &self.overrides {
             if let Some(layer) = scene.stack.layers.get_mut(*k)
@@ -368,8 +368,10 @@ impl ViewerApp {
         if let Some((strips, old)) = &self.planes
             && recolourable(old, &scene)
             && self.image.as_ref().is_some_and(|(_, n, _)| *n == self.nav)
+            // Planes whose traps do not serve the new layers are computed again.
+            && let Ok(rgb8) = render::recolor_rgb8(&scene.stack, strips, old.aa)
         {
-            let rgb8 = render::recolor_rgb8(&scene.stack, strips, old.aa).concat();
+            let rgb8 = rgb8.concat();
             let (w, h) = (old.width as usize, old.height as usize);
             if let Some((tex, _, _)) = &mut self.image {
                 tex.set(ColorImage::from_rgb([w, h], &rgb8), egui::TextureOptions::LINEAR);
@@ -500,7 +502,7 @@ impl ViewerApp {
         file.render.engine = cli("auto".into());
         file.iteration.max = cli((*file.iteration.max.get_ref()).min(500));
         let Ok(text) = toml::to_string(&file) else { return };
-        if let Ok(scene) = Scene::validate(file, "julia preview", &text, &self.base_dir, &crate::io::load_bitmap) {
+        if let Ok(scene) = Scene::validate(file, "julia preview", &text, &self.base_dir, crate::io::load_bitmap) {
             self.julia_asked = Some(c);
             self.julia_worker.submit(Job { scene, nav: Nav::home(), passes: vec![1] });
         }

@@ -5,7 +5,8 @@
 
 use std::sync::mpsc::{self, Receiver};
 
-use crate::field::{ChannelSet, INTERIOR, Planes};
+use crate::field::{ChannelSet, Planes};
+use crate::formula::end::INTERIOR;
 use crate::gpu::{self, Precision};
 use crate::render;
 use crate::scene::Scene;
@@ -49,8 +50,10 @@ fn compare(job: u64, scene: &Scene, cpu: &[Planes], precision: Precision) -> Res
     let params = render::field_params(scene, ChannelSet::default());
     let rows = scene.height * scene.aa;
     let gpu_planes = gpu::field::compute_planes(&ctx, &params, precision, 0..rows).map_err(|e| e.to_string())?;
-    let a = render::recolor_rgb8(&scene.stack, cpu, scene.aa).concat();
-    let b = render::recolor_rgb8(&scene.stack, std::slice::from_ref(&gpu_planes), scene.aa).concat();
+    let a = render::recolor_rgb8(&scene.stack, cpu, scene.aa).map_err(|e| e.to_string())?.concat();
+    let b = render::recolor_rgb8(&scene.stack, std::slice::from_ref(&gpu_planes), scene.aa)
+        .map_err(|e| e.to_string())?
+        .concat();
     let rgb8 = a.iter().zip(&b).map(|(x, y)| (x.abs_diff(*y) as u32 * 4).min(255) as u8).collect();
     let cpu_n = cpu.iter().flat_map(|p| p.n.iter().copied());
     let (mut differ, mut total) = (0usize, 0usize);

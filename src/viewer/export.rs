@@ -145,8 +145,9 @@ fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &Atomic
     };
     let (writers, encoders) = crate::io::output::open(scene, targets).map_err(|e| e.to_string())?;
     let writers = Mutex::new(Some(writers));
-    let prepare =
-        |strip: &render::RenderedStrip| encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref());
+    let prepare = |strip: &render::RenderedStrip| {
+        Ok(encoders.encode(strip.row, &strip.rgb, &strip.planes, strip.samples.as_deref())?)
+    };
     let progress = |p: render::Progress| {
         if let render::Progress::Rows(r) = p {
             rows.store(r, Ordering::Relaxed);
@@ -161,7 +162,7 @@ fn export(scene: &Scene, req: &ExportRequest, cancel: &AtomicBool, rows: &Atomic
         &progress,
         &prepare,
         |_, encoded| match writers.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
-            Some(w) => w.write(encoded),
+            Some(w) => Ok(w.write(encoded)?),
             None => Err("the export's files are already closed".into()),
         },
     )

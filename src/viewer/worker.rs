@@ -364,7 +364,7 @@ fn render_pass(
     let planes = Mutex::new(Vec::new());
     let total = scene.height as u64;
     let progress = |p: render::Progress| report(progress_report(id, total, p));
-    let prepare = |strip: &render::RenderedStrip| -> Result<Vec<u8>, String> {
+    let prepare = |strip: &render::RenderedStrip| -> Result<Vec<u8>, render::SinkError> {
         Ok(strip.rgb.iter().flat_map(|p| p.map(linear_to_srgb8)).collect())
     };
     let stats = render::render(
@@ -412,7 +412,7 @@ mod tests {
                     zoom = \"1e30\"\nwidth = 16\nheight = 12\n[iteration]\nmax = 20000\n\
                     [[layer]]\nkind = \"smooth\"\npalette = \"twilight\"\n";
         let file = Scene::parse_file("deep", text).unwrap();
-        let scene = Scene::validate(file, "deep", text, std::path::Path::new("."), &crate::io::load_bitmap).unwrap();
+        let scene = Scene::validate(file, "deep", text, std::path::Path::new("."), crate::io::load_bitmap).unwrap();
         let mut worker = Worker::inline(None);
         let id = worker.submit(Job { scene, nav: Nav::home(), passes: vec![1] });
         let reports = worker.poll();

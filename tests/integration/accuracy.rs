@@ -10,7 +10,8 @@
 
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{self, ChannelSet, INTERIOR};
+use deepfield::field::{self, ChannelSet};
+use deepfield::formula::end::INTERIOR;
 
 use super::reference;
 use super::util::{Lcg, median, scene};

@@ -7,7 +7,8 @@ use std::process::{Command, Output};
 use std::sync::atomic::AtomicBool;
 
 use deepfield::coloring::{Histogram, Mask, MaskQuantity};
-use deepfield::field::{self, ChannelSet, INTERIOR, TrapPlane};
+use deepfield::field::{self, ChannelSet, TrapPlane};
+use deepfield::formula::end::INTERIOR;
 use deepfield::palette::color::linear_to_srgb8 as srgb8;
 use deepfield::render;
 
@@ -314,6 +315,27 @@ fn ifs_plane_is_the_density_at_each_point() {
         field::compute_strip(&render::field_params(&without, ChannelSet::default()), 0..54, &AtomicBool::new(false))
             .unwrap();
     assert_eq!(plain.planes.n, strip.planes.n);
+}
+
+/// A layer that colours from a trap plane of another kind (planes of a scene whose trap 0
+/// is a stripe, recoloured with a distance-trap layer) is refused, naming the layer and the
+/// trap, instead of painting nothing.
+#[test]
+fn a_trap_plane_of_the_wrong_kind_is_refused() {
+    let stripes = scene(&format!("{VIEW}[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"stripe\"\n"));
+    let traps = scene(&format!("{VIEW}[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"trap\"\nshape = \"circle\"\n"));
+    let params = render::field_params(&stripes, ChannelSet::default());
+    let strip = field::compute_strip(&params, 0..54, &AtomicBool::new(false)).unwrap();
+    let planes = [strip.planes];
+    assert!(render::recolor(&stripes.stack, &planes, 1).is_ok());
+    let e = render::recolor(&traps.stack, &planes, 1).expect_err("a stripe plane coloured as distances");
+    assert_eq!((e.layer, e.trap), (2, 0));
+    assert_eq!(
+        e.to_string(),
+        "layer 2 colours from trap 0's distance data, but the planes hold stripe data for trap 0"
+    );
+    let e = render::recolor_rgb8(&traps.stack, &planes, 1).expect_err("the same, as bytes");
+    assert_eq!((e.layer, e.trap), (2, 0));
 }
 
 /// Histogram positions are uniform over the exterior samples: the fraction below q is q.

@@ -528,7 +528,7 @@ fn perturbation_agrees_with_direct_f64_at_shallow_zoom() {
             assert!(same as f64 >= 0.995 * p.n.len() as f64, "{render}: N agrees on {same} of {}", p.n.len());
             let mut nf_err: Vec<f64> = Vec::new();
             for k in 0..p.n.len() {
-                if direct.n[k] == p.n[k] && p.n[k] != field::INTERIOR {
+                if direct.n[k] == p.n[k] && p.n[k] != deepfield::formula::end::INTERIOR {
                     nf_err.push((direct.nf[k] - p.nf[k]).abs() as f64);
                 }
             }

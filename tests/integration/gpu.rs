@@ -13,8 +13,9 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{self, ChannelSet, FieldParams, INTERIOR, Needs, Planes, SampleGrid, TrapPlane};
+use deepfield::field::{self, ChannelSet, FieldParams, Needs, Planes, SampleGrid, TrapPlane};
 use deepfield::formula::Family;
+use deepfield::formula::end::INTERIOR;
 use deepfield::gpu::field::compute_planes;
 use deepfield::gpu::ifs::{self, IfsParams};
 use deepfield::gpu::uniforms::{UNIFORMS_SIZE, Uniforms};

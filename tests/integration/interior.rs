@@ -9,7 +9,8 @@
 use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
-use deepfield::field::{ChannelSet, INTERIOR};
+use deepfield::field::ChannelSet;
+use deepfield::formula::end::INTERIOR;
 use deepfield::orbit::interior::Decision;
 use deepfield::render::{self, Options, Stats};
 use deepfield::simd_level::SimdLevel;

@@ -14,6 +14,7 @@ mod interior;
 mod layout;
 mod locate;
 mod reference;
+mod sink;
 mod units;
 mod util;
 #[cfg(feature = "viewer")]

@@ -8,7 +8,7 @@ use deepfield::scene::Scene;
 pub fn scene(text: &str) -> Scene {
     let file = Scene::parse_file("test.toml", text).unwrap_or_else(|e| panic!("{e}"));
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Scene::validate(file, "test.toml", text, root, &deepfield::io::load_bitmap).unwrap_or_else(|e| panic!("{e}"))
+    Scene::validate(file, "test.toml", text, root, deepfield::io::load_bitmap).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Deterministic pseudo-random numbers (64-bit LCG), so sampled pixels never change.

@@ -175,7 +175,7 @@ pub(super) fn parse(ctx: &Ctx<'_>) -> Result<Vec<Palette>, ImportError> {
     let (count_at, count_line) = lines.next().unwrap_or((ctx.text.len(), ""));
     let count = match words(count_line).as_slice() {
         [(at, w)] => {
-            let n = int_word(w, "the number of segments").map_err(|m| ctx.err(count_at + at, m))?;
+            let n = int_word(w, "the number of segments").map_err(|e| ctx.err(count_at + at, e.to_string()))?;
             if n < 1 {
                 return Err(ctx.err(count_at + at, format!("a gradient needs at least one segment, not {n}")));
             }
@@ -256,7 +256,7 @@ fn segment(ctx: &Ctx<'_>, start: usize, line: &str) -> Result<Segment, ImportErr
     }
     let int = |k: usize, what: &str, max: i64| -> Result<i64, ImportError> {
         let (at, word) = w[k];
-        let v = int_word(word, what).map_err(|m| ctx.err(start + at, m))?;
+        let v = int_word(word, what).map_err(|e| ctx.err(start + at, e.to_string()))?;
         if !(0..=max).contains(&v) {
             return Err(ctx.err(start + at, format!("{what} {v} is not one GIMP knows (0 to {max})")));
         }

@@ -339,9 +339,19 @@ fn rgb_to_hsv([r, g, b]: [f64; 3]) -> [f64; 3] {
     [h / 6.0, delta / max, max]
 }
 
-/// Parses a decimal integer word, or explains what was wrong.
-fn int_word(word: &str, what: &str) -> Result<i64, String> {
-    word.parse::<i64>().map_err(|_| format!("expected {what} (a whole number), found `{word}`"))
+/// A word that should have been a decimal integer.
+#[derive(Debug, thiserror::Error)]
+#[error("expected {what} (a whole number), found `{word}`")]
+struct NotAnInteger {
+    /// What the number is.
+    what: String,
+    /// The word found.
+    word: String,
+}
+
+/// Parses a decimal integer word, `what` the number is.
+fn int_word(word: &str, what: &str) -> Result<i64, NotAnInteger> {
+    word.parse::<i64>().map_err(|_| NotAnInteger { what: what.to_string(), word: word.to_string() })
 }
 
 #[cfg(test)]
