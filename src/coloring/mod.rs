@@ -20,10 +20,11 @@ pub use mask::{MASK_FEATHER, Mask, MaskQuantity};
 pub use shading::{DistanceStyle, Light};
 pub use transfer::Transfer;
 
-use crate::field::{Needs, Planes, TrapKind, TrapPlane};
+use crate::field::{Needs, Planes, TrapPlane};
 use crate::formula::end::INTERIOR;
 use crate::palette::{Palette, color};
 use crate::simd_level::SimdLevel;
+use crate::trap::TrapKind;
 
 /// Image-wide data some colourings need, built once from every strip of the image, and how
 /// the colouring runs.

@@ -13,9 +13,10 @@ pub mod text;
 use tiny_skia::{Pixmap, PixmapPaint, PremultipliedColorU8, Transform};
 
 use crate::coloring::{Coloring, Context, Histogram, Mask};
-use crate::field::{Needs, Planes, TrapKind};
+use crate::field::{Needs, Planes};
 use crate::palette::color::{Srgb8Encoder, linear_to_srgb, linear_to_srgb8, srgb8_to_linear};
 use crate::trap::Trap;
+use crate::trap::TrapKind;
 
 /// How a layer combines with what is below it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]

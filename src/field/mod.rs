@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 
 pub use grid::{SampleGrid, image_offset};
-pub use planes::{Channel, ChannelSet, Planes, TrapKind, TrapPlane, UnknownChannel};
+pub use planes::{Channel, ChannelSet, Planes, TrapPlane, UnknownChannel};
 pub use projection::Projection;
 pub use transform::Transform;
 

@@ -4,7 +4,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use super::Needs;
-use crate::trap::Trap;
+use crate::trap::{Trap, TrapKind};
 
 /// A raw data channel (names follow Kalles Fraktaler 2+ and Fraktaler-3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -129,32 +129,6 @@ pub enum TrapPlane {
         /// Work space: mean without the escaping term.
         prev: Vec<f32>,
     },
-}
-
-/// What one trap's plane holds (and its EXR channels: `trapK.D`, `trapK.STRIPE`,
-/// `trapK.R/G/B/A`, `trapK.IFS`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TrapKind {
-    /// Distances ([`TrapPlane::Distance`]).
-    Distance,
-    /// Stripe averages ([`TrapPlane::Stripe`]).
-    Stripe,
-    /// Colours ([`TrapPlane::Color`]).
-    Color,
-    /// IFS densities ([`TrapPlane::Density`]).
-    Density,
-}
-
-impl TrapKind {
-    /// The kind in words, for messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            TrapKind::Distance => "distance",
-            TrapKind::Stripe => "stripe",
-            TrapKind::Color => "colour",
-            TrapKind::Density => "density",
-        }
-    }
 }
 
 impl TrapPlane {

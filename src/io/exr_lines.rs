@@ -12,7 +12,8 @@ use ::exr::meta::attribute::SampleType;
 use ::exr::prelude::f16;
 
 use super::exr_raw::RawHeader;
-use crate::field::{Channel, Planes, TrapKind, TrapPlane};
+use crate::field::{Channel, Planes, TrapPlane};
+use crate::trap::TrapKind;
 
 /// A mutex's guard, whether or not another thread panicked while holding it (the data is
 /// plain samples, valid either way).

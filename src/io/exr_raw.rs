@@ -5,7 +5,8 @@
 //! uncompressed files depend on these types, not on the module that chooses between them
 //! (`exr_read`, which also holds the whole-image fallback).
 
-use crate::field::{ChannelSet, Planes, TrapKind};
+use crate::field::{ChannelSet, Planes};
+use crate::trap::TrapKind;
 
 /// What a raw-data EXR's header says: enough to check that a scene fits the data before
 /// any block is read.

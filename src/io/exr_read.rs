@@ -28,7 +28,8 @@ use super::exr_blocks::decode_blocks;
 use super::exr_lines::{Layout, Slot, lock, slot_of};
 use super::exr_plain::PlainBlocks;
 pub use super::exr_raw::{RawData, RawHeader};
-use crate::field::{Channel, ChannelSet, Planes, TrapKind, TrapPlane};
+use crate::field::{Channel, ChannelSet, Planes, TrapPlane};
+use crate::trap::TrapKind;
 
 /// The most a compressed EXR can expand: deflate (ZIP) reaches ~1032:1, the other
 /// compressions less, so a file claiming more decoded bytes than this many times its size

@@ -7,8 +7,9 @@ use rayon::prelude::*;
 
 use crate::coloring::Context;
 use crate::compose::{self, Stack, TrapMismatch};
-use crate::field::{Planes, TrapKind, TrapPlane};
+use crate::field::{Planes, TrapPlane};
 use crate::palette::color::linear_to_srgb8;
+use crate::trap::TrapKind;
 
 /// Colours every strip (sample rows a multiple of `aa`) and downsamples it: linear RGB
 /// output pixels per strip, in order. Refuses strips whose trap planes do not serve the

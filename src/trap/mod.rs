@@ -9,10 +9,12 @@
 mod bitmap;
 mod geometric;
 pub mod ifs;
+mod kind;
 pub mod stripe;
 
 pub use bitmap::{Bitmap, BitmapTrap, Frame};
 pub use geometric::Shape;
+pub use kind::TrapKind;
 pub use stripe::Stripe;
 
 /// A trap the kernel evaluates along each orbit.
@@ -32,8 +34,7 @@ pub enum Trap {
 
 impl Trap {
     /// What the trap's plane holds.
-    pub fn plane_kind(&self) -> crate::field::TrapKind {
-        use crate::field::TrapKind;
+    pub fn plane_kind(&self) -> TrapKind {
         match self {
             Trap::Geometric(_) => TrapKind::Distance,
             Trap::Stripe(_) => TrapKind::Stripe,
