@@ -12,6 +12,9 @@ use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
 
 use crate::field::Transform;
+use crate::num::{Decimal, DecimalError};
+use crate::orbit::Scale;
+use crate::scene::Scene;
 
 /// A view: centre (decimal strings, [re, im]) and log10 of the zoom (the image height spans
 /// 4 / zoom), with the scene's rotation and stretch, through which pixel moves become plane
@@ -31,6 +34,30 @@ impl Nav {
     /// The whole Mandelbrot set.
     pub fn home() -> Self {
         Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10(), transform: Transform::IDENTITY }
+    }
+
+    /// The view of a validated scene: its centre, zoom, rotation and stretch. A scene that
+    /// leaves its scale out shows the whole set, as [`Nav::home`] does.
+    pub fn of_scene(scene: &Scene) -> Self {
+        let log10_zoom = match (&scene.file.view.zoom, &scene.file.view.radius, &scene.scale) {
+            (None, None, _) => Self::home().log10_zoom,
+            (_, _, Scale::Zoom(z)) => z.log10_abs(),
+            (_, _, Scale::Radius(r)) => 2f64.log10() - r.log10_abs(),
+        };
+        let center = [scene.center[0].text().to_string(), scene.center[1].text().to_string()];
+        Self { center, log10_zoom, transform: scene.transform }
+    }
+
+    /// The centre as exact decimals (an error for text that is not one, as a hand-edited
+    /// saved session may hold).
+    pub fn center_decimal(&self) -> Result<[Decimal; 2], DecimalError> {
+        Ok([Decimal::parse(&self.center[0])?, Decimal::parse(&self.center[1])?])
+    }
+
+    /// The zoom as written into scene files ([`Nav::zoom_text`]), exact from here on (an
+    /// error for a zoom that is not finite).
+    pub fn scale(&self) -> Result<Scale, DecimalError> {
+        Decimal::parse(&self.zoom_text()).map(Scale::Zoom)
     }
 
     /// Plane units per pixel for an image `height` pixels high, as f64 (0 past 1e-308: for

@@ -73,11 +73,11 @@ fn wheel_zoom_keeps_the_point_under_the_cursor_fixed() {
     let r = h.state().image_rect();
     let at = r.center() + Vec2::new(140.0, -70.0);
     let height = h.state().image_size_px()[1] as f64;
-    let before = h.state().nav.point_at(px(&h, at), height);
-    let zoom0 = h.state().nav.log10_zoom;
+    let before = h.state().nav().point_at(px(&h, at), height);
+    let zoom0 = h.state().nav().log10_zoom;
     wheel(&h, at, 240.0);
     settle(&mut h);
-    let nav = h.state().nav.clone();
+    let nav = h.state().nav().clone();
     assert!(nav.log10_zoom > zoom0 + 0.3, "zoomed in: {} -> {}", zoom0, nav.log10_zoom);
     let after = nav.point_at(px(&h, at), height);
     let s = nav.spacing(height);
@@ -88,7 +88,7 @@ fn wheel_zoom_keeps_the_point_under_the_cursor_fixed() {
 fn drag_pans_and_history_goes_back_and_forward() {
     let dir = scratch("viewer-pan");
     let mut h = harness(&dir, SCENE);
-    let start = h.state().nav.clone();
+    let start = h.state().nav().clone();
     let height = h.state().image_size_px()[1] as f64;
     let r = h.state().image_rect();
     let (a, b) = (r.center(), r.center() + Vec2::new(-100.0, 40.0));
@@ -103,19 +103,19 @@ fn drag_pans_and_history_goes_back_and_forward() {
         modifiers: Modifiers::NONE,
     });
     settle(&mut h);
-    let moved = h.state().nav.clone();
+    let moved = h.state().nav().clone();
     // Dragging left by 100 px moves the view right by 100 pixel spacings (y: up is +).
     let d = start.offset_px_of(&moved, height);
     assert!((d[0] - 100.0).abs() < 1.0 && (d[1] - 40.0).abs() < 1.0, "{d:?}");
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
-    assert_eq!(h.state().nav, start, "Backspace goes back");
+    assert_eq!(h.state().nav(), &start, "Backspace goes back");
     h.get_by_label("Forward >").click();
     settle(&mut h);
-    assert_eq!(h.state().nav, moved, "Forward returns");
+    assert_eq!(h.state().nav(), &moved, "Forward returns");
     h.key_press(egui::Key::Home);
     settle(&mut h);
-    assert!((h.state().nav.log10_zoom - 1.6f64.log10()).abs() < 1e-12, "Home shows the whole set");
+    assert!((h.state().nav().log10_zoom - 1.6f64.log10()).abs() < 1e-12, "Home shows the whole set");
 }
 
 #[test]
@@ -143,7 +143,7 @@ fn ctrl_click_opens_the_julia_set_of_the_point() {
     let r = h.state().image_rect();
     let at = r.center() + Vec2::new(-60.0, 30.0);
     let height = h.state().image_size_px()[1] as f64;
-    let want = h.state().nav.point_at(px(&h, at), height);
+    let want = h.state().nav().point_at(px(&h, at), height);
     h.hover_at(at);
     h.run_steps(2);
     assert!(h.state().counters().julia_previews >= 1, "hovering previews the Julia set");
@@ -207,10 +207,10 @@ fn gpu_side_by_side_and_difference() {
     let full =
         "version = 1\n[iteration]\nmax = 300\n[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ndensity = 0.1\n";
     let mut h = harness(&dir, full);
-    h.state_mut().mode = ViewMode::SideBySide;
+    h.state_mut().set_mode(ViewMode::SideBySide);
     settle(&mut h);
     h.snapshot_options("viewer-side-by-side", &tolerance());
-    h.state_mut().mode = ViewMode::Difference;
+    h.state_mut().set_mode(ViewMode::Difference);
     let mut mismatch = None;
     for _ in 0..200 {
         h.run_steps(1);
@@ -288,8 +288,8 @@ fn dropped_palettes_recolour_and_dropped_scenes_open() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     h.state_mut().open_path(&png).expect("scene opens");
     settle(&mut h);
-    assert_eq!(h.state().nav.center, ["-1.25".to_string(), "0.02".to_string()]);
-    assert!((h.state().nav.log10_zoom - 40f64.log10()).abs() < 1e-12);
+    assert_eq!(h.state().nav().center, ["-1.25".to_string(), "0.02".to_string()]);
+    assert!((h.state().nav().log10_zoom - 40f64.log10()).abs() < 1e-12);
     assert!(h.state().counters().renders > after.renders);
 }
 
@@ -350,7 +350,7 @@ fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
     let dir = scratch("viewer-newton");
     let scene = "version = 1\n[view]\ncenter = [\"-1.7\", \"0\"]\nzoom = \"10\"\n[iteration]\nmax = 300\n";
     let mut h = harness(&dir, scene);
-    let start = h.state().nav.clone();
+    let start = h.state().nav().clone();
     let r = h.state().image_rect();
     let [_, height] = h.state().image_size_px();
     // -1.755 is 0.055 left of the centre: 0.055 / (0.4 / height) pixels.
@@ -366,13 +366,13 @@ fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     settle(&mut h);
-    let nav = h.state().nav.clone();
+    let nav = h.state().nav().clone();
     assert!(h.state().newton_note().is_some_and(|n| n.contains("period 3")), "{:?}", h.state().newton_note());
     assert!(nav.center[0].starts_with("-1.754877666246692760049508896358"), "{:?}", nav.center);
     assert!((nav.log10_zoom - 48f64.log10()).abs() < 0.15, "zoom 1e{}", nav.log10_zoom);
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
-    assert_eq!(h.state().nav, start);
+    assert_eq!(h.state().nav(), &start);
 }
 
 /// Layer numbers show the scene's own values, however large (a density of 5000 once showed
