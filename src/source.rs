@@ -41,7 +41,7 @@ pub struct SourceError {
     pub origin: String,
     /// The position, where one exists.
     pub position: Option<Position>,
-    /// The key path of the offending value ("view.zoom", "layer[1].density"), where the
+    /// The key path of the offending value (`view.zoom`, `layer[1].density`), where the
     /// source has no text to give a position in.
     pub key: Option<String>,
     /// What was wrong and what was expected.

@@ -1,13 +1,13 @@
 //! The explorer window: image, navigation, panels, progressive rendering, recolouring,
 //! Julia preview, export and headless screenshots.
 //!
-//! The scene as edited lives in a [`Document`] (the scene file's formula, iteration limit
+//! The scene as edited lives in a `Document` (the scene file's formula, iteration limit
 //! and layers, validated through the typed path, with the last valid [`Scene`]); the view in
-//! [`Navigation`] (exact decimal centre and zoom, with its history). The scene shown is the
+//! `Navigation` (exact decimal centre and zoom, with its history). The scene shown is the
 //! document's scene with the view's centre and zoom and the image area's size set through
 //! the typed setters ([`Scene::with_view`], [`Scene::with_size`]); no TOML text is written
 //! or read on the way. Whether that costs nothing, a recolour of the last raw planes
-//! (milliseconds) or a render is decided by comparing typed values ([`RenderState`]). While
+//! (milliseconds) or a render is decided by comparing typed values (`RenderState`). While
 //! a new view renders, the last image is drawn where it belongs in the new view, so there is
 //! never a blank frame.
 //!

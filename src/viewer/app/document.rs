@@ -180,10 +180,7 @@ impl Document {
     /// Writes the scene to `path` at view `center`, `zoom` (decimal text); edited palettes
     /// are saved beside it and referred to by file name.
     pub(super) fn save(&self, path: &Path, center: [String; 2], zoom: String) -> Result<(), String> {
-        let mut file = self.file.clone();
-        file.view.center = cli(center);
-        file.view.zoom = Some(cli(zoom));
-        file.view.radius = None;
+        let mut file = self.at_view(center, zoom);
         for (k, p) in &self.overrides {
             let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
             let name = format!("{stem}-layer{k}.toml");
@@ -199,10 +196,15 @@ impl Document {
 
     /// The scene file at view `center`, `zoom`, as TOML (for the saved session).
     pub(super) fn session_text(&self, center: [String; 2], zoom: String) -> Option<String> {
+        toml::to_string(&self.at_view(center, zoom)).ok()
+    }
+
+    /// The scene file as edited, at view `center`, `zoom`.
+    fn at_view(&self, center: [String; 2], zoom: String) -> SceneFile {
         let mut file = self.file.clone();
         file.view.center = cli(center);
         file.view.zoom = Some(cli(zoom));
         file.view.radius = None;
-        toml::to_string(&file).ok()
+        file
     }
 }
