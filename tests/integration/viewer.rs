@@ -507,3 +507,41 @@ fn a_reference_file_serves_the_viewer() {
     let o = std::process::Command::new(bin).args(["view", "--reference", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// A Julia parameter typed that is not a number is said next to its field, by the typed
+/// scene's key path, and nothing renders: the image keeps the last valid scene. Once the
+/// text is a number again the error goes and the new parameter renders.
+#[test]
+fn a_bad_value_typed_is_shown_by_its_field_and_the_view_keeps_the_last_good_one() {
+    let dir = scratch("viewer-bad-typed");
+    let scene = "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[iteration]\nmax = 200\n";
+    let mut h = harness(&dir, scene);
+    let before = h.state().counters();
+    let field = h.get_by_label("c re");
+    field.focus();
+    h.run_steps(1);
+    h.get_by_label("c re").type_text("x");
+    settle(&mut h);
+    let typed = h.state().julia_c().expect("a Julia scene");
+    assert!(typed[0].contains('x'), "the field keeps what was typed: {typed:?}");
+    // The status bar names the scene and the key ("scene.toml: formula.c: ..."); the line by
+    // the field is the message.
+    let by_field = |h: &Harness<'static, ViewerApp>| {
+        h.query_all_by_label_contains("Julia parameter c")
+            .filter(|n| n.value().is_some_and(|l| l.starts_with("Julia parameter c")))
+            .count()
+    };
+    assert_eq!(by_field(&h), 1, "the error shows by the field");
+    assert_eq!(h.state().counters().renders, before.renders, "nothing renders from a bad value");
+    // The number it was: the error goes, and the picture is the one shown (no render).
+    h.key_press(egui::Key::Backspace);
+    settle(&mut h);
+    assert_eq!(h.state().julia_c().map(|c| c[0].clone()).as_deref(), Some("-0.8"));
+    assert!(h.query_by_label_contains("Julia parameter c").is_none(), "the error is gone");
+    assert_eq!(h.state().counters().renders, before.renders, "the same scene renders nothing");
+    // Another number renders.
+    h.get_by_label("c re").type_text("5");
+    settle(&mut h);
+    assert_eq!(h.state().julia_c().map(|c| c[0].clone()).as_deref(), Some("-0.85"));
+    assert!(h.state().counters().renders > before.renders);
+}
