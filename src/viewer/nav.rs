@@ -298,6 +298,26 @@ mod tests {
         assert_eq!(h.lens(), (1, 0));
     }
 
+    /// A scene's view is its centre and zoom as written (a radius as the zoom it means; no
+    /// scale, the whole set), and a view's centre and zoom are exact decimals for the typed
+    /// scene; a zoom that is not finite is an error, never a stand-in value.
+    #[test]
+    fn views_of_scenes_and_back() {
+        let scene = |text: &str| {
+            let file = Scene::parse_file("t", text).unwrap();
+            Scene::validate(file, "t", text, std::path::Path::new("."), &crate::io::load_bitmap).unwrap()
+        };
+        let n = Nav::of_scene(&scene("version = 1\n[view]\ncenter = [\"-1.25\", \"0.02\"]\nzoom = \"900\"\n"));
+        assert_eq!((n.center.clone(), n.log10_zoom), (["-1.25".to_string(), "0.02".to_string()], 900f64.log10()));
+        assert_eq!(n.center_decimal().unwrap()[0], Decimal::parse("-1.25").unwrap());
+        assert_eq!(n.scale().unwrap(), Scale::Zoom(Decimal::parse("9.000000e2").unwrap()));
+        let r = Nav::of_scene(&scene("version = 1\n[view]\nradius = \"0.5\"\n"));
+        assert!((r.log10_zoom - 4f64.log10()).abs() < 1e-15);
+        assert_eq!(Nav::of_scene(&scene("version = 1\n")), Nav::home());
+        assert!(Nav { log10_zoom: f64::NAN, ..Nav::home() }.scale().is_err());
+        assert!(Nav { center: ["x".into(), "0".into()], ..Nav::home() }.center_decimal().is_err());
+    }
+
     #[test]
     fn decimal_text() {
         assert_eq!(text(&rat("-0.75"), 5), "-0.75");

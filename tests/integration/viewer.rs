@@ -545,3 +545,26 @@ fn a_bad_value_typed_is_shown_by_its_field_and_the_view_keeps_the_last_good_one(
     assert_eq!(h.state().julia_c().map(|c| c[0].clone()).as_deref(), Some("-0.85"));
     assert!(h.state().counters().renders > before.renders);
 }
+
+/// A layer value typed that the scene refuses is said under that key's control, and
+/// nothing renders or recolours until it is valid.
+#[test]
+fn a_bad_layer_value_is_shown_under_its_control() {
+    let dir = scratch("viewer-bad-layer");
+    let scene = "version = 1\n[iteration]\nmax = 200\n[[layer]]\nkind = \"smooth\"\n";
+    let mut h = harness(&dir, scene);
+    let before = h.state().counters();
+    h.get_by_label("interior").focus();
+    h.run_steps(1);
+    h.get_by_label("interior").type_text("x");
+    // Text takes effect when the field is left.
+    h.key_press(egui::Key::Enter);
+    settle(&mut h);
+    let interior = h.state().scene_file().layers[0].get_ref().interior.clone().map(|c| c.into_inner());
+    assert_eq!(interior.as_deref(), Some("#000000x"));
+    let under =
+        h.query_all_by_label_contains("#000000x").filter(|n| n.value().is_some_and(|v| v.starts_with("colour")));
+    assert_eq!(under.count(), 1, "the error shows under the control");
+    let after = h.state().counters();
+    assert_eq!((after.renders, after.recolours), (before.renders, before.recolours));
+}
