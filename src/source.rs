@@ -28,14 +28,22 @@ impl fmt::Display for Position {
     }
 }
 
-/// An error located in a named source: `file:line:column: message`.
+/// An error located in a named source: `file:line:column: message`, or, for a source built
+/// in code (no text to point into), `origin: key: message` with the key path of the value.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{origin}{}: {message}", position.map(|p| format!(":{p}")).unwrap_or_default())]
+#[error(
+    "{origin}{}{}: {message}",
+    position.map(|p| format!(":{p}")).unwrap_or_default(),
+    key.as_ref().map(|k| format!(": {k}")).unwrap_or_default()
+)]
 pub struct SourceError {
     /// The file (or "command line", or a built-in name).
     pub origin: String,
     /// The position, where one exists.
     pub position: Option<Position>,
+    /// The key path of the offending value (`view.zoom`, `layer[1].density`), where the
+    /// source has no text to give a position in.
+    pub key: Option<String>,
     /// What was wrong and what was expected.
     pub message: String,
 }
@@ -46,8 +54,14 @@ impl SourceError {
         Self {
             origin: origin.to_string(),
             position: span.map(|s| Position::of(text, s.start)),
+            key: None,
             message: message.into(),
         }
+    }
+
+    /// An error in the value at key path `key` of a source that has no text.
+    pub fn at_key(origin: &str, key: Option<&str>, message: impl Into<String>) -> Self {
+        Self { origin: origin.to_string(), position: None, key: key.map(str::to_string), message: message.into() }
     }
 
     /// Converts a TOML parse or deserialisation error.

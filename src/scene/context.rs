@@ -26,25 +26,46 @@ pub type BitmapLoader<'a> = dyn Fn(&Path) -> Result<Bitmap, BitmapLoadError> + '
 pub type BitmapLoadError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Where the scene being validated came from, so that every error can name the file, line
-/// and column of the offending value (or say it came from the command line).
+/// and column of the offending value (or say it came from the command line), or, for a scene
+/// built in code, the key path of the value.
 pub(super) struct Ctx<'a> {
     origin: &'a str,
-    text: &'a str,
+    source: Source<'a>,
+}
+
+/// What a value's span points into.
+enum Source<'a> {
+    /// The scene's text: spans are byte ranges.
+    Text(&'a str),
+    /// No text: a span's start `k` (from 1) names the value at `keys[k - 1]`, as
+    /// `build::label` numbers them.
+    Keys(&'a [String]),
 }
 
 impl<'a> Ctx<'a> {
     /// Errors will name `origin` and locate spans in `text`.
     pub(super) fn new(origin: &'a str, text: &'a str) -> Self {
-        Self { origin, text }
+        Self { origin, source: Source::Text(text) }
+    }
+
+    /// Errors will name `origin` and the key path a span numbers in `keys`.
+    pub(super) fn keyed(origin: &'a str, keys: &'a [String]) -> Self {
+        Self { origin, source: Source::Keys(keys) }
     }
 
     /// An error at `span` (or on the command line, for the [`CLI`] span).
     pub(super) fn err<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SourceError> {
         let message = message.into();
         if span == CLI {
-            return Err(SourceError { origin: "command line".into(), position: None, message });
+            return Err(SourceError::at_key("command line", None, message));
         }
-        Err(SourceError::at(self.origin, self.text, Some(span), message))
+        Err(match self.source {
+            Source::Text(text) => SourceError::at(self.origin, text, Some(span), message),
+            Source::Keys(keys) => {
+                let key = span.start.checked_sub(1).and_then(|k| keys.get(k));
+                SourceError::at_key(self.origin, key.map(String::as_str), message)
+            }
+        })
     }
 
     /// An exact decimal, or an error naming `what`.

@@ -4,8 +4,12 @@
 //! problem with the file, line and column of the offending value and what was expected
 //! (`layer` validates each `[[layer]]`; both locate their errors through `context`).
 //! The scene also decides which engine can address the view ([`Scene::engine`]).
+//! `build` validates scenes built in code (errors name key paths) and changes one part of a
+//! validated scene; `inputs` says what its planes depend on ([`RenderInputs`]).
 
+mod build;
 mod context;
+mod inputs;
 pub mod kfr;
 mod layer;
 pub mod presets;
@@ -14,7 +18,9 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
+pub use build::layer_key;
 pub use context::{BitmapLoadError, BitmapLoader};
+pub use inputs::RenderInputs;
 pub use layer::{COMMON_KEYS, DefaultValue, LAYER_KINDS, default_value, kind_keys, kind_list, uses_palette};
 pub use raw::SceneFile;
 

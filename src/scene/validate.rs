@@ -6,7 +6,7 @@ use toml::Spanned;
 
 use super::context::{BitmapLoader, Ctx};
 use super::layer::{default_layer, layer};
-use super::raw::SceneFile;
+use super::raw::{FormulaRaw, SceneFile, ViewRaw};
 use super::{EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_LOG10_ZOOM, MAX_SAMPLES, MAX_SIDE, Scene};
 use crate::compose::Stack;
 use crate::field::transform::MAX_STRETCH_AMOUNT;
@@ -24,32 +24,145 @@ pub(super) fn validate(
     base_dir: &Path,
     bitmaps: &BitmapLoader<'_>,
 ) -> Result<Scene, SourceError> {
-    let cx = Ctx::new(origin, text);
+    validate_in(file, &Ctx::new(origin, text), origin, base_dir, bitmaps)
+}
+
+/// [`validate`] with errors located by `cx` (in text, or by key path for a scene built in
+/// code).
+pub(super) fn validate_in(
+    file: SceneFile,
+    cx: &Ctx<'_>,
+    origin: &str,
+    base_dir: &Path,
+    bitmaps: &BitmapLoader<'_>,
+) -> Result<Scene, SourceError> {
     if *file.version.get_ref() != 1 {
         return cx
             .err(file.version.span(), format!("unsupported scene version {}; expected 1", file.version.get_ref()));
     }
+    let family = family(cx, &file.formula)?;
+    let View { center, log10_radius, radius, scale, transform, projection } = view(cx, &file.view)?;
+    let (width, height, aa) = size(cx, &file.view, &file.render.aa)?;
+    let max_iter = max_iter(cx, &file.iteration.max)?;
+    let escape_radius = cx.finite(&file.iteration.escape_radius, 2.0, 1e150, "iteration.escape_radius")?;
+    let engine = match EngineChoice::parse(file.render.engine.get_ref()) {
+        Some(e) => e,
+        None => {
+            let other = file.render.engine.get_ref();
+            let names = EngineChoice::NAMES;
+            return cx.err(file.render.engine.span(), format!("unknown engine `{other}`; expected {names}"));
+        }
+    };
+    let bla_on = file.render.bla.as_ref().is_none_or(|b| *b.get_ref());
+    let tolerance = match &file.render.bla_tolerance {
+        Some(t) => cx.finite(t, 1e-300, 0.1, "render.bla_tolerance")?,
+        None => DEFAULT_BLA_TOLERANCE,
+    };
+    let bla = bla_on.then_some(tolerance);
+    let interior_detection = match file.render.interior_detection.as_ref().map(|b| *b.get_ref()) {
+        None => Detection::Auto,
+        Some(true) => Detection::On,
+        Some(false) => Detection::Off,
+    };
+    let bg = cx.colour(&file.render.background)?;
+    let cycle = match &file.render.cycle {
+        Some(c) => cx.finite(c, -1e9, 1e9, "render.cycle")?,
+        None => 0.0,
+    };
 
-    let family = match file.formula.kind.get_ref().as_str() {
+    let mut traps = Vec::new();
+    let mut layers = Vec::new();
+    let raw_layers =
+        if file.layers.is_empty() { vec![Spanned::new(0..0, default_layer())] } else { file.layers.clone() };
+    for l in &raw_layers {
+        layers.push(layer(cx, l, base_dir, bitmaps, cycle, &mut traps)?);
+    }
+
+    let png_bits = match &file.output.bits {
+        None => 8,
+        Some(b) => match b.get_ref() {
+            8 => 8,
+            16 => 16,
+            other => return cx.err(b.span(), format!("output.bits must be 8 or 16, got {other}")),
+        },
+    };
+    let channels = match &file.output.channels {
+        // By default an EXR holds everything the layers read, so it recolours as rendered.
+        None if traps.is_empty() => ChannelSet::default_exr(),
+        None => {
+            let mut set = ChannelSet::default_exr();
+            set.insert(Channel::Traps);
+            set
+        }
+        Some(list) => {
+            let mut set = ChannelSet::default();
+            for name in list.get_ref() {
+                set.insert(name.parse::<Channel>().or_else(|e| cx.err(list.span(), e.to_string()))?);
+            }
+            set
+        }
+    };
+
+    let mut file = file;
+    anchor_paths(&mut file, base_dir);
+    Ok(Scene {
+        origin: origin.to_string(),
+        base_dir: base_dir.to_path_buf(),
+        family,
+        center,
+        log10_radius,
+        radius,
+        width,
+        height,
+        transform,
+        projection,
+        max_iter,
+        escape_radius,
+        aa,
+        engine,
+        bla,
+        interior_detection,
+        scale,
+        stack: Stack { layers, background: [bg[0], bg[1], bg[2]] },
+        traps,
+        png_bits,
+        channels,
+        file,
+    })
+}
+
+/// `[formula]`: the map.
+pub(super) fn family(cx: &Ctx<'_>, formula: &FormulaRaw) -> Result<FamilySpec, SourceError> {
+    Ok(match formula.kind.get_ref().as_str() {
         "mandelbrot" => {
-            if let Some(c) = &file.formula.c {
+            if let Some(c) = &formula.c {
                 return cx.err(c.span(), "`c` applies only to kind = \"julia\"");
             }
             FamilySpec::Mandelbrot
         }
-        "julia" => match &file.formula.c {
+        "julia" => match &formula.c {
             Some(c) => FamilySpec::Julia { c: cx.pair(c, "Julia parameter c")? },
-            None => return cx.err(file.formula.kind.span(), "a Julia set needs its parameter: c = [\"re\", \"im\"]"),
+            None => return cx.err(formula.kind.span(), "a Julia set needs its parameter: c = [\"re\", \"im\"]"),
         },
         other => {
-            return cx.err(
-                file.formula.kind.span(),
-                format!("unknown formula `{other}`; expected \"mandelbrot\" or \"julia\""),
-            );
+            return cx
+                .err(formula.kind.span(), format!("unknown formula `{other}`; expected \"mandelbrot\" or \"julia\""));
         }
-    };
+    })
+}
 
-    let view = &file.view;
+/// The `[view]` keys other than the size, validated.
+pub(super) struct View {
+    pub(super) center: [Decimal; 2],
+    pub(super) log10_radius: f64,
+    pub(super) radius: f64,
+    pub(super) scale: Scale,
+    pub(super) transform: crate::field::Transform,
+    pub(super) projection: crate::field::Projection,
+}
+
+/// `[view]`: centre, scale, rotation, stretch and projection.
+pub(super) fn view(cx: &Ctx<'_>, view: &ViewRaw) -> Result<View, SourceError> {
     let center = cx.pair(&view.center, "view centre")?;
     let (log10_radius, radius, scale) = match (&view.zoom, &view.radius) {
         (Some(_), Some(r)) => return cx.err(r.span(), "give either `zoom` or `radius`, not both"),
@@ -111,105 +224,30 @@ pub(super) fn validate(
             crate::field::Projection::Exponential { ln_factor: factor.ln() }
         }
     };
+    Ok(View { center, log10_radius, radius, scale, transform, projection })
+}
+
+/// The image size and supersampling: width, height and aa, within the sample limit.
+pub(super) fn size(cx: &Ctx<'_>, view: &ViewRaw, aa: &Spanned<i64>) -> Result<(u32, u32, u32), SourceError> {
     let width = cx.range_i(&view.width, 1, MAX_SIDE, "width")? as u32;
     let height = cx.range_i(&view.height, 1, MAX_SIDE, "height")? as u32;
-    let max_iter = cx.range_i(&file.iteration.max, 1, MAX_ITER_LIMIT as i64, "iteration.max")? as u32;
-    let escape_radius = cx.finite(&file.iteration.escape_radius, 2.0, 1e150, "iteration.escape_radius")?;
-    let aa = cx.range_i(&file.render.aa, 1, MAX_AA, "render.aa")? as u32;
+    let aa = cx.range_i(aa, 1, MAX_AA, "render.aa")? as u32;
     let samples = width as u64 * height as u64 * (aa as u64).pow(2);
     if samples > MAX_SAMPLES {
         return cx.err(view.width.span(), format!("{width}x{height} with {aa}x{aa} supersampling is {samples} samples; at most {MAX_SAMPLES} are supported"));
     }
-    let engine = match EngineChoice::parse(file.render.engine.get_ref()) {
-        Some(e) => e,
-        None => {
-            let other = file.render.engine.get_ref();
-            let names = EngineChoice::NAMES;
-            return cx.err(file.render.engine.span(), format!("unknown engine `{other}`; expected {names}"));
-        }
-    };
-    let bla_on = file.render.bla.as_ref().is_none_or(|b| *b.get_ref());
-    let tolerance = match &file.render.bla_tolerance {
-        Some(t) => cx.finite(t, 1e-300, 0.1, "render.bla_tolerance")?,
-        None => DEFAULT_BLA_TOLERANCE,
-    };
-    let bla = bla_on.then_some(tolerance);
-    let interior_detection = match file.render.interior_detection.as_ref().map(|b| *b.get_ref()) {
-        None => Detection::Auto,
-        Some(true) => Detection::On,
-        Some(false) => Detection::Off,
-    };
-    let bg = cx.colour(&file.render.background)?;
-    let cycle = match &file.render.cycle {
-        Some(c) => cx.finite(c, -1e9, 1e9, "render.cycle")?,
-        None => 0.0,
-    };
+    Ok((width, height, aa))
+}
 
-    let mut traps = Vec::new();
-    let mut layers = Vec::new();
-    let raw_layers =
-        if file.layers.is_empty() { vec![Spanned::new(0..0, default_layer())] } else { file.layers.clone() };
-    for l in &raw_layers {
-        layers.push(layer(&cx, l, base_dir, bitmaps, cycle, &mut traps)?);
-    }
-
-    let png_bits = match &file.output.bits {
-        None => 8,
-        Some(b) => match b.get_ref() {
-            8 => 8,
-            16 => 16,
-            other => return cx.err(b.span(), format!("output.bits must be 8 or 16, got {other}")),
-        },
-    };
-    let channels = match &file.output.channels {
-        // By default an EXR holds everything the layers read, so it recolours as rendered.
-        None if traps.is_empty() => ChannelSet::default_exr(),
-        None => {
-            let mut set = ChannelSet::default_exr();
-            set.insert(Channel::Traps);
-            set
-        }
-        Some(list) => {
-            let mut set = ChannelSet::default();
-            for name in list.get_ref() {
-                set.insert(name.parse::<Channel>().or_else(|e| cx.err(list.span(), e.to_string()))?);
-            }
-            set
-        }
-    };
-
-    let mut file = file;
-    anchor_paths(&mut file, base_dir);
-    Ok(Scene {
-        origin: origin.to_string(),
-        base_dir: base_dir.to_path_buf(),
-        family,
-        center,
-        log10_radius,
-        radius,
-        width,
-        height,
-        transform,
-        projection,
-        max_iter,
-        escape_radius,
-        aa,
-        engine,
-        bla,
-        interior_detection,
-        scale,
-        stack: Stack { layers, background: [bg[0], bg[1], bg[2]] },
-        traps,
-        png_bits,
-        channels,
-        file,
-    })
+/// `iteration.max`.
+pub(super) fn max_iter(cx: &Ctx<'_>, max: &Spanned<i64>) -> Result<u32, SourceError> {
+    Ok(cx.range_i(max, 1, MAX_ITER_LIMIT as i64, "iteration.max")? as u32)
 }
 
 /// Rewrites the files a valid scene refers to (bitmaps, palette files) as absolute paths,
 /// so the scene embedded in an output re-renders from any folder. Built-in palette names
 /// stay names.
-fn anchor_paths(file: &mut SceneFile, base_dir: &Path) {
+pub(super) fn anchor_paths(file: &mut SceneFile, base_dir: &Path) {
     let absolute = |p: &str| -> Option<String> {
         let path = base_dir.join(p);
         path.is_file().then(|| std::fs::canonicalize(&path).unwrap_or(path).display().to_string())

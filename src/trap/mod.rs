@@ -18,7 +18,7 @@ pub use kind::TrapKind;
 pub use stripe::Stripe;
 
 /// A trap the kernel evaluates along each orbit.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Trap {
     /// Minimum distance of the orbit to a shape.
     Geometric(Shape),

@@ -12,6 +12,7 @@ use eframe::egui;
 use crate::field::ChannelSet;
 use crate::render::{self, Options};
 use crate::scene::Scene;
+use crate::source::SourceError;
 
 /// What the user requested.
 #[derive(Debug, Clone)]
@@ -103,14 +104,10 @@ impl Export {
         request
     }
 
-    /// Starts rendering `scene` (the current view) at the requested size.
-    pub fn start(&mut self, mut scene: Scene, req: ExportRequest) {
-        scene.width = req.size[0];
-        scene.height = req.size[1];
-        scene.aa = req.aa;
-        scene.file.view.width = crate::scene::raw::cli(req.size[0] as i64);
-        scene.file.view.height = crate::scene::raw::cli(req.size[1] as i64);
-        scene.file.render.aa = crate::scene::raw::cli(req.aa as i64);
+    /// Starts rendering `scene` (the current view) at the requested size, or says why the
+    /// scene cannot have it (too many samples).
+    pub fn start(&mut self, scene: Scene, req: ExportRequest) -> Result<(), SourceError> {
+        let scene = scene.with_size(req.size[0], req.size[1], req.aa)?;
         let cancel = Arc::new(AtomicBool::new(false));
         let rows = Arc::new(AtomicU64::new(0));
         let (c, r) = (cancel.clone(), rows.clone());
@@ -118,6 +115,7 @@ impl Export {
         let thread = std::thread::spawn(move || export(&scene, &req, &c, &r));
         self.message = None;
         self.running = Some(Running { cancel, rows, total, thread });
+        Ok(())
     }
 
     /// Collects a finished export.

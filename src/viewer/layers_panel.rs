@@ -17,7 +17,8 @@ use crate::coloring::{MASK_FEATHER, MaskQuantity, Transfer};
 use crate::compose::BlendMode;
 use crate::palette::{self, Palette};
 use crate::scene::raw::{KeyValueMut, LayerRaw, MaskRaw, cli};
-use crate::scene::{DefaultValue, LAYER_KINDS, default_value, kind_keys};
+use crate::scene::{DefaultValue, LAYER_KINDS, default_value, kind_keys, layer_key};
+use crate::source::SourceError;
 
 /// Shows the layers, the controls of each and the add-a-layer menu. `overrides` are the
 /// palette editor's palettes by layer index and `selected` the layer it edits; both follow a
@@ -27,6 +28,7 @@ pub(super) fn show(
     layers: &mut Vec<Spanned<LayerRaw>>,
     overrides: &mut BTreeMap<usize, Palette>,
     selected: &mut usize,
+    error: Option<&SourceError>,
 ) -> bool {
     let mut remove = None;
     let mut changed = false;
@@ -40,7 +42,7 @@ pub(super) fn show(
                 remove = Some(k);
             }
         });
-        changed |= layer_controls(ui, k, l, overrides);
+        changed |= layer_controls(ui, k, l, overrides, error);
     }
     if let Some(k) = remove
         && layers.len() > 1
@@ -77,7 +79,19 @@ pub(super) fn show(
 
 /// The controls of layer `k`: one per key its kind takes, in [`LAYER_KINDS`] order, then
 /// its opacity (above the bottom layer). Returns true when the scene changed.
-fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut BTreeMap<usize, Palette>) -> bool {
+fn layer_controls(
+    ui: &mut egui::Ui,
+    k: usize,
+    l: &mut LayerRaw,
+    overrides: &mut BTreeMap<usize, Palette>,
+    error: Option<&SourceError>,
+) -> bool {
+    // The scene's error, under the control of the key it is in.
+    let note = |ui: &mut egui::Ui, key: &str| {
+        if let Some(e) = error.filter(|e| e.key.as_ref().is_some_and(|at| at.starts_with(&layer_key(k, key)))) {
+            ui.colored_label(egui::Color32::from_rgb(255, 90, 90), &e.message);
+        }
+    };
     // An unknown kind has no keys to show; validation's message names the kinds.
     let Some(keys) = kind_keys(l.kind.get_ref()) else { return false };
     // Read before the fields are borrowed for editing (a distance layer's defaults follow
@@ -102,10 +116,12 @@ fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut
             // Every kind takes these; no kind lists them among its own keys.
             KeyValueMut::Blend(_) | KeyValueMut::Mask(_) => false,
         };
+        note(ui, key);
     }
     if let Some((_, KeyValueMut::Mask(m))) = fields.iter_mut().find(|(name, _)| *name == "mask") {
         changed |= mask_control(ui, k, m);
     }
+    note(ui, "mask");
     drop(fields);
     // How it combines with the layers below (the bottom layer has nothing below it).
     if k > 0 {
@@ -128,6 +144,7 @@ fn layer_controls(ui: &mut egui::Ui, k: usize, l: &mut LayerRaw, overrides: &mut
             changed = true;
         }
     }
+    note(ui, "opacity");
     changed
 }
 

@@ -12,6 +12,9 @@ use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
 
 use crate::field::Transform;
+use crate::num::{Decimal, DecimalError};
+use crate::orbit::Scale;
+use crate::scene::Scene;
 
 /// A view: centre (decimal strings, [re, im]) and log10 of the zoom (the image height spans
 /// 4 / zoom), with the scene's rotation and stretch, through which pixel moves become plane
@@ -31,6 +34,30 @@ impl Nav {
     /// The whole Mandelbrot set.
     pub fn home() -> Self {
         Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10(), transform: Transform::IDENTITY }
+    }
+
+    /// The view of a validated scene: its centre, zoom, rotation and stretch. A scene that
+    /// leaves its scale out shows the whole set, as [`Nav::home`] does.
+    pub fn of_scene(scene: &Scene) -> Self {
+        let log10_zoom = match (&scene.file.view.zoom, &scene.file.view.radius, &scene.scale) {
+            (None, None, _) => Self::home().log10_zoom,
+            (_, _, Scale::Zoom(z)) => z.log10_abs(),
+            (_, _, Scale::Radius(r)) => 2f64.log10() - r.log10_abs(),
+        };
+        let center = [scene.center[0].text().to_string(), scene.center[1].text().to_string()];
+        Self { center, log10_zoom, transform: scene.transform }
+    }
+
+    /// The centre as exact decimals (an error for text that is not one, as a hand-edited
+    /// saved session may hold).
+    pub fn center_decimal(&self) -> Result<[Decimal; 2], DecimalError> {
+        Ok([Decimal::parse(&self.center[0])?, Decimal::parse(&self.center[1])?])
+    }
+
+    /// The zoom as written into scene files ([`Nav::zoom_text`]), exact from here on (an
+    /// error for a zoom that is not finite).
+    pub fn scale(&self) -> Result<Scale, DecimalError> {
+        Decimal::parse(&self.zoom_text()).map(Scale::Zoom)
     }
 
     /// Plane units per pixel for an image `height` pixels high, as f64 (0 past 1e-308: for
@@ -269,6 +296,26 @@ mod tests {
         assert_eq!(h.back(b.clone()), Some(a.clone()));
         assert_eq!(h.forward(a.clone()), Some(b));
         assert_eq!(h.lens(), (1, 0));
+    }
+
+    /// A scene's view is its centre and zoom as written (a radius as the zoom it means; no
+    /// scale, the whole set), and a view's centre and zoom are exact decimals for the typed
+    /// scene; a zoom that is not finite is an error, never a stand-in value.
+    #[test]
+    fn views_of_scenes_and_back() {
+        let scene = |text: &str| {
+            let file = Scene::parse_file("t", text).unwrap();
+            Scene::validate(file, "t", text, std::path::Path::new("."), &crate::io::load_bitmap).unwrap()
+        };
+        let n = Nav::of_scene(&scene("version = 1\n[view]\ncenter = [\"-1.25\", \"0.02\"]\nzoom = \"900\"\n"));
+        assert_eq!((n.center.clone(), n.log10_zoom), (["-1.25".to_string(), "0.02".to_string()], 900f64.log10()));
+        assert_eq!(n.center_decimal().unwrap()[0], Decimal::parse("-1.25").unwrap());
+        assert_eq!(n.scale().unwrap(), Scale::Zoom(Decimal::parse("9.000000e2").unwrap()));
+        let r = Nav::of_scene(&scene("version = 1\n[view]\nradius = \"0.5\"\n"));
+        assert!((r.log10_zoom - 4f64.log10()).abs() < 1e-15);
+        assert_eq!(Nav::of_scene(&scene("version = 1\n")), Nav::home());
+        assert!(Nav { log10_zoom: f64::NAN, ..Nav::home() }.scale().is_err());
+        assert!(Nav { center: ["x".into(), "0".into()], ..Nav::home() }.center_decimal().is_err());
     }
 
     #[test]

@@ -19,7 +19,7 @@ use crate::orbit::saved::SavedReferences;
 use crate::palette::color::linear_to_srgb8;
 use crate::render::engine::EnginePlan;
 use crate::render::{self, Options, RenderError};
-use crate::scene::Scene;
+use crate::scene::{FamilySpec, Scene};
 
 use super::nav::Nav;
 
@@ -198,9 +198,9 @@ impl Worker {
     }
 }
 
-/// A deep engine kept from the last job: its key ([`deep_key`]: what besides the centre,
-/// extent and spacing decides it), the reference point, and the engine.
-type Kept = (String, [Decimal; 2], Arc<Perturbation>);
+/// A deep engine kept from the last job: its key (what besides the centre, extent and
+/// spacing decides it), the reference point, and the engine.
+type Kept = (DeepKey, [Decimal; 2], Arc<Perturbation>);
 
 /// The deep engine kept between jobs, and the reference orbits a file brought.
 #[derive(Debug, Default)]
@@ -229,9 +229,27 @@ const DEEP_REACH: f64 = 3.0;
 
 /// What decides a deep engine besides its reference point, extent and spacing (which
 /// [`Perturbation::with_origin`] and [`Perturbation::with_spacing`] check): formula,
-/// iteration limit, escape radius, BLA tolerance and the quantities computed.
-fn deep_key(scene: &Scene) -> String {
-    format!("{:?} {} {} {:?} {:?}", scene.family, scene.max_iter, scene.escape_radius, scene.bla, scene.channels)
+/// iteration limit, escape radius, BLA tolerance and the quantities computed. An engine is
+/// kept for a new job when the keys compare equal.
+#[derive(Debug, Clone, PartialEq)]
+struct DeepKey {
+    family: FamilySpec,
+    max_iter: u32,
+    escape_radius: f64,
+    bla: Option<f64>,
+    channels: ChannelSet,
+}
+
+impl DeepKey {
+    fn of(scene: &Scene) -> Self {
+        DeepKey {
+            family: scene.family.clone(),
+            max_iter: scene.max_iter,
+            escape_radius: scene.escape_radius,
+            bla: scene.bla,
+            channels: scene.channels,
+        }
+    }
 }
 
 /// `a - b` in plane units, exact up to the final rounding to `FloatExp`.
@@ -252,7 +270,7 @@ fn deep_engine(
     cancel: &AtomicBool,
     progress: &(dyn Fn(render::Progress) + Sync),
 ) -> Result<Option<Arc<Perturbation>>, RenderError> {
-    let key = deep_key(scene);
+    let key = DeepKey::of(scene);
     let cached = cache.engine.lock().unwrap_or_else(|e| e.into_inner()).clone().filter(|(k, _, _)| *k == key);
     // An engine built for a much wider view would serve a deep zoom-in with short BLA
     // steps: past a few reaches narrower, a new one is cheaper.

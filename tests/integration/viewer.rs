@@ -73,11 +73,11 @@ fn wheel_zoom_keeps_the_point_under_the_cursor_fixed() {
     let r = h.state().image_rect();
     let at = r.center() + Vec2::new(140.0, -70.0);
     let height = h.state().image_size_px()[1] as f64;
-    let before = h.state().nav.point_at(px(&h, at), height);
-    let zoom0 = h.state().nav.log10_zoom;
+    let before = h.state().nav().point_at(px(&h, at), height);
+    let zoom0 = h.state().nav().log10_zoom;
     wheel(&h, at, 240.0);
     settle(&mut h);
-    let nav = h.state().nav.clone();
+    let nav = h.state().nav().clone();
     assert!(nav.log10_zoom > zoom0 + 0.3, "zoomed in: {} -> {}", zoom0, nav.log10_zoom);
     let after = nav.point_at(px(&h, at), height);
     let s = nav.spacing(height);
@@ -88,7 +88,7 @@ fn wheel_zoom_keeps_the_point_under_the_cursor_fixed() {
 fn drag_pans_and_history_goes_back_and_forward() {
     let dir = scratch("viewer-pan");
     let mut h = harness(&dir, SCENE);
-    let start = h.state().nav.clone();
+    let start = h.state().nav().clone();
     let height = h.state().image_size_px()[1] as f64;
     let r = h.state().image_rect();
     let (a, b) = (r.center(), r.center() + Vec2::new(-100.0, 40.0));
@@ -103,19 +103,19 @@ fn drag_pans_and_history_goes_back_and_forward() {
         modifiers: Modifiers::NONE,
     });
     settle(&mut h);
-    let moved = h.state().nav.clone();
+    let moved = h.state().nav().clone();
     // Dragging left by 100 px moves the view right by 100 pixel spacings (y: up is +).
     let d = start.offset_px_of(&moved, height);
     assert!((d[0] - 100.0).abs() < 1.0 && (d[1] - 40.0).abs() < 1.0, "{d:?}");
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
-    assert_eq!(h.state().nav, start, "Backspace goes back");
+    assert_eq!(h.state().nav(), &start, "Backspace goes back");
     h.get_by_label("Forward >").click();
     settle(&mut h);
-    assert_eq!(h.state().nav, moved, "Forward returns");
+    assert_eq!(h.state().nav(), &moved, "Forward returns");
     h.key_press(egui::Key::Home);
     settle(&mut h);
-    assert!((h.state().nav.log10_zoom - 1.6f64.log10()).abs() < 1e-12, "Home shows the whole set");
+    assert!((h.state().nav().log10_zoom - 1.6f64.log10()).abs() < 1e-12, "Home shows the whole set");
 }
 
 #[test]
@@ -143,7 +143,7 @@ fn ctrl_click_opens_the_julia_set_of_the_point() {
     let r = h.state().image_rect();
     let at = r.center() + Vec2::new(-60.0, 30.0);
     let height = h.state().image_size_px()[1] as f64;
-    let want = h.state().nav.point_at(px(&h, at), height);
+    let want = h.state().nav().point_at(px(&h, at), height);
     h.hover_at(at);
     h.run_steps(2);
     assert!(h.state().counters().julia_previews >= 1, "hovering previews the Julia set");
@@ -207,10 +207,10 @@ fn gpu_side_by_side_and_difference() {
     let full =
         "version = 1\n[iteration]\nmax = 300\n[[layer]]\nkind = \"smooth\"\npalette = \"classic\"\ndensity = 0.1\n";
     let mut h = harness(&dir, full);
-    h.state_mut().mode = ViewMode::SideBySide;
+    h.state_mut().set_mode(ViewMode::SideBySide);
     settle(&mut h);
     h.snapshot_options("viewer-side-by-side", &tolerance());
-    h.state_mut().mode = ViewMode::Difference;
+    h.state_mut().set_mode(ViewMode::Difference);
     let mut mismatch = None;
     for _ in 0..200 {
         h.run_steps(1);
@@ -288,8 +288,8 @@ fn dropped_palettes_recolour_and_dropped_scenes_open() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     h.state_mut().open_path(&png).expect("scene opens");
     settle(&mut h);
-    assert_eq!(h.state().nav.center, ["-1.25".to_string(), "0.02".to_string()]);
-    assert!((h.state().nav.log10_zoom - 40f64.log10()).abs() < 1e-12);
+    assert_eq!(h.state().nav().center, ["-1.25".to_string(), "0.02".to_string()]);
+    assert!((h.state().nav().log10_zoom - 40f64.log10()).abs() < 1e-12);
     assert!(h.state().counters().renders > after.renders);
 }
 
@@ -350,7 +350,7 @@ fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
     let dir = scratch("viewer-newton");
     let scene = "version = 1\n[view]\ncenter = [\"-1.7\", \"0\"]\nzoom = \"10\"\n[iteration]\nmax = 300\n";
     let mut h = harness(&dir, scene);
-    let start = h.state().nav.clone();
+    let start = h.state().nav().clone();
     let r = h.state().image_rect();
     let [_, height] = h.state().image_size_px();
     // -1.755 is 0.055 left of the centre: 0.055 / (0.4 / height) pixels.
@@ -366,13 +366,13 @@ fn newton_zoom_goes_to_the_minibrot_under_the_pointer() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     settle(&mut h);
-    let nav = h.state().nav.clone();
+    let nav = h.state().nav().clone();
     assert!(h.state().newton_note().is_some_and(|n| n.contains("period 3")), "{:?}", h.state().newton_note());
     assert!(nav.center[0].starts_with("-1.754877666246692760049508896358"), "{:?}", nav.center);
     assert!((nav.log10_zoom - 48f64.log10()).abs() < 0.15, "zoom 1e{}", nav.log10_zoom);
     h.key_press(egui::Key::Backspace);
     settle(&mut h);
-    assert_eq!(h.state().nav, start);
+    assert_eq!(h.state().nav(), &start);
 }
 
 /// Layer numbers show the scene's own values, however large (a density of 5000 once showed
@@ -506,4 +506,65 @@ fn a_reference_file_serves_the_viewer() {
     assert!(err.contains("does not serve") && err.contains("max_iter"), "{err}");
     let o = std::process::Command::new(bin).args(["view", "--reference", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A Julia parameter typed that is not a number is said next to its field, by the typed
+/// scene's key path, and nothing renders: the image keeps the last valid scene. Once the
+/// text is a number again the error goes and the new parameter renders.
+#[test]
+fn a_bad_value_typed_is_shown_by_its_field_and_the_view_keeps_the_last_good_one() {
+    let dir = scratch("viewer-bad-typed");
+    let scene = "version = 1\n[formula]\nkind = \"julia\"\nc = [\"-0.8\", \"0.156\"]\n[iteration]\nmax = 200\n";
+    let mut h = harness(&dir, scene);
+    let before = h.state().counters();
+    let field = h.get_by_label("c re");
+    field.focus();
+    h.run_steps(1);
+    h.get_by_label("c re").type_text("x");
+    settle(&mut h);
+    let typed = h.state().julia_c().expect("a Julia scene");
+    assert!(typed[0].contains('x'), "the field keeps what was typed: {typed:?}");
+    // The status bar names the scene and the key ("scene.toml: formula.c: ..."); the line by
+    // the field is the message.
+    let by_field = |h: &Harness<'static, ViewerApp>| {
+        h.query_all_by_label_contains("Julia parameter c")
+            .filter(|n| n.value().is_some_and(|l| l.starts_with("Julia parameter c")))
+            .count()
+    };
+    assert_eq!(by_field(&h), 1, "the error shows by the field");
+    assert_eq!(h.state().counters().renders, before.renders, "nothing renders from a bad value");
+    // The number it was: the error goes, and the picture is the one shown (no render).
+    h.key_press(egui::Key::Backspace);
+    settle(&mut h);
+    assert_eq!(h.state().julia_c().map(|c| c[0].clone()).as_deref(), Some("-0.8"));
+    assert!(h.query_by_label_contains("Julia parameter c").is_none(), "the error is gone");
+    assert_eq!(h.state().counters().renders, before.renders, "the same scene renders nothing");
+    // Another number renders.
+    h.get_by_label("c re").type_text("5");
+    settle(&mut h);
+    assert_eq!(h.state().julia_c().map(|c| c[0].clone()).as_deref(), Some("-0.85"));
+    assert!(h.state().counters().renders > before.renders);
+}
+
+/// A layer value typed that the scene refuses is said under that key's control, and
+/// nothing renders or recolours until it is valid.
+#[test]
+fn a_bad_layer_value_is_shown_under_its_control() {
+    let dir = scratch("viewer-bad-layer");
+    let scene = "version = 1\n[iteration]\nmax = 200\n[[layer]]\nkind = \"smooth\"\n";
+    let mut h = harness(&dir, scene);
+    let before = h.state().counters();
+    h.get_by_label("interior").focus();
+    h.run_steps(1);
+    h.get_by_label("interior").type_text("x");
+    // Text takes effect when the field is left.
+    h.key_press(egui::Key::Enter);
+    settle(&mut h);
+    let interior = h.state().scene_file().layers[0].get_ref().interior.clone().map(|c| c.into_inner());
+    assert_eq!(interior.as_deref(), Some("#000000x"));
+    let under =
+        h.query_all_by_label_contains("#000000x").filter(|n| n.value().is_some_and(|v| v.starts_with("colour")));
+    assert_eq!(under.count(), 1, "the error shows under the control");
+    let after = h.state().counters();
+    assert_eq!((after.renders, after.recolours), (before.renders, before.recolours));
 }

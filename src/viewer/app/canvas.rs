@@ -8,15 +8,13 @@ impl ViewerApp {
         let rect = ui.available_rect_before_wrap();
         let ppp = ui.ctx().pixels_per_point();
         let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
-        if size != self.size_px {
-            self.size_px = size;
-            self.needs_render = true;
+        if self.view.lay_out(rect, size) {
+            self.render.invalidate();
         }
-        self.image_rect = rect;
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_gray(12));
-        let h = self.size_px[1] as f64;
+        let h = self.view.height();
         // Pointer position in physical pixels from the image centre (y down).
         let to_px = |p: Pos2| [((p.x - rect.center().x) * ppp) as f64, ((p.y - rect.center().y) * ppp) as f64];
         self.draw_image(ui, rect, ppp);
@@ -25,35 +23,26 @@ impl ViewerApp {
         if let Some(pos) = response.hover_pos() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll.abs() > 0.0 {
-                // One history entry per wheel gesture (smoothed scrolling spans frames).
-                if self.last_wheel.is_none_or(|t| t.elapsed().as_secs_f64() > 0.4) {
-                    self.history.push(self.nav.clone());
-                }
-                self.last_wheel = Some(Instant::now());
-                let factor = 2f64.powf(scroll as f64 / 120.0);
-                self.nav = self.nav.zoom_about(factor, to_px(pos), h);
-                self.needs_render = true;
+                self.view.wheel_zoom(2f64.powf(scroll as f64 / 120.0), to_px(pos));
+                self.render.invalidate();
             }
-            if self.file.formula.kind.get_ref() == "mandelbrot" {
-                self.julia_wanted = Some(self.nav.point_at(to_px(pos), h));
+            if self.doc.is_mandelbrot() {
+                self.julia.want(self.view.nav().point_at(to_px(pos), h));
             }
         }
         // Drag: pan (the image follows the pointer); right-drag or shift-drag: box zoom.
         let boxing = ui.input(|i| i.modifiers.shift) || response.dragged_by(PointerButton::Secondary);
         if response.drag_started() && boxing {
-            self.box_start = response.interact_pointer_pos();
+            self.view.set_box_start(response.interact_pointer_pos());
         }
-        if response.dragged() && self.box_start.is_none() {
+        if response.dragged() && self.view.box_start().is_none() {
             let d = response.drag_delta();
             if d != Vec2::ZERO {
-                if response.drag_started() {
-                    self.history.push(self.nav.clone());
-                }
-                self.nav = self.nav.pan(-(d.x * ppp) as f64, -(d.y * ppp) as f64, h);
-                self.needs_render = true;
+                self.view.drag_pan(-(d.x * ppp) as f64, -(d.y * ppp) as f64, response.drag_started());
+                self.render.invalidate();
             }
         }
-        if let (Some(a), Some(b)) = (self.box_start, response.interact_pointer_pos()) {
+        if let (Some(a), Some(b)) = (self.view.box_start(), response.interact_pointer_pos()) {
             painter.rect_stroke(
                 Rect::from_two_pos(a, b),
                 0.0,
@@ -61,26 +50,26 @@ impl ViewerApp {
                 egui::StrokeKind::Middle,
             );
             if response.drag_stopped() {
-                let n = self.nav.zoom_box(to_px(a), to_px(b), self.size_px[0] as f64, h);
-                self.box_start = None;
+                let n = self.view.nav().zoom_box(to_px(a), to_px(b), self.view.size_px()[0] as f64, h);
+                self.view.set_box_start(None);
                 self.go(n);
             }
         }
         if !response.dragged() && !response.drag_stopped() {
-            self.box_start = None;
+            self.view.set_box_start(None);
         }
         // Ctrl-click on a Mandelbrot view: open the Julia set of the point.
         if response.clicked()
             && ui.input(|i| i.modifiers.command || i.modifiers.ctrl)
-            && self.file.formula.kind.get_ref() == "mandelbrot"
+            && self.doc.is_mandelbrot()
             && let Some(pos) = response.interact_pointer_pos()
         {
-            let c = self.nav.point_at(to_px(pos), h);
+            let c = self.view.nav().point_at(to_px(pos), h);
             self.open_julia([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]);
         }
         // Julia preview inset.
-        if let Some((tex, c)) = &self.julia
-            && self.file.formula.kind.get_ref() == "mandelbrot"
+        if let Some((tex, c)) = self.julia.shown()
+            && self.doc.is_mandelbrot()
         {
             let inset = Rect::from_min_size(rect.right_bottom() - Vec2::new(210.0, 160.0), Vec2::new(200.0, 150.0));
             painter.image(tex.id(), inset, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
@@ -104,15 +93,16 @@ impl ViewerApp {
             ViewMode::Difference => None,
             ViewMode::SideBySide => Some(Rect::from_min_max(Pos2::new(rect.center().x, rect.min.y), rect.max)),
         };
-        if let Some((tex, nav, size)) = &self.image {
+        if let Some(shown) = self.render.image() {
             // Where the image's own view lies in the current one.
-            let h = self.size_px[1].max(1) as f64;
-            let scale = 10f64.powf(self.nav.log10_zoom - nav.log10_zoom) as f32;
-            let off = self.nav.offset_px_of(nav, h);
+            let (nav, size, h) = (self.view.nav(), shown.size, self.view.height());
+            let scale = 10f64.powf(nav.log10_zoom - shown.nav.log10_zoom) as f32;
+            let off = nav.offset_px_of(&shown.nav, h);
             let centre = rect.center() + Vec2::new(off[0] as f32 / ppp, -off[1] as f32 / ppp);
-            let img_size =
-                Vec2::new(size[0] as f32, size[1] as f32) * (self.size_px[1] as f32 / size[1].max(1) as f32) * scale
-                    / ppp;
+            let img_size = Vec2::new(size[0] as f32, size[1] as f32)
+                * (self.view.size_px()[1] as f32 / size[1].max(1) as f32)
+                * scale
+                / ppp;
             let at = Rect::from_center_size(centre, img_size);
             let clip = match gpu_rect {
                 Some(g) if self.mode == ViewMode::SideBySide => {
@@ -122,7 +112,7 @@ impl ViewerApp {
             };
             if matches!(self.mode, ViewMode::Cpu | ViewMode::SideBySide) {
                 ui.painter_at(clip).image(
-                    tex.id(),
+                    shown.texture.id(),
                     at,
                     Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
                     Color32::WHITE,
@@ -130,8 +120,8 @@ impl ViewerApp {
             }
         }
         match self.mode {
-            ViewMode::Difference => match &self.diff_shown {
-                Some((tex, job, mismatch)) if *job == self.job => {
+            ViewMode::Difference => match self.diff.shown_for(self.render.job()) {
+                Some((tex, mismatch)) => {
                     painter.image(tex.id(), rect, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
                     let text = format!("|CPU - GPU f32| x 4; N differs on {:.3}% of samples", mismatch * 100.0);
                     painter.text(
@@ -164,16 +154,16 @@ impl ViewerApp {
 
     /// The paint callback's parameters for drawing the part `rect` of the image area `full`.
     pub(super) fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::viewer::paint::PaintParams> {
-        let scene = self.scene.as_ref()?;
+        let scene = self.render.scene()?;
         // The paint shader draws unrotated, unstretched views only.
         if !scene.transform.is_identity() {
             return None;
         }
-        let h = self.size_px[1].max(1) as f64;
-        let spacing = self.nav.spacing(h);
+        let (nav, h) = (self.view.nav(), self.view.height());
+        let spacing = nav.spacing(h);
         // The GPU half of a side-by-side view shows the right half of the same view.
         let dx = ((rect.center().x - full.center().x) * ppp) as f64;
-        let centre = self.nav.point_at([dx, 0.0], h);
+        let centre = nav.point_at([dx, 0.0], h);
         let interior = scene
             .stack
             .layers

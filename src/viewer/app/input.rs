@@ -3,15 +3,43 @@
 
 use super::*;
 
+/// Newton zooming in progress and its settings.
+#[derive(Default)]
+pub(super) struct NewtonState {
+    /// The search running on its own thread.
+    pending: Option<std::sync::mpsc::Receiver<Result<(Nav, String), String>>>,
+    /// Zoom by this factor towards what is found (1 or less: frame it).
+    factor: f64,
+    /// What the last search found (or why it found nothing).
+    note: Option<String>,
+}
+
+impl NewtonState {
+    /// The zoom factor towards what is found, for its control.
+    pub(super) fn factor_mut(&mut self) -> &mut f64 {
+        &mut self.factor
+    }
+
+    /// What the last search found, or why it found nothing.
+    pub(super) fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// True while a search runs.
+    pub(super) fn pending(&self) -> bool {
+        self.pending.is_some()
+    }
+}
+
 impl ViewerApp {
     /// Starts a Newton zoom search from pixel `at` (from the image centre, y down).
     pub(super) fn start_newton(&mut self, target: crate::viewer::newton::Target, at: [f64; 2]) {
-        if self.file.formula.kind.get_ref() != "mandelbrot" {
+        if !self.doc.is_mandelbrot() {
             self.newton.note = Some("Newton zoom searches the Mandelbrot set's parameter plane".into());
             return;
         }
         let (tx, rx) = std::sync::mpsc::channel();
-        let (nav, h, factor) = (self.nav.clone(), self.size_px[1].max(1) as f64, self.newton.factor);
+        let (nav, h, factor) = (self.view.nav().clone(), self.view.height(), self.newton.factor);
         std::thread::spawn(move || {
             let _ = tx.send(crate::viewer::newton::newton_zoom(&nav, at, h, target, factor));
         });
@@ -42,12 +70,12 @@ impl ViewerApp {
 
     /// Newton zooming is being searched.
     pub fn newton_pending(&self) -> bool {
-        self.newton.pending.is_some()
+        self.newton.pending()
     }
 
     /// What the last Newton zoom found, or why it found nothing.
     pub fn newton_note(&self) -> Option<&str> {
-        self.newton.note.as_deref()
+        self.newton.note()
     }
 
     pub(super) fn keys(&mut self, ctx: &egui::Context) {
@@ -58,7 +86,7 @@ impl ViewerApp {
             ctx.input(|i| (i.key_pressed(Key::N), i.key_pressed(Key::M), i.pointer.hover_pos()));
         if newton_minibrot || newton_point {
             let ppp = ctx.pixels_per_point();
-            let r = self.image_rect;
+            let r = self.view.image_rect();
             let at = pointer
                 .filter(|p| r.contains(*p))
                 .map_or([0.0, 0.0], |p| [((p.x - r.center().x) * ppp) as f64, ((p.y - r.center().y) * ppp) as f64]);
@@ -69,7 +97,7 @@ impl ViewerApp {
             };
             self.start_newton(target, at);
         }
-        let h = self.size_px[1].max(1) as f64;
+        let h = self.view.height();
         let step = h * 0.1;
         let (left, right, up, down, plus, minus, home, back) = ctx.input(|i| {
             (
@@ -86,16 +114,16 @@ impl ViewerApp {
         let pans = [(left, -step, 0.0), (right, step, 0.0), (up, 0.0, -step), (down, 0.0, step)];
         for (pressed, dx, dy) in pans {
             if pressed {
-                let n = self.nav.pan(dx, dy, h);
+                let n = self.view.nav().pan(dx, dy, h);
                 self.go(n);
             }
         }
         if plus {
-            let n = self.nav.zoom_about(2.0, [0.0, 0.0], h);
+            let n = self.view.nav().zoom_about(2.0, [0.0, 0.0], h);
             self.go(n);
         }
         if minus {
-            let n = self.nav.zoom_about(0.5, [0.0, 0.0], h);
+            let n = self.view.nav().zoom_about(0.5, [0.0, 0.0], h);
             self.go(n);
         }
         if home {

@@ -3,10 +3,13 @@
 
 use super::*;
 
+/// The colour of error messages.
+const ERROR_COLOUR: Color32 = Color32::from_rgb(255, 90, 90);
+
 impl ViewerApp {
     pub(super) fn toolbar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            let (b, f) = self.history.lens();
+            let (b, f) = self.view.history_lens();
             if ui.add_enabled(b > 0, egui::Button::new("< Back")).on_hover_text("Backspace").clicked() {
                 self.back();
             }
@@ -29,10 +32,10 @@ impl ViewerApp {
                 self.start_newton(crate::viewer::newton::Target::Misiurewicz, [0.0, 0.0]);
             }
             let label = ui.label("step");
-            ui.add(egui::DragValue::new(&mut self.newton.factor).range(0.0..=1e6).speed(0.5).max_decimals(1))
+            ui.add(egui::DragValue::new(self.newton.factor_mut()).range(0.0..=1e6).speed(0.5).max_decimals(1))
                 .labelled_by(label.id)
                 .on_hover_text("zoom by this factor towards what is found; 0: frame it at once");
-            if self.newton.pending.is_some() {
+            if self.newton.pending() {
                 ui.spinner();
             }
             ui.separator();
@@ -52,37 +55,36 @@ impl ViewerApp {
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             let short = |t: &String| if t.len() > 24 { format!("{}…", &t[..24]) } else { t.clone() };
-            ui.label(format!(
-                "centre {} {:+}i",
-                short(&self.nav.center[0]),
-                short(&self.nav.center[1]).trim_start_matches('+')
-            ));
+            let nav = self.view.nav();
+            ui.label(format!("centre {} {:+}i", short(&nav.center[0]), short(&nav.center[1]).trim_start_matches('+')));
             ui.separator();
-            ui.label(format!("zoom {}", fmt_zoom(self.nav.log10_zoom)));
+            ui.label(format!("zoom {}", fmt_zoom(nav.log10_zoom)));
             ui.separator();
-            ui.label(format!("max iter {}", self.file.iteration.max.get_ref()));
+            ui.label(format!("max iter {}", self.doc.max_iter()));
             ui.separator();
-            ui.label(format!("engine {}", if self.engine.is_empty() { "-" } else { &self.engine }));
-            if let Some(note) = &self.newton.note {
+            let engine = self.render.engine();
+            ui.label(format!("engine {}", if engine.is_empty() { "-" } else { engine }));
+            if let Some(note) = self.newton.note() {
                 ui.separator();
                 ui.label(note);
             }
             ui.separator();
-            let (done, total) = self.progress;
-            if let (true, Some((name, d, t))) = (done < total, self.stage) {
+            let (done, total) = self.render.progress();
+            if let (true, Some((name, d, t))) = (done < total, self.render.stage()) {
                 ui.add(egui::ProgressBar::new(fraction(d, t)).desired_width(160.0).text(stage_text(name, d, t)));
             } else if done < total {
                 ui.add(egui::ProgressBar::new(fraction(done, total)).desired_width(120.0).show_percentage());
             } else {
-                ui.label(format!("{:.2} s", self.last_seconds));
+                ui.label(format!("{:.2} s", self.render.last_seconds()));
             }
             if let Some(warning) = self.gpu_warning() {
                 ui.separator();
                 ui.colored_label(Color32::from_rgb(255, 170, 40), warning);
             }
-            if let Some(e) = &self.error {
+            let scene_error = self.doc.error().map(ToString::to_string);
+            if let Some(e) = self.error.as_ref().or(scene_error.as_ref()) {
                 ui.separator();
-                ui.colored_label(Color32::from_rgb(255, 90, 90), e);
+                ui.colored_label(ERROR_COLOUR, e);
             }
         });
     }
@@ -94,8 +96,8 @@ impl ViewerApp {
             ViewMode::GpuDf => crate::gpu::Precision::DoubleFloat,
             _ => crate::gpu::Precision::F32,
         };
-        let spacing = self.nav.spacing(self.size_px[1].max(1) as f64);
-        let c = self.nav.point_at([0.0, 0.0], 1.0);
+        let spacing = self.view.nav().spacing(self.view.height());
+        let c = self.view.nav().point_at([0.0, 0.0], 1.0);
         precision
             .exhausted(spacing, c)
             .then(|| format!("GPU {precision:?} precision exhausted at this depth: pixels are wrong"))
@@ -103,23 +105,18 @@ impl ViewerApp {
 
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Formula");
-        let mut julia = self.file.formula.kind.get_ref() == "julia";
+        let c = self.doc.julia_c();
+        let mut julia = !self.doc.is_mandelbrot();
         ui.horizontal(|ui| {
             let m = ui.radio_value(&mut julia, false, "Mandelbrot").changed();
             let j = ui.radio_value(&mut julia, true, "Julia").changed();
             if m || j {
-                self.file.formula.kind = cli(if julia { "julia" } else { "mandelbrot" }.into());
-                if julia && self.file.formula.c.is_none() {
-                    self.file.formula.c = Some(cli(["-0.8".into(), "0.156".into()]));
-                }
-                if !julia {
-                    self.file.formula.c = None;
-                }
-                self.changed();
+                let c = c.clone().unwrap_or_else(|| ["-0.8".into(), "0.156".into()]);
+                self.doc.set_julia(julia.then_some(c));
+                self.render.invalidate();
             }
         });
-        if let Some(c) = &mut self.file.formula.c {
-            let mut v = c.get_ref().clone();
+        if let Some(mut v) = self.doc.julia_c() {
             let field = |ui: &mut egui::Ui, name: &str, text: &mut String| {
                 let label = ui.label(name);
                 ui.text_edit_singleline(text).labelled_by(label.id)
@@ -127,11 +124,15 @@ impl ViewerApp {
             let a = ui.horizontal(|ui| field(ui, "c re", &mut v[0])).inner;
             let b = ui.horizontal(|ui| field(ui, "c im", &mut v[1])).inner;
             if a.changed() || b.changed() {
-                *c = cli(v);
-                self.needs_render = true;
+                self.doc.set_julia(Some(v));
+                self.render.invalidate();
+            }
+            // A value the scene refuses: said here; the image keeps the last valid one.
+            if let Some(e) = self.doc.error_at("formula.c") {
+                ui.colored_label(ERROR_COLOUR, &e.message);
             }
         }
-        let mut max = *self.file.iteration.max.get_ref();
+        let mut max = self.doc.max_iter();
         let edited = ui
             .horizontal(|ui| {
                 let label = ui.label("max iterations");
@@ -139,26 +140,21 @@ impl ViewerApp {
             })
             .inner;
         if edited.changed() {
-            self.file.iteration.max = cli(max);
-            self.changed();
+            self.doc.set_max_iter(max);
+            self.render.invalidate();
         }
         ui.separator();
         ui.heading("Layers");
-        if crate::viewer::layers_panel::show(ui, &mut self.file.layers, &mut self.overrides, &mut self.selected_layer) {
-            self.changed();
+        if self.doc.layers_ui(ui) {
+            self.render.invalidate();
         }
         ui.separator();
         ui.heading("Palette editor");
-        let current = self
-            .scene
-            .as_ref()
-            .and_then(|s| s.stack.layers.get(self.selected_layer))
-            .and_then(|l| l.coloring.palette().cloned());
-        match current {
+        match self.doc.selected_palette() {
             Some(p) => {
                 if let Some(edited) = self.editor.show(ui, &p) {
-                    self.overrides.insert(self.selected_layer, edited);
-                    self.changed();
+                    self.doc.override_selected(edited);
+                    self.render.invalidate();
                 }
             }
             None => {
@@ -184,28 +180,13 @@ impl ViewerApp {
     }
 
     pub(super) fn save_scene(&self) -> Result<(), String> {
-        let path = PathBuf::from(&self.scene_path);
-        let mut file = self.file.clone();
-        file.view.center = cli(self.nav.center.clone());
-        file.view.zoom = Some(cli(self.nav.zoom_text()));
-        file.view.radius = None;
-        // Edited palettes are saved beside the scene and referred to by file name.
-        for (k, p) in &self.overrides {
-            let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-            let name = format!("{stem}-layer{k}.toml");
-            let dir = path.parent().unwrap_or(Path::new("."));
-            std::fs::write(dir.join(&name), palette::to_toml(p)).map_err(|e| format!("{name}: {e}"))?;
-            if let Some(l) = file.layers.get_mut(*k) {
-                l.get_mut().palette = Some(cli(name));
-            }
-        }
-        let text = toml::to_string(&file).map_err(|e| e.to_string())?;
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+        let nav = self.view.nav();
+        self.doc.save(Path::new(&self.scene_path), nav.center.clone(), nav.zoom_text())
     }
 
     pub(super) fn start_export(&mut self, req: ExportRequest) {
         match self.scene_for_view() {
-            Ok(scene) => self.export.start(scene, req),
+            Ok(scene) => self.error = self.export.start(scene, req).err().map(|e| e.to_string()),
             Err(e) => self.error = Some(e),
         }
     }
@@ -230,23 +211,18 @@ impl ViewerApp {
             } else {
                 palette::load(&path.display().to_string(), None).map_err(|e| e.to_string())?
             };
-            self.overrides.insert(self.selected_layer, p);
-            self.changed();
+            self.doc.override_selected(p);
+            self.render.invalidate();
             return Ok(());
         }
         let s = crate::io::read_scene_source(path).map_err(|e| e.to_string())?;
-        let file = Scene::parse_file(&s.origin, &s.text).map_err(|e| e.to_string())?;
-        self.history.push(self.nav.clone());
-        self.nav = nav_of(&file);
-        self.file = file;
-        self.origin = s.origin;
-        self.base_dir = s.base_dir;
-        self.overrides.clear();
-        self.selected_layer = 0;
-        if self.file.layers.is_empty() {
-            self.file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
-        }
-        self.changed();
+        // A scene that does not validate is refused with its line and column; the one shown
+        // stays.
+        let doc = Document::from_text(s.origin, &s.text, s.base_dir).map_err(|e| e.to_string())?;
+        let nav = Nav::of_scene(&doc.scene());
+        self.doc = doc;
+        self.go(nav);
+        self.render.invalidate();
         Ok(())
     }
 }
@@ -275,6 +251,7 @@ fn fmt_zoom(log10: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render;
 
     #[test]
     fn stages_are_named_with_their_share_done() {
