@@ -18,8 +18,9 @@ pub struct IoError {
     /// What went wrong (quoting the cause, when there is one).
     pub message: String,
     /// The failure beneath, when a system call or a codec failed; none for a fault found
-    /// in the file's content or in what was asked.
-    pub cause: Option<Cause>,
+    /// in the file's content or in what was requested. Boxed: an error travels in every
+    /// `Result` of the I/O layer, and the causes are large.
+    pub cause: Option<Box<Cause>>,
 }
 
 impl std::fmt::Display for IoError {
@@ -30,7 +31,7 @@ impl std::fmt::Display for IoError {
 
 impl std::error::Error for IoError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.cause.as_ref().map(Cause::error)
+        self.cause.as_deref().map(Cause::error)
     }
 }
 
@@ -86,7 +87,7 @@ impl Cause {
 }
 
 impl IoError {
-    /// A fault with no failure beneath: the file's content, or what was asked of it.
+    /// A fault with no failure beneath: the file's content, or what was requested of it.
     pub(crate) fn new(path: &Path, message: impl Into<String>) -> Self {
         Self { path: path.display().to_string(), message: message.into(), cause: None }
     }
@@ -94,20 +95,20 @@ impl IoError {
     /// A failure of the system or a codec, told in its own words.
     pub(crate) fn caused(path: &Path, cause: impl Into<Cause>) -> Self {
         let cause = cause.into();
-        Self { path: path.display().to_string(), message: cause.to_string(), cause: Some(cause) }
+        Self { path: path.display().to_string(), message: cause.to_string(), cause: Some(Box::new(cause)) }
     }
 
     /// A failure of the system or a codec while doing `doing` ("cannot write").
     pub(crate) fn context(path: &Path, doing: &str, cause: impl Into<Cause>) -> Self {
         let cause = cause.into();
-        Self { path: path.display().to_string(), message: format!("{doing}: {cause}"), cause: Some(cause) }
+        Self { path: path.display().to_string(), message: format!("{doing}: {cause}"), cause: Some(Box::new(cause)) }
     }
 
     /// The kind of the operating system's error beneath (a full disk, a missing folder, no
     /// permission), or None when the system did not fail (a damaged file, a codec's
     /// refusal).
     pub fn kind(&self) -> Option<std::io::ErrorKind> {
-        self.cause.as_ref().and_then(Cause::io).map(std::io::Error::kind)
+        self.cause.as_deref().and_then(Cause::io).map(std::io::Error::kind)
     }
 }
 

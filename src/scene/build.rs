@@ -217,7 +217,7 @@ mod tests {
 
     fn parsed() -> Scene {
         let file = Scene::parse_file("text", TEXT).unwrap();
-        Scene::validate(file, "text", TEXT, Path::new("."), &crate::io::load_bitmap).unwrap()
+        Scene::validate(file, "text", TEXT, Path::new("."), crate::io::load_bitmap).unwrap()
     }
 
     fn layer(kind: &str, edit: impl FnOnce(&mut LayerRaw)) -> Spanned<LayerRaw> {
@@ -272,7 +272,7 @@ mod tests {
             layers: layers(),
             output: OutputRaw::default(),
         };
-        let built = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap();
+        let built = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap();
         same_render(&built, &parsed());
         assert_eq!(built.to_toml(), parsed().to_toml(), "the same scene is embedded in outputs");
     }
@@ -290,7 +290,7 @@ mod tests {
             layers: layers(),
             output: OutputRaw::default(),
         };
-        let plain = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap();
+        let plain = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap();
         assert!(plain.julia_c().is_none());
         let scene = plain
             .clone()
@@ -309,7 +309,7 @@ mod tests {
         assert!(plain.planes_serve(&moved), "the same view, written the same way");
         let mut file = plain.file.clone();
         file.layers[0].get_mut().density = Some(cli(0.9));
-        let recoloured = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap();
+        let recoloured = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap();
         assert_ne!(recoloured.stack, plain.stack);
         assert!(plain.planes_serve(&recoloured), "a colouring change only recolours");
     }
@@ -320,18 +320,18 @@ mod tests {
     fn bad_values_built_in_code_name_their_key() {
         let mut file = Scene::parse_file("text", TEXT).unwrap();
         file.view.zoom = Some(cli("-3".into()));
-        let e = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap_err();
+        let e = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap_err();
         assert_eq!((e.key.as_deref(), e.position), (Some("view.zoom"), None), "{e}");
         assert_eq!(e.to_string(), "code: view.zoom: zoom must be positive, got -3");
 
         let mut file = Scene::parse_file("text", TEXT).unwrap();
         file.layers[1].get_mut().radius = Some(cli(f64::NAN));
-        let e = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap_err();
+        let e = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap_err();
         assert_eq!(e.key, Some(layer_key(1, "radius")), "{e}");
 
         let mut file = Scene::parse_file("text", TEXT).unwrap();
         file.layers[0].get_mut().mask = Some(cli(crate::scene::raw::MaskRaw::new("nowhere")));
-        let e = Scene::from_file(file, "code", Path::new("."), &crate::io::load_bitmap).unwrap_err();
+        let e = Scene::from_file(file, "code", Path::new("."), crate::io::load_bitmap).unwrap_err();
         assert_eq!(e.key.as_deref(), Some("layer[0].mask.quantity"), "{e}");
 
         let scene = parsed();
@@ -352,7 +352,7 @@ mod tests {
     fn scenes_from_text_still_give_lines_and_columns() {
         let text = "version = 1\n[view]\nzoom = \"-1\"\n";
         let e =
-            Scene::validate(Scene::parse_file("t", text).unwrap(), "t", text, Path::new("."), &crate::io::load_bitmap)
+            Scene::validate(Scene::parse_file("t", text).unwrap(), "t", text, Path::new("."), crate::io::load_bitmap)
                 .unwrap_err();
         assert_eq!((e.key.clone(), e.to_string()), (None, "t:3:8: zoom must be positive, got -1".to_string()));
     }

@@ -305,7 +305,7 @@ mod tests {
     fn views_of_scenes_and_back() {
         let scene = |text: &str| {
             let file = Scene::parse_file("t", text).unwrap();
-            Scene::validate(file, "t", text, std::path::Path::new("."), &crate::io::load_bitmap).unwrap()
+            Scene::validate(file, "t", text, std::path::Path::new("."), crate::io::load_bitmap).unwrap()
         };
         let n = Nav::of_scene(&scene("version = 1\n[view]\ncenter = [\"-1.25\", \"0.02\"]\nzoom = \"900\"\n"));
         assert_eq!((n.center.clone(), n.log10_zoom), (["-1.25".to_string(), "0.02".to_string()], 900f64.log10()));

@@ -39,7 +39,7 @@ impl Document {
         if file.layers.is_empty() {
             file.layers.push(Spanned::new(0..0, LayerRaw::of_kind("smooth")));
         }
-        let valid = Scene::validate(file.clone(), &origin, text, &base_dir, &crate::io::load_bitmap)?;
+        let valid = Scene::validate(file.clone(), &origin, text, &base_dir, crate::io::load_bitmap)?;
         Ok(Self { file, origin, base_dir, overrides: BTreeMap::new(), selected_layer: 0, valid, error: None })
     }
 
@@ -74,7 +74,7 @@ impl Document {
     /// Validates the file as edited: it becomes the scene, or the error is kept and the last
     /// valid scene stays.
     fn revalidate(&mut self) {
-        match Scene::from_file(self.file.clone(), &self.origin, &self.base_dir, &crate::io::load_bitmap) {
+        match Scene::from_file(self.file.clone(), &self.origin, &self.base_dir, crate::io::load_bitmap) {
             Ok(scene) => {
                 self.valid = scene;
                 self.error = None;
@@ -174,7 +174,7 @@ impl Document {
         file.render.aa = cli(1);
         file.render.engine = cli("auto".into());
         file.iteration.max = cli((*file.iteration.max.get_ref()).min(500));
-        Scene::from_file(file, "julia preview", &self.base_dir, &crate::io::load_bitmap)
+        Scene::from_file(file, "julia preview", &self.base_dir, crate::io::load_bitmap)
     }
 
     /// Writes the scene to `path` at view `center`, `zoom` (decimal text); edited palettes
