@@ -143,7 +143,7 @@ pub const MAX_DENSE_ITERATIONS: u32 = 1 << 25;
 /// tables, under half a GB at any depth) and the rest packed (a Mandelbrot reference is
 /// held dense to [`MAX_DENSE_ITERATIONS`] first, in case it turns out to be one period of
 /// a nucleus, which then stays dense), 1.0–1.4 bytes per
-/// iteration as measured ([`packed`]): 1e9 iterations in under 2 GB. The steps of whole
+/// iteration as measured ([`reference::packed`]): 1e9 iterations in under 2 GB. The steps of whole
 /// blocks past the dense part add at most 2^20 steps and 2^19 cursors: 130 MB with f64
 /// deltas, 350 MB with FloatExp (both number types' steps), by their sizes.
 pub const DENSE_PART: u32 = 1 << 20;
