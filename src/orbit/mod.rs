@@ -183,7 +183,14 @@ pub fn periodic_below(spec: &DeepSpec) -> Option<FloatExp> {
 /// packed.
 fn stepping(spec: &DeepSpec, share: bool) -> reference::Stepping {
     let (dense_limit, hold) = dense_split(spec.max_iter, spec.dense_orbit);
-    reference::Stepping { share, simd: spec.simd, periodic_below: periodic_below(spec), dense_limit, hold }
+    reference::Stepping {
+        share,
+        simd: spec.simd,
+        periodic_below: periodic_below(spec),
+        dense_limit,
+        hold,
+        cut_cycles: true,
+    }
 }
 
 /// Computes the reference orbit(s) of a view: the centre's orbit (Mandelbrot), or for a

@@ -2,15 +2,16 @@
 //! by every render that shares them (`render --reference`: the work units of one poster,
 //! the frames of one zoom), so no machine computes them again.
 //!
-//! The format (version 2, little-endian throughout):
+//! The format (version 3, little-endian throughout):
 //!
 //! ```text
 //! b"DFREFORB"                       magic, 8 bytes
-//! u32 version (2; version 1 files, without the packed part, are read too)
+//! u32 version (3; versions 1, without the packed part, and 2, without the cycle, are read too)
 //! u32 key length, key (UTF-8)       what determined the orbits: `name = value` lines
 //! u32 number of orbits (1 or 2)
 //! per orbit:
 //!   u64 bits, u8 escaped, u32 period (0: none)
+//!   u32 cycle (0: none; see `Reference::cycle`)
 //!   u64 n, n x (f64 re, f64 im)     Z_0 .. Z_(n-1) as f64, the part stored densely
 //!   tiny list                       its values too small for f64, with their exponents:
 //!     u64 m, m x (u32 index, f64 re mantissa, i32 re exponent, f64 im mantissa, i32 im exponent)
@@ -35,7 +36,7 @@ use super::reference::packed::{Packed, Tiny};
 use super::{DeepSpec, reference_bits};
 
 const MAGIC: &[u8; 8] = b"DFREFORB";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// Why a reference file cannot be used.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -123,6 +124,7 @@ impl SavedReferences {
             out.extend_from_slice(&r.bits().to_le_bytes());
             out.push(r.escaped() as u8);
             out.extend_from_slice(&r.period().unwrap_or(0).to_le_bytes());
+            out.extend_from_slice(&r.cycle().unwrap_or(0).to_le_bytes());
             out.extend_from_slice(&(z.len() as u64).to_le_bytes());
             for p in z {
                 out.extend_from_slice(&p[0].to_le_bytes());
@@ -174,6 +176,7 @@ impl SavedReferences {
             let bits = r.u64()?;
             let escaped = r.take(1)?[0] != 0;
             let period = Some(r.u32()?).filter(|&p| p > 0);
+            let cycle = if version >= 3 { Some(r.u32()?).filter(|&w| w > 0) } else { None };
             let n = r.len(16)?;
             if n == 0 {
                 return Err(bad("an orbit is empty"));
@@ -206,7 +209,10 @@ impl SavedReferences {
             if period.is_some_and(|p| p as u64 != end) {
                 return Err(bad("an orbit's period is not its length"));
             }
-            refs.push(Reference::from_parts(z, tiny, packed, escaped, bits, period));
+            if cycle.is_some_and(|w| w as u64 > end || packed.is_some() || escaped || period.is_some()) {
+                return Err(bad("an orbit's cycle reaches outside its densely stored values"));
+            }
+            refs.push(Reference::from_parts(z, tiny, packed, escaped, bits, period, cycle));
         }
         // Samples rebase onto the last orbit and go on from its index 1.
         if refs.last().is_some_and(|r| r.last() < 1) {
@@ -299,7 +305,7 @@ mod tests {
 
     fn sample() -> SavedReferences {
         let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
-        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, None, false, 300, Some(2));
+        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, None, false, 300, Some(2), None);
         SavedReferences { key: "center = -1 0\n".into(), refs: Arc::new(vec![r]) }
     }
 
@@ -314,6 +320,20 @@ mod tests {
         assert_eq!((d.refs[0].period(), d.refs[0].bits()), (Some(2), 300));
     }
 
+    /// An orbit that repeats reads back with its cycle; a cycle reaching outside the orbit
+    /// is refused.
+    #[test]
+    fn cycles_round_trip() {
+        let z = vec![[0.0, 0.0], [0.5, 0.0], [0.25, 0.125], [0.25, 0.125]];
+        let r = Reference::from_parts(z.clone(), vec![], None, false, 300, None, Some(1));
+        let s = SavedReferences { key: "k\n".into(), refs: Arc::new(vec![r]) };
+        let d = SavedReferences::decode(&s.encode()).unwrap();
+        assert_eq!((d.refs[0].cycle(), d.refs[0].end()), (Some(1), 3));
+        let wide = Reference::from_parts(z, vec![], None, false, 300, None, Some(4));
+        let s = SavedReferences { key: "k\n".into(), refs: Arc::new(vec![wide]) };
+        assert!(SavedReferences::decode(&s.encode()).is_err(), "a cycle longer than the orbit");
+    }
+
     /// An orbit with a packed tail (tiny values in both parts) reads back whole, and a
     /// version 1 file (no packed part) is still read.
     #[test]
@@ -323,17 +343,20 @@ mod tests {
         p.push([0.0, 0.0], Some([FloatExp::new(1.25, -3000), FloatExp::ZERO]));
         p.push([-1.75, 0.0], None);
         let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
-        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, Some(p), false, 300, None);
+        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, Some(p), false, 300, None, None);
         let s = SavedReferences { key: "k\n".into(), refs: Arc::new(vec![r]) };
         let d = SavedReferences::decode(&s.encode()).unwrap();
         let values = |r: &Reference| r.values_fe(0, 10).collect::<Vec<_>>();
         assert_eq!((d.refs[0].last(), d.refs[0].end()), (2, 5));
         assert_eq!(values(&d.refs[0]), values(&s.refs[0]));
         assert_eq!(d.refs[0].packed(), s.refs[0].packed());
-        // Version 1: the same bytes without the packed flag.
+        // Version 1: the same bytes without the cycle (after the period) and the packed flag.
         let v1 = sample();
+        assert_eq!(v1.refs.len(), 1);
+        let cycle_at = MAGIC.len() + 4 + 4 + v1.key.len() + 4 + 8 + 1 + 4;
         let mut bytes = v1.encode();
         bytes.truncate(bytes.len() - 5);
+        bytes.drain(cycle_at..cycle_at + 4);
         bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
         let crc = crc32fast::hash(&bytes);
         bytes.extend_from_slice(&crc.to_le_bytes());

@@ -241,12 +241,12 @@ impl Contraction {
 /// orbit of a Julia set's parameter c (the reference orbit of 0: Z_0 = 0, Z_1 = c, ...)
 /// that puts c inside the Mandelbrot set's interior, where the Julia set's interior
 /// samples are recognised safely (module docs). An orbit that escapes never contracts.
-pub fn orbit_contracts(orbit: &Reference, check: Check) -> bool {
+pub fn orbit_contracts(orbit: &Reference, check: Check, max_iter: u32) -> bool {
     if orbit.escaped() {
         return false;
     }
     let mut c = Contraction::new(FloatExp::ONE, check);
-    orbit.values_fe(1, orbit.end()).any(|z| {
+    orbit.values_through_cycle(1, max_iter).any(|z| {
         c.step(z, norm2(z), check);
         c.interior(check)
     })
@@ -566,7 +566,7 @@ pub fn decide(
     if asked == Detection::Off {
         return Decision::Off;
     }
-    if !mandelbrot && !orbit_contracts(&refs[refs.len() - 1], check) {
+    if !mandelbrot && !orbit_contracts(&refs[refs.len() - 1], check, max_iter) {
         return Decision::JuliaNoInterior;
     }
     if asked == Detection::On {
@@ -579,7 +579,7 @@ pub fn decide(
         }
         Some(p) if (max_iter as u64) < AUTO_MIN_PERIODS * p as u64 => Decision::AutoFewPeriods,
         Some(_) => Decision::AutoOn,
-        None if orbit_contracts(centre, check) => Decision::AutoOn,
+        None if orbit_contracts(centre, check, max_iter) => Decision::AutoOn,
         None => Decision::AutoExteriorCentre,
     }
 }

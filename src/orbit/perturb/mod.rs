@@ -478,7 +478,13 @@ impl Perturbation {
         if let Some(exit) = self.ends::<D, DER>(s, z, der, traps, states) {
             return Some(exit);
         }
-        let end = s.m >= r.last();
+        let mut end = s.m >= r.last();
+        if end && let Some(w) = r.cycle() {
+            // The orbit repeats from here: Z_m = Z_(m - w) exactly, so the sample goes on
+            // from there with the same delta (and `zm` is that value already).
+            s.m -= w;
+            end = false;
+        }
         if end && let Some(packed) = r.packed() {
             return self.tail::<D, DER, INT>(s, der, ctx, (zm, full, z), traps, states, local, packed);
         }

@@ -296,6 +296,18 @@ impl FixedOrbit {
         [to_floatexp(&self.x), to_floatexp(&self.y)]
     }
 
+    /// Whether z is exactly `saved` (words of x, then of y, as [`FixedOrbit::save`] wrote).
+    fn is(&self, saved: &[u64]) -> bool {
+        saved.len() == 2 * self.n && saved[..self.n] == self.x[..] && saved[self.n..] == self.y[..]
+    }
+
+    /// Writes z's words into `saved` (x, then y).
+    fn save(&self, saved: &mut Vec<u64>) {
+        saved.clear();
+        saved.extend_from_slice(&self.x);
+        saved.extend_from_slice(&self.y);
+    }
+
     /// |x|, |y| and |x + y| into the work space.
     fn inputs(&mut self) {
         let w = &mut self.w;
@@ -339,6 +351,13 @@ impl FixedOrbit {
     /// f64, n at it), so no step runs past an escape. On one thread it steps only as far as
     /// `keep` asks; pipelined, up to a few batches further, which changes nothing kept.
     ///
+    /// Up to index `detect_until` each z is also compared with one remembered value (Brent's
+    /// cycle detection: the value is renewed at indices 1, 2, 4, 8, ...): once z_n is
+    /// exactly z_(n-q), every bit of the orbit from there repeats with period q, so the
+    /// orbit stops there with `Some(q)` after `keep` saw z_n. An orbit that only comes close
+    /// to repeating (slow escapes, repelling cycles) is never cut: equality is of every
+    /// word of the fixed-point state.
+    ///
     /// Where a step is too narrow to share ([`THREADED_LIMBS`]) but two threads are free
     /// and `share` allows it, a helper thread steps the orbit ahead in batches while this
     /// one keeps the values: keeping (the period test, rounding to f64, storing) costs
@@ -350,16 +369,23 @@ impl FixedOrbit {
         share: bool,
         escape2: f64,
         max_iter: u32,
+        detect_until: u32,
         mut keep: impl FnMut(u32, [FloatExp; 2]) -> Result<bool, E>,
-    ) -> Result<(), E> {
+    ) -> Result<Option<u32>, E> {
         if !(share && self.n < THREADED_LIMBS && two_threads()) {
             return self.with_stepper(share, |s| {
                 let mut n = 0u32;
+                let mut cycle = Brent::new(s.orbit);
                 while !keep(n, s.get())? {
                     s.step();
                     n += 1;
+                    if n <= detect_until
+                        && let Some(q) = cycle.found(s.orbit)
+                    {
+                        return Ok((!keep(n, s.get())?).then_some(q));
+                    }
                 }
-                Ok(())
+                Ok(None)
             });
         }
         let ends = |n: u32, v: [FloatExp; 2]| {
@@ -368,9 +394,12 @@ impl FixedOrbit {
         };
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<[FloatExp; 2]>>(PIPELINE_BATCHES);
         let orbit = &mut *self;
+        let repeats = std::sync::atomic::AtomicU32::new(0);
         std::thread::scope(|scope| {
+            let repeats = &repeats;
             scope.spawn(move || {
                 let mut n = 0u32;
+                let mut cycle = Brent::new(orbit);
                 loop {
                     let mut batch = Vec::with_capacity(PIPELINE_BATCH);
                     let mut last = false;
@@ -381,6 +410,14 @@ impl FixedOrbit {
                         if !last {
                             orbit.step();
                             n += 1;
+                            if n <= detect_until
+                                && let Some(q) = cycle.found(orbit)
+                            {
+                                // z_n is the last value: send it, and say why the orbit ends.
+                                batch.push(orbit.get());
+                                repeats.store(q, Ordering::Relaxed);
+                                last = true;
+                            }
                         }
                     }
                     // A closed channel: the keeper has what it needs.
@@ -394,12 +431,16 @@ impl FixedOrbit {
             for batch in rx {
                 for v in batch {
                     if keep(n, v)? {
-                        return Ok(());
+                        return Ok(None);
                     }
                     n += 1;
                 }
             }
-            unreachable!("the helper stops at the orbit's end, which `keep` ends at")
+            // The channel closed without `keep` ending the orbit: the helper found it
+            // repeating (the scope joined the helper, so its store is seen).
+            let q = repeats.load(Ordering::Relaxed);
+            assert!(q > 0, "the helper stops at the orbit's end, which `keep` ends at, or at a repeat");
+            Ok(Some(q))
         })
     }
 
@@ -628,6 +669,37 @@ fn to_floatexp(a: &[u64]) -> FloatExp {
     let exp = 64 * h as i64 - lz as i64 - 64 * (n as i64 - 1);
     let f = FloatExp::new(high_to_f64(t), exp as i32);
     if negative { -f } else { f }
+}
+
+/// Brent's cycle detection on the fixed-point state: one remembered value, renewed each
+/// time the distance to it reaches a power of two, and a comparison per step (a few words,
+/// against a step's squares of them).
+struct Brent {
+    saved: Vec<u64>,
+    since: u32,
+    power: u32,
+}
+
+impl Brent {
+    fn new(orbit: &FixedOrbit) -> Brent {
+        let mut saved = Vec::new();
+        orbit.save(&mut saved);
+        Brent { saved, since: 0, power: 1 }
+    }
+
+    /// After a step: the period q when z is now exactly the value q steps back.
+    fn found(&mut self, orbit: &FixedOrbit) -> Option<u32> {
+        self.since += 1;
+        if orbit.is(&self.saved) {
+            return Some(self.since);
+        }
+        if self.since == self.power {
+            orbit.save(&mut self.saved);
+            self.since = 0;
+            self.power = self.power.saturating_mul(2);
+        }
+        None
+    }
 }
 
 #[cfg(test)]

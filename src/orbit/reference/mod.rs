@@ -53,6 +53,9 @@ pub struct Stepping {
     /// `dense_limit`: an orbit that turns out periodic by then (a nucleus's) stays dense,
     /// with BLA and Newton's test over its whole period.
     pub hold: Option<u32>,
+    /// Stop where the orbit repeats itself exactly ([`Reference::cycle`]); false computes
+    /// it to the limit (the same values, for tests and measurements).
+    pub cut_cycles: bool,
 }
 
 /// A stored value too small for f64: its index and value.
@@ -83,7 +86,13 @@ pub struct Reference {
     escaped: bool,
     bits: u64,
     period: Option<u32>,
+    cycle: Option<u32>,
 }
+
+/// Iterations a repeating orbit is stored for at least (copies of its cycle): samples read
+/// it by index, with BLA steps up to this long, and wrap back by this many iterations at
+/// its end. 2^16 values take 1 MiB.
+pub const CYCLE_SPAN: u32 = 1 << 16;
 
 impl Reference {
     /// Iterates from `start` with parameter `c` until |Z| > `escape_radius` or `max_iter`.
@@ -105,7 +114,8 @@ impl Reference {
         progress: &dyn Fn(u32),
         cancel: &AtomicBool,
     ) -> Result<Reference, Cancelled> {
-        let mut out = Reference { z: Vec::new(), tiny: Vec::new(), packed: None, escaped: false, bits, period: None };
+        let mut out =
+            Reference { z: Vec::new(), tiny: Vec::new(), packed: None, escaped: false, bits, period: None, cycle: None };
         let c64 = [bigfloat::to_floatexp(&c[0]).to_f64(), bigfloat::to_floatexp(&c[1]).to_f64()];
         let pack_at = steps.dense_limit.map(|d| steps.hold.map_or(d, |h| h.max(d)));
         let r2 = escape_radius * escape_radius;
@@ -157,16 +167,40 @@ impl Reference {
             }
             Ok(false)
         };
-        if let Some(mut orbit) = FixedOrbit::new(start, c, bits, escape_radius, steps.simd) {
-            orbit.for_each_value(steps.share, r2, max_iter, &mut keep)?;
+        // Cycles are looked for while the orbit is stored densely.
+        let detect_until = if steps.cut_cycles { pack_at.unwrap_or(u32::MAX) } else { 0 };
+        let repeats = if let Some(mut orbit) = FixedOrbit::new(start, c, bits, escape_radius, steps.simd) {
+            orbit.for_each_value(steps.share, r2, max_iter, detect_until, &mut keep)?
         } else {
             let mut z: BigComplex =
                 [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
             let mut n = 0u32;
-            while !keep(n, [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])])? {
+            let (mut saved, mut since, mut power) = (z.clone(), 0u32, 1u32);
+            let mut found = None;
+            loop {
+                if keep(n, [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])])? {
+                    break None;
+                }
+                if found.is_some() {
+                    // Z_n, kept, repeats the value `found` steps back.
+                    break found;
+                }
                 bigfloat::step_assign(&mut z, c, bits);
                 n += 1;
+                // Brent's cycle detection, as the fixed-point orbit does it.
+                since += 1;
+                if n <= detect_until && z == saved {
+                    found = Some(since);
+                } else if since == power {
+                    saved.clone_from(&z);
+                    (since, power) = (0, power.saturating_mul(2));
+                }
             }
+        };
+        if let Some(q) = repeats
+            && out.packed.is_none()
+        {
+            out.repeat(q, max_iter);
         }
         out.z.shrink_to_fit();
         if let Some(p) = &mut out.packed {
@@ -176,6 +210,37 @@ impl Reference {
             }
         }
         Ok(out)
+    }
+
+    /// Stores copies of the orbit's last `q` values (Z_last = Z_(last - q), exactly) until
+    /// it holds [`CYCLE_SPAN`] iterations past the first repeat or reaches `max_iter`, and
+    /// records how far back a sample at its end continues ([`Reference::cycle`]).
+    fn repeat(&mut self, q: u32, max_iter: u32) {
+        let first = self.last() - q;
+        let copies = CYCLE_SPAN.div_ceil(q).max(1);
+        let end = (u64::from(self.last()) + u64::from(copies) * u64::from(q)).min(u64::from(max_iter)) as u32;
+        let tiny: Vec<Tiny> = self.tiny.iter().filter(|t| t.0 > first).copied().collect();
+        for m in self.last() + 1..=end {
+            let from = m - q;
+            self.z.push(self.z[from as usize]);
+            // Values too small for f64 repeat with the rest (rare: a cycle through 0 itself
+            // is a nucleus's, which the period test ends first).
+            if let Some(t) = tiny.iter().find(|t| (m - t.0).is_multiple_of(q) && t.0 <= m) {
+                self.tiny.push((m, t.1));
+            }
+        }
+        // Past the limit nothing repeats that a sample could reach.
+        let wrap = end - (first + q);
+        self.cycle = (end < max_iter && wrap > 0).then_some(wrap);
+    }
+
+    /// How far back a sample that reaches [`Reference::last`] continues, where the orbit
+    /// repeats itself exactly: Z_last = Z_(last - w), so the sample's index goes back by w
+    /// and its delta stays as it is. None: the orbit escaped, reached the limit, or is one
+    /// period of a nucleus (samples rebase at its end).
+    #[inline]
+    pub fn cycle(&self) -> Option<u32> {
+        self.cycle
     }
 
     /// Index of the last value stored densely (read by index, [`Reference::get`]).
@@ -220,6 +285,19 @@ impl Reference {
         dense.chain(packed)
     }
 
+    /// [`Reference::values_fe`] from `from` to `to`, going on through the cycle of an
+    /// orbit that repeats ([`Reference::cycle`]) past its end, as a sample would read it.
+    pub fn values_through_cycle(&self, from: u32, to: u32) -> impl Iterator<Item = [FloatExp; 2]> + '_ {
+        let stored = self.values_fe(from, to);
+        let rest = self.cycle.filter(|_| to > self.end()).map(|w| {
+            let first = self.end() - w + 1;
+            let start = from.max(self.end() + 1);
+            let turns = (first..=self.end()).cycle().skip(((start - self.end() - 1) % w) as usize);
+            turns.take((to - start + 1) as usize).map(|m| self.get_fe(m))
+        });
+        stored.chain(rest.into_iter().flatten())
+    }
+
     /// True when the orbit escaped (at index [`Reference::end`]).
     pub fn escaped(&self) -> bool {
         self.escaped
@@ -240,8 +318,9 @@ impl Reference {
         escaped: bool,
         bits: u64,
         period: Option<u32>,
+        cycle: Option<u32>,
     ) -> Reference {
-        Reference { z, tiny, packed, escaped, bits, period }
+        Reference { z, tiny, packed, escaped, bits, period, cycle }
     }
 
     /// The period found (see [`Stepping::periodic_below`]): the orbit stored is one period.
@@ -328,6 +407,56 @@ mod tests {
         let dense = run([near, Float::from(0.0)], periodic(1e-40));
         let all = |r: &Reference| r.values_fe(0, u32::MAX).map(|v| v.map(|x| x.to_f64().to_bits())).collect::<Vec<_>>();
         assert_eq!(all(&r), all(&dense));
+    }
+
+    /// An orbit that repeats itself exactly (a centre whose orbit settles on an attracting
+    /// cycle, once the rounding at the working precision repeats) is cut at the repeat, and
+    /// read through its cycle it holds every value of the orbit computed to the limit, bit
+    /// for bit, on one thread and pipelined; an orbit that only comes close to repeating
+    /// (crawling past the cusp, near a Misiurewicz point, escaping) is never cut.
+    #[test]
+    fn an_orbit_is_cut_where_it_repeats_exactly_and_nowhere_else() {
+        let z0 = [Float::from(0.0), Float::from(0.0)];
+        let big = |re: &str, im: &str, bits: u64| {
+            let d = |t: &str| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), bits);
+            [d(re), d(im)]
+        };
+        let run = |c: &BigComplex, max_iter: u32, cut_cycles: bool, share: bool| {
+            let steps = Stepping { cut_cycles, share, ..Stepping::default() };
+            Reference::compute(&z0, c, max_iter, 1e10, c[0].get_prec().unwrap_or(64), steps, &|_| {}, &AtomicBool::new(false))
+                .unwrap()
+        };
+        let bits = |v: [FloatExp; 2]| v.map(|x| (x.mantissa().to_bits(), x.exponent()));
+        // (centre, precision, limit, cut?)
+        let cases = [
+            // Inside the main cardioid: the fixed point attracts by 0.28 a step.
+            (big("-0.1", "0.1", 200), 200_000, true),
+            // Inside the period-2 bulb, near its edge (multiplier about 0.9).
+            (big("-0.77", "0.05", 130), 300_000, true),
+            // Inside the period-3 bulb (the rabbit's parameter).
+            (big("-0.12256116687665", "0.74486176661974", 100), 200_000, true),
+            // Past the cusp: the orbit crawls past 1/2 for about 10^9 iterations.
+            (big("0.25000000000000001", "0", 200), 300_000, false),
+            // Close to the Misiurewicz point -0.10109636384562 + 0.95628651080914i.
+            (big("-0.10109636384562", "0.95628651080914", 200), 200_000, false),
+            // A chaotic orbit that escapes (the 1e14 benchmark's neighbourhood).
+            (big("-1.7490", "0.00003", 100), 200_000, false),
+        ];
+        for (c, max_iter, cuts) in cases {
+            let whole = run(&c, max_iter, false, false);
+            assert_eq!(whole.cycle(), None);
+            let want: Vec<_> = whole.values_fe(0, max_iter).map(bits).collect();
+            for share in [false, true] {
+                let cut = run(&c, max_iter, true, share);
+                let at = c[0].to_string();
+                assert_eq!(cut.cycle().is_some(), cuts, "{at}: cut at {} with {:?}", cut.end(), cut.cycle());
+                if cuts {
+                    assert!(cut.end() < max_iter / 2, "{at}: {} values kept", cut.end());
+                }
+                let got: Vec<_> = cut.values_through_cycle(0, max_iter).map(bits).collect();
+                assert!(got == want, "{at} (share {share}): the orbit read through its cycle differs");
+            }
+        }
     }
 
     /// An orbit stored densely up to a limit and packed after it holds the same values, bit
