@@ -141,9 +141,10 @@ fn report(
             text.push_str(&format!(
                 "reference   {} iterations{}{} at {} bits, {:.3} s (orbit {:.3} s, BLA tables {:.3} s), {:.1} MB + BLA {:.1} MB ({} period-aligned steps, {} stages{})\nsteps       {} perturbation ({} in FloatExp), {} BLA covering {} iterations{}, {} rebases\n",
                 d.reference_iterations,
-                match (d.reference_escaped, d.reference_period) {
-                    (true, _) => " (escaped)".to_string(),
-                    (_, Some(p)) => format!(" (one period: the centre is a nucleus of period {p}; stored once, samples rebase through it)"),
+                match (d.reference_escaped, d.reference_period, d.reference_cycle) {
+                    (true, _, _) => " (escaped)".to_string(),
+                    (_, Some(p), _) => format!(" (one period: the centre is a nucleus of period {p}; stored once, samples rebase through it)"),
+                    (_, _, Some(w)) => format!(" (it repeats itself exactly: stored to its first repeat and {w} iterations of copies, which samples go round)"),
                     _ => String::new(),
                 },
                 if d.reference_dense < d.reference_iterations {

@@ -305,7 +305,8 @@ mod tests {
 
     fn sample() -> SavedReferences {
         let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
-        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, None, false, 300, Some(2), None);
+        let r =
+            Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, None, false, 300, Some(2), None);
         SavedReferences { key: "center = -1 0\n".into(), refs: Arc::new(vec![r]) }
     }
 
@@ -343,7 +344,8 @@ mod tests {
         p.push([0.0, 0.0], Some([FloatExp::new(1.25, -3000), FloatExp::ZERO]));
         p.push([-1.75, 0.0], None);
         let tiny = vec![(1, [FloatExp::new(1.5, -2000), FloatExp::ZERO])];
-        let r = Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, Some(p), false, 300, None, None);
+        let r =
+            Reference::from_parts(vec![[0.0, 0.0], [0.0, 0.0], [-1.25, 0.5]], tiny, Some(p), false, 300, None, None);
         let s = SavedReferences { key: "k\n".into(), refs: Arc::new(vec![r]) };
         let d = SavedReferences::decode(&s.encode()).unwrap();
         let values = |r: &Reference| r.values_fe(0, 10).collect::<Vec<_>>();

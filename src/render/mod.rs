@@ -180,6 +180,9 @@ pub struct DeepStats {
     /// The period of the primary reference when it is one period of a nucleus's orbit
     /// (then only that period is stored, whatever the iteration limit).
     pub reference_period: Option<u32>,
+    /// Where the primary reference repeats itself exactly: how far back a sample at its
+    /// end continues (`orbit::Reference::cycle`); None otherwise.
+    pub reference_cycle: Option<u32>,
     /// Seconds spent on reference orbits and BLA tables.
     pub reference_seconds: f64,
     /// Of those, seconds the reference orbit(s) took.
@@ -576,6 +579,7 @@ pub fn render<P: Send>(
             reference_dense: d.reference_dense(),
             reference_escaped: d.reference_escaped(),
             reference_period: d.references()[0].period(),
+            reference_cycle: d.references()[0].cycle(),
             reference_seconds,
             orbit_seconds: d.orbit_seconds(),
             tables_seconds: d.tables_seconds(),

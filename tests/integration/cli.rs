@@ -134,12 +134,16 @@ fn engines_forced_beyond_their_range_are_refused_with_a_reason() {
     rejects("bad-tolerance", Some("version = 1\n[render]\nbla_tolerance = 2.0\n"), &[], "scene.toml:3:17");
 }
 
-/// A deep view with a limit past the 2^25 iterations stored densely, and no period to store
-/// instead (inside the main cardioid: an attracting fixed point), renders with the rest of
-/// its reference packed, and `--stats` says how the orbit is stored (and builds no steps
-/// past the first 2^20 iterations, which no sample reaches); `--dense-orbit` packs
-/// a shorter orbit the same way, and the picture is the same as with the whole orbit
-/// stored densely when BLA is off (the same values, stepped one iteration at a time).
+/// A deep view whose reference repeats itself exactly (inside the main cardioid: the orbit
+/// settles on an attracting fixed point, which the rounding reaches within a few hundred
+/// iterations) stores it only to that repeat, whatever the limit, and `--stats` says so;
+/// its samples stop in the dense part (interior, by the contraction criterion), so no steps
+/// of blocks are built. A view with a limit past the 2^25 iterations stored densely whose
+/// reference neither repeats nor escapes (just past the cusp, where the orbit crawls for
+/// about 10^9 iterations) renders with the rest of its reference packed, and `--stats`
+/// says how the orbit is stored. `--dense-orbit` packs a shorter orbit the same way, and
+/// the picture is the same as with the whole orbit stored densely when BLA is off (the
+/// same values, stepped one iteration at a time).
 #[test]
 fn limits_past_the_dense_orbit_pack_the_rest() {
     let dir = scratch("cli-packed");
@@ -148,10 +152,15 @@ fn limits_past_the_dense_orbit_pack_the_rest() {
     let o = deepfield(&["render", "interior.toml", "--max-iter", "33554433", "-o", "i.png", "--stats", "-q"], &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
-    assert!(text.contains("33554433 iterations, 1048576 stored densely and 32505857 packed"), "{text}");
-    // Its samples stop in the dense part (interior, by the contraction criterion), so the
-    // steps of blocks past the tree are never built.
+    assert!(text.contains("it repeats itself exactly") && !text.contains("packed"), "{text}");
     assert!(!text.contains("blocks"), "{text}");
+    let crawl =
+        "version = 1\n[view]\ncenter = [\"0.25000000000000001\", \"0\"]\nzoom = \"1e14\"\nwidth = 2\nheight = 2\n";
+    write(&dir, "crawl.toml", crawl);
+    let o = deepfield(&["render", "crawl.toml", "--max-iter", "33554433", "-o", "c.png", "--stats", "-q"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(text.contains("33554433 iterations, 1048576 stored densely and 32505857 packed"), "{text}");
     let e50 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bench-e50.toml")).unwrap();
     write(&dir, "e50.toml", &e50);
     let common = ["render", "e50.toml", "--size", "24x18", "--no-bla", "-q", "--stats"];

@@ -114,8 +114,15 @@ impl Reference {
         progress: &dyn Fn(u32),
         cancel: &AtomicBool,
     ) -> Result<Reference, Cancelled> {
-        let mut out =
-            Reference { z: Vec::new(), tiny: Vec::new(), packed: None, escaped: false, bits, period: None, cycle: None };
+        let mut out = Reference {
+            z: Vec::new(),
+            tiny: Vec::new(),
+            packed: None,
+            escaped: false,
+            bits,
+            period: None,
+            cycle: None,
+        };
         let c64 = [bigfloat::to_floatexp(&c[0]).to_f64(), bigfloat::to_floatexp(&c[1]).to_f64()];
         let pack_at = steps.dense_limit.map(|d| steps.hold.map_or(d, |h| h.max(d)));
         let r2 = escape_radius * escape_radius;
@@ -423,8 +430,17 @@ mod tests {
         };
         let run = |c: &BigComplex, max_iter: u32, cut_cycles: bool, share: bool| {
             let steps = Stepping { cut_cycles, share, ..Stepping::default() };
-            Reference::compute(&z0, c, max_iter, 1e10, c[0].get_prec().unwrap_or(64), steps, &|_| {}, &AtomicBool::new(false))
-                .unwrap()
+            Reference::compute(
+                &z0,
+                c,
+                max_iter,
+                1e10,
+                c[0].get_prec().unwrap_or(64),
+                steps,
+                &|_| {},
+                &AtomicBool::new(false),
+            )
+            .unwrap()
         };
         let bits = |v: [FloatExp; 2]| v.map(|x| (x.mantissa().to_bits(), x.exponent()));
         // (centre, precision, limit, cut?)
