@@ -31,7 +31,7 @@ pub struct RenderInputs<'a> {
     pub max_iter: u32,
     /// Escape radius.
     pub escape_radius: f64,
-    /// The engine asked for.
+    /// The engine requested.
     pub engine: EngineChoice,
     /// BLA tolerance.
     pub bla: Option<f64>,

@@ -1,5 +1,5 @@
 //! The main image: the render worker, the image on screen with the view it shows, the raw
-//! planes of the last complete render, and what was last asked for.
+//! planes of the last complete render, and what was last requested.
 //!
 //! What a new request costs is decided by comparing typed values: the same scene at the
 //! same view costs nothing; a scene whose planes the last render computed
@@ -27,7 +27,7 @@ pub(super) struct RenderState {
     image: Option<Shown>,
     /// Raw planes of the last complete render, and the scene they now colour.
     planes: Option<(Vec<Planes>, Scene)>,
-    /// The scene and view last asked for.
+    /// The scene and view last requested.
     requested: Option<(Scene, Nav)>,
     /// Something changed since the last request.
     stale: bool,
@@ -71,7 +71,7 @@ impl RenderState {
         self.stale
     }
 
-    /// Shows `scene` at `nav`: nothing to do when that is what was last asked for, a
+    /// Shows `scene` at `nav`: nothing to do when that is what was last requested, a
     /// recolour of the last planes when they serve it at the view on screen, else a render.
     pub(super) fn request(&mut self, scene: Scene, nav: &Nav) {
         self.stale = false;
@@ -102,7 +102,7 @@ impl RenderState {
         self.requested = Some((scene, nav.clone()));
     }
 
-    /// The view's scene could not be built: nothing is asked for until something changes.
+    /// The view's scene could not be built: nothing is requested until something changes.
     pub(super) fn request_failed(&mut self) {
         self.stale = false;
     }
@@ -153,7 +153,7 @@ impl RenderState {
         self.image.as_ref()
     }
 
-    /// The scene last asked for (the view on screen, or soon).
+    /// The scene last requested (the view on screen, or soon).
     pub(super) fn scene(&self) -> Option<&Scene> {
         self.requested.as_ref().map(|(s, _)| s)
     }
