@@ -317,6 +317,24 @@ fn against_the_reference_of_a_deeper_view_of_the_same_centre() {
     check("minibrot 1e20 from 1e50's reference", v, "perturb-f64");
 }
 
+/// A reference that repeats itself exactly (`orbit::reference::Reference::cycle`): the
+/// e102 minibrot's interior off its nucleus (`scenes/long-orbit-e102.toml`), whose orbit
+/// settles on the minibrot's attracting cycle and repeats to the last bit at iteration
+/// 265001. The reference stops there, and the view (to 340000 iterations, past the
+/// reference's end at 330735) agrees with big floats with interior detection and without.
+/// (That samples going round the cycle end as along the whole orbit, bit for bit, is
+/// `orbit::perturb::tests::samples_go_round_a_repeating_reference_as_along_the_whole_orbit`.)
+#[test]
+fn through_a_reference_that_repeats() {
+    const OFF_NUCLEUS: [&str; 2] = [
+        "-0.83031842675693053553109980802050591726924580592100415017586803599827560339120465373468510811787516730485186454892834980632246054605795",
+        "0.23612476396680780363307856325882633547132442124365456398110558858530832926040168389957117374824216611996058042279006600832794659929318",
+    ];
+    check("minibrot 1e102 off its nucleus, cut", View::mandelbrot(OFF_NUCLEUS, "1.2e-102", 340_000, 8), "perturb-f64");
+    let v = View { render: "interior_detection = false", ..View::mandelbrot(OFF_NUCLEUS, "1.2e-102", 340_000, 8) };
+    check("minibrot 1e102 off its nucleus, cut, no interior detection", v, "perturb-f64");
+}
+
 /// References stored densely for a few hundred iterations and packed after
 /// (`orbit::reference::packed`, as limits past 2^25 store them): samples run through the packed tail
 /// by single steps, in f64 and FloatExp deltas, with BLA in the dense part, for the

@@ -2,10 +2,12 @@
 
 use std::sync::atomic::AtomicBool;
 
+use malachite_float::Float;
+
 use super::*;
 use crate::cancel::NEVER;
 use crate::num::Decimal;
-use crate::orbit::{DeepSpec, Scale, prepare};
+use crate::orbit::{DeepSpec, Scale, prepare, reference};
 
 const MINIBROT: [&str; 2] = [
     "-1.768610493014677074503175653270265220239677907588665494837677257575304640978808475274635707362464",
@@ -394,4 +396,62 @@ fn lanes_match_one_sample_at_a_time_with_interior_found() {
     // The whole of a Julia set whose parameter is inside the period-3 bulb (the rabbit).
     let (found, _) = same_both_ways(["0", "0"], Some(["-0.12", "0.75"]), "1.3", 20000, Numbers::F64, eps, None);
     assert!(found > 100, "rabbit: {found} samples found interior");
+}
+
+/// Samples that reach the end of a reference cut where it repeats itself
+/// (`Reference::cycle`) go round its cycle and end exactly as they do along the whole
+/// orbit computed to the limit: with BLA off both engines do the same operations on the
+/// same values, so every escape, z_n and derivative is the same bits. The view is the e102
+/// minibrot's interior off its nucleus (the reference repeats at iteration 265001), and
+/// the samples are by its exterior, where they escape after millions of iterations, past
+/// many turns of the cycle.
+#[test]
+fn samples_go_round_a_repeating_reference_as_along_the_whole_orbit() {
+    const OFF_NUCLEUS: [&str; 2] = [
+        "-0.83031842675693053553109980802050591726924580592100415017586803599827560339120465373468510811787516730485186454892834980632246054605795",
+        "0.23612476396680780363307856325882633547132442124365456398110558858530832926040168389957117374824216611996058042279006600832794659929318",
+    ];
+    let max_iter = 7_000_000;
+    let spec = DeepSpec {
+        center: dec(OFF_NUCLEUS),
+        julia: None,
+        spacing: Scale::Zoom(Decimal::parse("1.7e102").unwrap()).spacing(300),
+        max_offset: 250.0,
+        max_iter,
+        escape_radius: 65536.0,
+        derivative: true,
+        bla: None,
+        interior: Detection::Off,
+        numbers: Numbers::F64,
+        simd: SimdLevel::detect(),
+        references: None,
+        dense_orbit: None,
+    };
+    let cut = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
+    let w = cut.refs[0].cycle().expect("the reference repeats itself");
+    let end = cut.refs[0].last();
+    let steps = reference::Stepping { cut_cycles: false, ..crate::orbit::stepping(&spec, false) };
+    let c = dec(OFF_NUCLEUS).map(|d| crate::num::bigfloat::from_decimal(&d, cut.refs[0].bits()));
+    let z0 = [Float::from(0.0), Float::from(0.0)];
+    let never = AtomicBool::new(false);
+    let bits = cut.refs[0].bits();
+    let whole = Reference::compute(&z0, &c, max_iter, 65536.0, bits, steps, &|_| {}, &never).expect("whole orbit");
+    assert_eq!((whole.cycle(), whole.end()), (None, max_iter));
+    let along = prepare(&DeepSpec { references: Some(std::sync::Arc::new(vec![whole])), ..spec }, &|_, _| {}, &never)
+        .expect("prepared");
+    // Pixel (252, 116) of scenes/long-orbit-e102.toml and its neighbours, in spacings.
+    let offsets: Vec<[f64; 2]> =
+        (0..16).map(|k| [51.0 + f64::from(k % 4) * 0.5, 32.0 + f64::from(k / 4) * 0.5]).collect();
+    let run = |p: &Perturbation| {
+        let mut out = vec![Orbit::interior(); offsets.len()];
+        p.orbits(&offsets, &mut out, &mut Counters::default(), SimdLevel::detect(), &never);
+        out
+    };
+    let (got, want) = (run(&cut), run(&along));
+    let bits = |o: &Orbit| (o.n, o.z.map(f64::to_bits), o.dz.map(f64::to_bits));
+    for (k, (g, x)) in got.iter().zip(&want).enumerate() {
+        assert_eq!(bits(g), bits(x), "sample {k} at {:?}", offsets[k]);
+    }
+    let past = got.iter().filter(|o| o.n != crate::formula::end::INTERIOR && o.n > end + w).count();
+    assert!(past >= 2, "samples that escaped after going round the cycle: {past} ({got:?})");
 }
