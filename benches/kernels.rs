@@ -5,11 +5,15 @@
 //! "item/s" rows count only iterations the orbit loops performed). `n_only` is the headline
 //! figure; `smooth_only`, `with_distance` and `with_trap` show what each extra costs, and so
 //! that a scene colouring by smooth iteration alone pays for neither the derivative nor traps.
+//! `single_steps_one_thread` and `smooth_one_thread` set the perturbation engine's single
+//! steps (its vector lanes) beside the direct kernel, on the same samples and one thread.
 
 use std::sync::atomic::AtomicBool;
 
 use deepfield::field::{self, FieldParams, Needs};
-use deepfield::scene::Scene;
+use deepfield::orbit::interior::Detection;
+use deepfield::render;
+use deepfield::scene::{EngineChoice, Scene};
 use deepfield::trap::{Shape, Trap};
 use divan::counter::ItemsCount;
 use rayon::prelude::*;
@@ -79,4 +83,42 @@ fn with_distance(bencher: divan::Bencher<'_, '_>) {
 fn with_trap(bencher: divan::Bencher<'_, '_>) {
     let trap = Trap::Geometric(Shape::Point { at: [0.0, 0.0] });
     bench_with(bencher, Needs { nf: true, traps: vec![trap], ..Needs::default() }, true);
+}
+
+/// A pool of one thread: what a one-thread figure runs in, so that no strip's chunks go to
+/// other threads.
+fn one_thread<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool").install(f)
+}
+
+/// N and NF on one thread: the direct kernel's figure to set beside
+/// [`single_steps_one_thread`].
+#[divan::bench(sample_count = 10)]
+fn smooth_one_thread(bencher: divan::Bencher<'_, '_>) {
+    let params = params(Needs { nf: true, ..Needs::default() });
+    let iterations = one_thread(|| run(&params, false));
+    bencher.counter(ItemsCount::new(iterations)).bench(|| one_thread(|| run(&params, false)));
+}
+
+/// The same samples, N and NF, through the perturbation engine (`perturb-f64`) with BLA and
+/// interior detection off, on one thread: every iteration a single step (but for rebases),
+/// taken in the vector lanes. Its iterations per second against [`smooth_one_thread`]'s are
+/// the lanes' single-step rate against the direct kernel's on this CPU.
+#[divan::bench(sample_count = 5)]
+fn single_steps_one_thread(bencher: divan::Bencher<'_, '_>) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
+    let text = std::fs::read_to_string(&path).expect("scene");
+    let file = Scene::parse_file(SCENE, &text).expect("parses");
+    let mut scene =
+        Scene::validate(file, SCENE, &text, path.parent().unwrap(), deepfield::io::load_bitmap).expect("valid");
+    (scene.width, scene.height) = (common::side(scene.width), common::side(scene.height));
+    (scene.engine, scene.bla, scene.interior_detection) = (EngineChoice::PerturbF64, None, Detection::Off);
+    let plan = render::engine::plan(&scene).expect("perturbation addresses the view");
+    let cancel = AtomicBool::new(false);
+    let (mut params, _) =
+        render::prepare_field(&scene, &plan, render::Options::default(), &cancel, &|_| {}).expect("prepared");
+    assert!(params.deep.is_some(), "the perturbation engine runs");
+    params.needs = Needs { nf: true, ..Needs::default() };
+    let iterations = one_thread(|| run(&params, false));
+    bencher.counter(ItemsCount::new(iterations)).bench(|| one_thread(|| run(&params, false)));
 }
