@@ -234,7 +234,7 @@ fn interior_detection_is_a_scene_key_and_a_flag_shown_in_statistics() {
     for (flag, decision, text) in [
         (None, "auto-on", "detection on (by default"),
         (Some("off"), "off", "detection off (render.interior_detection = false)"),
-        (Some("on"), "on", "detection on (asked for)"),
+        (Some("on"), "on", "detection on (requested)"),
     ] {
         let png = format!("{decision}.png");
         let mut args = vec!["render", "scene.toml", "-o", &png, "--stats", "--stats-json", "s.json"];

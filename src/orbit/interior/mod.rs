@@ -495,7 +495,7 @@ pub enum Detection {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Decision {
-    /// Asked for.
+    /// Requested (`render.interior_detection = true`).
     On,
     /// On by default: the view's centre is found interior by the same criterion (and, for
     /// a view centred on a nucleus, its minibrot is at least a sample across).
@@ -523,7 +523,7 @@ impl Decision {
     /// One line for `--stats`.
     pub fn describe(self) -> &'static str {
         match self {
-            Decision::On => "on (asked for)",
+            Decision::On => "on (requested)",
             Decision::AutoOn => "on (by default: the view is centred on interior)",
             Decision::Off => "off (render.interior_detection = false)",
             Decision::AutoExteriorCentre => {
