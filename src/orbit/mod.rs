@@ -15,6 +15,7 @@
 //! | | `reference/fixed.rs` | the step z² + c in fixed point on machine words, optionally shared by two threads |
 //! | | `reference/comba.rs` | the high half of a square by columns on 64-bit limbs (narrow precisions) |
 //! | | `reference/square.rs` | the same in vector lanes on 26-bit digits (wide precisions) |
+//! | | `reference/cycle.rs` | Brent's cycle detection, which stops an orbit where it repeats itself exactly |
 //! | | `reference/handover.rs` | where the two threads of a shared step meet, and when sharing stops |
 //! | | `reference/packed.rs` | a long orbit's tail, predictively coded in about a byte per iteration |
 //! | | `reference/mpfr.rs` | the step in MPFR (the `mpfr` feature), for comparison |

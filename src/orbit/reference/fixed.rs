@@ -40,6 +40,7 @@ use malachite_float::Float;
 use malachite_nz::integer::Integer;
 
 use super::comba;
+use super::cycle::Brent;
 use super::handover::{self, Contention, Shared, StopOnDrop};
 use super::square::{self, Layout};
 use crate::num::FloatExp;
@@ -375,7 +376,7 @@ impl FixedOrbit {
         if !(share && self.n < THREADED_LIMBS && two_threads()) {
             return self.with_stepper(share, |s| {
                 let mut n = 0u32;
-                let mut cycle = Brent::new(s.orbit);
+                let mut cycle = Watch::new(s.orbit);
                 while !keep(n, s.get())? {
                     s.step();
                     n += 1;
@@ -399,7 +400,7 @@ impl FixedOrbit {
             let repeats = &repeats;
             scope.spawn(move || {
                 let mut n = 0u32;
-                let mut cycle = Brent::new(orbit);
+                let mut cycle = Watch::new(orbit);
                 loop {
                     let mut batch = Vec::with_capacity(PIPELINE_BATCH);
                     let mut last = false;
@@ -671,34 +672,20 @@ fn to_floatexp(a: &[u64]) -> FloatExp {
     if negative { -f } else { f }
 }
 
-/// Brent's cycle detection on the fixed-point state: one remembered value, renewed each
-/// time the distance to it reaches a power of two, and a comparison per step (a few words,
-/// against a step's squares of them).
-struct Brent {
-    saved: Vec<u64>,
-    since: u32,
-    power: u32,
-}
+/// Brent's cycle detection ([`super::cycle`]) on the fixed-point state: the words of x,
+/// then of y (a comparison of a few words per step, against a step's squares of them).
+struct Watch(Brent<Vec<u64>>);
 
-impl Brent {
-    fn new(orbit: &FixedOrbit) -> Brent {
+impl Watch {
+    fn new(orbit: &FixedOrbit) -> Watch {
         let mut saved = Vec::new();
         orbit.save(&mut saved);
-        Brent { saved, since: 0, power: 1 }
+        Watch(Brent::new(saved))
     }
 
     /// After a step: the period q when z is now exactly the value q steps back.
     fn found(&mut self, orbit: &FixedOrbit) -> Option<u32> {
-        self.since += 1;
-        if orbit.is(&self.saved) {
-            return Some(self.since);
-        }
-        if self.since == self.power {
-            orbit.save(&mut self.saved);
-            self.since = 0;
-            self.power = self.power.saturating_mul(2);
-        }
-        None
+        self.0.found(|saved| orbit.is(saved), |saved| orbit.save(saved))
     }
 }
 

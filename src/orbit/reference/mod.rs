@@ -12,6 +12,7 @@
 //! the loop reads the dense part by index, with BLA, and the tail in order by single steps.
 
 pub mod comba;
+pub mod cycle;
 pub mod fixed;
 pub mod handover;
 #[cfg(feature = "mpfr")]
@@ -27,6 +28,7 @@ use crate::cancel::Cancelled;
 use crate::num::FloatExp;
 use crate::num::bigfloat::{self, BigComplex};
 use crate::simd_level::SimdLevel;
+use cycle::Brent;
 use fixed::FixedOrbit;
 use packed::{Cursor, Packed, TINY};
 
@@ -182,7 +184,7 @@ impl Reference {
             let mut z: BigComplex =
                 [Float::from_float_prec_ref(&start[0], bits).0, Float::from_float_prec_ref(&start[1], bits).0];
             let mut n = 0u32;
-            let (mut saved, mut since, mut power) = (z.clone(), 0u32, 1u32);
+            let mut cycle = Brent::new(z.clone());
             let mut found = None;
             loop {
                 if keep(n, [bigfloat::to_floatexp(&z[0]), bigfloat::to_floatexp(&z[1])])? {
@@ -194,13 +196,8 @@ impl Reference {
                 }
                 bigfloat::step_assign(&mut z, c, bits);
                 n += 1;
-                // Brent's cycle detection, as the fixed-point orbit does it.
-                since += 1;
-                if n <= detect_until && z == saved {
-                    found = Some(since);
-                } else if since == power {
-                    saved.clone_from(&z);
-                    (since, power) = (0, power.saturating_mul(2));
+                if n <= detect_until {
+                    found = cycle.found(|saved| *saved == z, |saved| saved.clone_from(&z));
                 }
             }
         };
