@@ -26,13 +26,19 @@ fn main() {
 
 const SCENE: &str = "scenes/seahorse-valley.toml";
 
-fn params(needs: Needs) -> FieldParams {
+/// The benchmark's scene, at this run's size ([`common::side`]).
+fn scene() -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
     let text = std::fs::read_to_string(&path).expect("scene");
     let file = Scene::parse_file(SCENE, &text).expect("parses");
     let mut scene =
         Scene::validate(file, SCENE, &text, path.parent().unwrap(), deepfield::io::load_bitmap).expect("valid");
     (scene.width, scene.height) = (common::side(scene.width), common::side(scene.height));
+    scene
+}
+
+fn params(needs: Needs) -> FieldParams {
+    let scene = scene();
     let mut p = deepfield::render::field_params(&scene, Default::default());
     p.needs = needs;
     p.orbit.derivative = p.needs.de;
@@ -106,12 +112,7 @@ fn smooth_one_thread(bencher: divan::Bencher<'_, '_>) {
 /// the lanes' single-step rate against the direct kernel's on this CPU.
 #[divan::bench(sample_count = 5)]
 fn single_steps_one_thread(bencher: divan::Bencher<'_, '_>) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
-    let text = std::fs::read_to_string(&path).expect("scene");
-    let file = Scene::parse_file(SCENE, &text).expect("parses");
-    let mut scene =
-        Scene::validate(file, SCENE, &text, path.parent().unwrap(), deepfield::io::load_bitmap).expect("valid");
-    (scene.width, scene.height) = (common::side(scene.width), common::side(scene.height));
+    let mut scene = scene();
     (scene.engine, scene.bla, scene.interior_detection) = (EngineChoice::PerturbF64, None, Detection::Off);
     let plan = render::engine::plan(&scene).expect("perturbation addresses the view");
     let cancel = AtomicBool::new(false);
