@@ -31,7 +31,7 @@ use crate::gpu;
 use crate::orbit::{self, Counters, DeepSpec, Perturbation};
 use crate::scene::{FamilySpec, Scene};
 use crate::simd_level::SimdLevel;
-use engine::{EngineError, EngineKind, EnginePlan};
+use engine::{EngineKind, EnginePlan};
 
 /// What the caller's `prepare` and `sink` report when they fail: their own error, kept
 /// whole so that the caller can look at it again (an [`crate::io::IoError`] for a full
@@ -44,9 +44,6 @@ pub enum RenderError {
     /// Cancelled by the user.
     #[error("cancelled")]
     Cancelled,
-    /// No engine (or not the forced one) can address the view.
-    #[error(transparent)]
-    Engine(#[from] EngineError),
     /// A reference file does not serve the view.
     #[error(transparent)]
     Reference(#[from] orbit::saved::SavedError),
@@ -78,13 +75,13 @@ pub enum RenderError {
 }
 
 impl RenderError {
-    /// True for errors in what was asked (the scene, the engine forced, a reference file,
-    /// the rows), as opposed to failures while working.
+    /// True for errors in what was requested (a reference file, the rows, a GPU engine
+    /// without a device), as opposed to failures while working. (A view no engine
+    /// addresses is refused before a render, by [`engine::plan`].)
     pub fn is_bad_input(&self) -> bool {
         matches!(
             self,
-            RenderError::Engine(_)
-                | RenderError::Reference(_)
+            RenderError::Reference(_)
                 | RenderError::NoReferenceNeeded(_)
                 | RenderError::Rows { .. }
                 | RenderError::Gpu(_)
