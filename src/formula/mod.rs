@@ -1,5 +1,10 @@
 //! The iterated maps, written once as small pure functions that every kernel calls.
 //!
+//! z² + c, the map most views use, has its exact operation sequence here ([`step`],
+//! [`deriv_step`]) for its own kernels; every other family of maps is a row of
+//! [`kind::KINDS`], composed by [`map`] and chosen, alone or in hybrids, as a
+//! [`phase::Formula`].
+//!
 //! Every f64 path (scalar, SIMD, traps) must produce bit-identical orbits, so the exact
 //! sequence of IEEE operations lives here and the SIMD kernel mirrors it lane for lane.
 //! Fused multiply-adds are part of that sequence: they are correctly rounded by definition
@@ -8,6 +13,12 @@
 //! pipes to the multiply pipes.
 
 pub mod end;
+pub mod kind;
+pub mod map;
+pub mod phase;
+
+pub use kind::Kind;
+pub use phase::{Cycle, Formula, FormulaError, Phase, Single, Stepper};
 
 /// Which family of maps z -> z^2 + c is iterated.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,0 +1,202 @@
+//! The formula families: one row each, declared once, with the name users write, Kalles
+//! Fraktaler's type number, the powers it comes in, and the four steps of [`super::map`]
+//! that make its map.
+//!
+//! Each row is exactly Kalles Fraktaler 2.15's definition (its `formula.xml`, reference
+//! lines), rewritten as a composition: for instance KF's Burning Ship power 3,
+//! `Xrn = (Xr2 - 3 Xi2) |Xr| + Cr; Xin = (3 Xr2 - Xi2) |Xi| + Ci`, is (|x| + i|y|)³ + c, a
+//! fold of both parts before the power. Kalles Fraktaler's Mandelbar of power 3 negates the
+//! real part of z³ where its other powers conjugate: the table keeps that.
+//! `tests/integration/formula_kf.rs` checks every row against KF's expanded formulas.
+
+use super::map::{FOLD_BOTH, FOLD_IM, FOLD_NONE, FOLD_RE, SIGN_IM, SIGN_NONE, SIGN_RE};
+
+/// A formula family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// z^p + c (type 0).
+    Mandelbrot,
+    /// (|x| + i|y|)^p + c (type 1).
+    BurningShip,
+    /// |Re z^p| + i|Im z^p| + c (type 2).
+    Buffalo,
+    /// |Re z^p| + i Im z^p + c (type 3).
+    Celtic,
+    /// conj(z)^p + c; for p = 3, -Re z³ + i Im z³ + c (type 4, the tricorn at p = 2).
+    Mandelbar,
+    /// |Re z²| - i Im z² + c (type 5).
+    MandelbarCeltic,
+    /// conj((|x| + iy)²) + c (type 6).
+    PerpendicularMandelbrot,
+    /// conj((x + i|y|)²) + c (type 7).
+    PerpendicularBurningShip,
+    /// |Re w| - i Im w + c, w = (|x| + iy)² (type 8).
+    PerpendicularCeltic,
+    /// |Re w| - i Im w + c, w = (x + i|y|)² (type 9).
+    PerpendicularBuffalo,
+    /// Re w - i|Im w| + c, w = (|x| + iy)³ (type 10).
+    CubicQuasiBurningShip,
+    /// (|x| + iy)³ + c (type 11).
+    CubicPartialBsReal,
+    /// (x + i|y|)³ + c (type 12).
+    CubicPartialBsImag,
+    /// Re z³ + i|Im z³| + c (type 13).
+    CubicFlyingSquirrel,
+    /// (x + i|y|)⁴ + c (type 15).
+    BurningShip4PartialImag,
+    /// (|x| + iy)⁴ + c (type 16).
+    BurningShip4PartialReal,
+    /// conj((|x| + iy)⁴) + c (type 17).
+    BurningShip4PartialRealMbar,
+    /// |Re w| + i Im w + c, w = (x + i|y|)⁴ (type 18).
+    CelticBurningShip4PartialImag,
+    /// |Re w| + i Im w + c, w = (|x| + iy)⁴ (type 19).
+    CelticBurningShip4PartialReal,
+    /// |Re w| - i Im w + c, w = (|x| + iy)⁴ (type 20).
+    CelticBurningShip4PartialRealMbar,
+    /// Re z⁴ + i|Im z⁴| + c (type 21).
+    Buffalo4PartialImag,
+    /// |Re z⁴| - i Im z⁴ + c (type 22).
+    Celtic4Mbar,
+    /// (|x| + iy)⁵ + c (type 27).
+    BurningShip5Partial,
+    /// conj((|x| + iy)⁵) + c (type 28).
+    BurningShip5PartialMbar,
+    /// |Re z⁵| - i Im z⁵ + c (type 29).
+    Celtic5Mbar,
+    /// Re w - i|Im w| + c, w = (|x| + iy)⁵ (type 30).
+    QuasiBurningShip5,
+}
+
+/// What one family is: the facts every part of the tool reads from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct KindInfo {
+    /// The family.
+    pub kind: Kind,
+    /// The name in scene files and on the command line.
+    pub name: &'static str,
+    /// Kalles Fraktaler's name for it.
+    pub kf_name: &'static str,
+    /// Kalles Fraktaler's `FractalType`.
+    pub kf_type: u32,
+    /// The smallest power.
+    pub min_power: u32,
+    /// The largest power.
+    pub max_power: u32,
+    /// The fold before the power.
+    pub fold_in: u8,
+    /// The fold after the power.
+    pub fold_out: u8,
+    /// The negation at the end, for every power but 3.
+    pub sign: u8,
+    /// The negation at the end for power 3.
+    pub sign3: u8,
+}
+
+const fn row(
+    kind: Kind,
+    name: &'static str,
+    kf_name: &'static str,
+    kf_type: u32,
+    powers: (u32, u32),
+    fold_in: u8,
+    fold_out: u8,
+    sign: u8,
+) -> KindInfo {
+    KindInfo { kind, name, kf_name, kf_type, min_power: powers.0, max_power: powers.1, fold_in, fold_out, sign, sign3: sign }
+}
+
+use Kind as K;
+
+/// Every family, in Kalles Fraktaler's order.
+pub const KINDS: [KindInfo; 26] = [
+    row(K::Mandelbrot, "mandelbrot", "Mandelbrot", 0, (2, 10), FOLD_NONE, FOLD_NONE, SIGN_NONE),
+    row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
+    row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
+    row(K::Celtic, "celtic", "Celtic", 3, (2, 5), FOLD_NONE, FOLD_RE, SIGN_NONE),
+    KindInfo { sign3: SIGN_RE, ..row(K::Mandelbar, "mandelbar", "Mandelbar", 4, (2, 5), FOLD_NONE, FOLD_NONE, SIGN_IM) },
+    row(K::MandelbarCeltic, "mandelbar-celtic", "Mandelbar Celtic", 5, (2, 2), FOLD_NONE, FOLD_RE, SIGN_IM),
+    row(K::PerpendicularMandelbrot, "perpendicular-mandelbrot", "Perpendicular Mandelbrot", 6, (2, 2), FOLD_RE, FOLD_NONE, SIGN_IM),
+    row(K::PerpendicularBurningShip, "perpendicular-burning-ship", "Perpendicular Burning Ship", 7, (2, 2), FOLD_IM, FOLD_NONE, SIGN_IM),
+    row(K::PerpendicularCeltic, "perpendicular-celtic", "Perpendicular Celtic", 8, (2, 2), FOLD_RE, FOLD_RE, SIGN_IM),
+    row(K::PerpendicularBuffalo, "perpendicular-buffalo", "Perpendicular Buffalo", 9, (2, 2), FOLD_IM, FOLD_RE, SIGN_IM),
+    row(K::CubicQuasiBurningShip, "cubic-quasi-burning-ship", "Cubic Quasi Burning Ship", 10, (3, 3), FOLD_RE, FOLD_IM, SIGN_IM),
+    row(K::CubicPartialBsReal, "cubic-partial-bs-real", "Cubic Partial BS Real", 11, (3, 3), FOLD_RE, FOLD_NONE, SIGN_NONE),
+    row(K::CubicPartialBsImag, "cubic-partial-bs-imag", "Cubic Partial BS Imag", 12, (3, 3), FOLD_IM, FOLD_NONE, SIGN_NONE),
+    row(K::CubicFlyingSquirrel, "cubic-flying-squirrel", "Cubic Flying Squirrel (Buffalo Imag)", 13, (3, 3), FOLD_NONE, FOLD_IM, SIGN_NONE),
+    row(K::BurningShip4PartialImag, "4th-burning-ship-partial-imag", "4th Burning Ship Partial Imag", 15, (4, 4), FOLD_IM, FOLD_NONE, SIGN_NONE),
+    row(K::BurningShip4PartialReal, "4th-burning-ship-partial-real", "4th Burning Ship Partial Real", 16, (4, 4), FOLD_RE, FOLD_NONE, SIGN_NONE),
+    row(K::BurningShip4PartialRealMbar, "4th-burning-ship-partial-real-mbar", "4th Burning Ship Partial Real Mbar", 17, (4, 4), FOLD_RE, FOLD_NONE, SIGN_IM),
+    row(K::CelticBurningShip4PartialImag, "4th-celtic-burning-ship-partial-imag", "4th Celtic Burning Ship Partial Imag", 18, (4, 4), FOLD_IM, FOLD_RE, SIGN_NONE),
+    row(K::CelticBurningShip4PartialReal, "4th-celtic-burning-ship-partial-real", "4th Celtic Burning Ship Partial Real", 19, (4, 4), FOLD_RE, FOLD_RE, SIGN_NONE),
+    row(K::CelticBurningShip4PartialRealMbar, "4th-celtic-burning-ship-partial-real-mbar", "4th Celtic Burning Ship Partial Real Mbar", 20, (4, 4), FOLD_RE, FOLD_RE, SIGN_IM),
+    row(K::Buffalo4PartialImag, "4th-buffalo-partial-imag", "4th Buffalo Partial Imag", 21, (4, 4), FOLD_NONE, FOLD_IM, SIGN_NONE),
+    row(K::Celtic4Mbar, "4th-celtic-mbar", "4th Celtic Mbar", 22, (4, 4), FOLD_NONE, FOLD_RE, SIGN_IM),
+    row(K::BurningShip5Partial, "5th-burning-ship-partial", "5th Burning Ship Partial", 27, (5, 5), FOLD_RE, FOLD_NONE, SIGN_NONE),
+    row(K::BurningShip5PartialMbar, "5th-burning-ship-partial-mbar", "5th Burning Ship Partial Mbar", 28, (5, 5), FOLD_RE, FOLD_NONE, SIGN_IM),
+    row(K::Celtic5Mbar, "5th-celtic-mbar", "5th Celtic Mbar", 29, (5, 5), FOLD_NONE, FOLD_RE, SIGN_IM),
+    row(K::QuasiBurningShip5, "5th-quasi-burning-ship", "5th Quasi Burning Ship (BS/Buffalo Hybrid)", 30, (5, 5), FOLD_RE, FOLD_IM, SIGN_IM),
+];
+
+impl Kind {
+    /// The family's row.
+    pub fn info(self) -> &'static KindInfo {
+        KINDS.iter().find(|k| k.kind == self).expect("every kind has a row")
+    }
+
+    /// The name users write.
+    pub fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// The family called `name`.
+    pub fn from_name(name: &str) -> Option<Kind> {
+        KINDS.iter().find(|k| k.name == name).map(|k| k.kind)
+    }
+
+    /// The family of Kalles Fraktaler's `FractalType` `t`.
+    pub fn from_kf_type(t: u32) -> Option<Kind> {
+        KINDS.iter().find(|k| k.kf_type == t).map(|k| k.kind)
+    }
+
+    /// Whether the family comes in power `p`.
+    pub fn has_power(self, p: u32) -> bool {
+        let i = self.info();
+        (i.min_power..=i.max_power).contains(&p)
+    }
+
+    /// The family's default power (its smallest).
+    pub fn default_power(self) -> u32 {
+        self.info().min_power
+    }
+
+    /// The four steps of the map at power `p`: (fold in, power, fold out, sign).
+    pub fn shape(self, p: u32) -> (u8, u32, u8, u8) {
+        let i = self.info();
+        (i.fold_in, p, i.fold_out, if p == 3 { i.sign3 } else { i.sign })
+    }
+
+    /// Every name, for messages.
+    pub fn names() -> String {
+        KINDS.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_kf_types_are_unique() {
+        for (i, a) in KINDS.iter().enumerate() {
+            for b in &KINDS[i + 1..] {
+                assert_ne!(a.name, b.name);
+                assert_ne!(a.kf_type, b.kf_type);
+                assert_ne!(a.kind, b.kind);
+            }
+            assert_eq!(Kind::from_name(a.name), Some(a.kind));
+            assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
+        }
+        assert_eq!(Kind::from_kf_type(14), None, "14 is not a composition of folds and a power");
+    }
+}

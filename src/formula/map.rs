@@ -1,0 +1,351 @@
+//! The maps of every formula family, composed of four steps that Kalles Fraktaler's formula
+//! definitions are expansions of: fold the components of z (absolute values of x, y or
+//! both), raise to an integer power p, fold the components of the result, and negate one
+//! component. Then c is added.
+//!
+//! A family is one choice of those four ([`Ops`], const parameters), so every kernel that
+//! is generic over [`Map`] is compiled per family into straight-line code: no opcode is
+//! read in the hot loop. From that one definition come the four things the engines need:
+//! the step in f64 ([`Map::apply`]), in big floats ([`Map::apply_big`]), the perturbed
+//! step on a delta against a reference ([`Map::delta`], exact through the folds by
+//! [`diffabs`]), and the real 2×2 Jacobian ([`Map::jacobian`]) for derivatives and
+//! bilinear approximation.
+
+use malachite_float::Float;
+
+use crate::num::bigcomplex::BigC;
+use crate::num::real::{Real, cadd, cmul};
+
+/// No component folded.
+pub const FOLD_NONE: u8 = 0;
+/// The real part folded: x -> |x|.
+pub const FOLD_RE: u8 = 1;
+/// The imaginary part folded: y -> |y|.
+pub const FOLD_IM: u8 = 2;
+/// Both parts folded.
+pub const FOLD_BOTH: u8 = 3;
+
+/// No component negated.
+pub const SIGN_NONE: u8 = 0;
+/// The imaginary part negated (the complex conjugate).
+pub const SIGN_IM: u8 = 1;
+/// The real part negated.
+pub const SIGN_RE: u8 = 2;
+
+/// The largest power a family may have.
+pub const MAX_POWER: u32 = 10;
+
+/// A 2×2 real matrix, rows first: `[[d re/dx, d re/dy], [d im/dx, d im/dy]]`.
+pub type Mat2 = [[f64; 2]; 2];
+
+/// One map z -> f(z) of a family (c is added by the caller), in every arithmetic the
+/// engines use.
+pub trait Map: Copy + Default + Send + Sync + 'static {
+    /// The power p (the degree that smooth iteration and the escape rate use).
+    const POWER: u32;
+    /// True when f is complex-analytic (no fold, no negation of one part alone): its
+    /// Jacobian is then a complex number.
+    const CONFORMAL: bool;
+    /// f(z) in f64.
+    fn apply(z: [f64; 2]) -> [f64; 2];
+    /// f(z) in big floats at `z.bits`.
+    fn apply_big(z: &BigC) -> BigC;
+    /// f(Z + d) - f(Z) for a reference value Z (f64) and a delta d, without cancellation:
+    /// the power by the binomial expansion in d, the folds by [`diffabs`].
+    fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2];
+    /// The Jacobian of f at z (a fold's derivative taken as +1 at 0).
+    fn jacobian(z: [f64; 2]) -> Mat2;
+}
+
+/// The family composed of a fold `IN`, the power `P`, a fold `OUT` and a negation `SIGN`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Ops<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8>;
+
+/// |X + d| - |X| without cancellation (Claude Heiland-Allen's `diffabs`): exact in the sense
+/// that only the sign of X + d is decided, and the result is d, -d, or d + 2X up to sign.
+#[inline(always)]
+pub fn diffabs<R: Real>(x: f64, d: R) -> R {
+    let s = R::from_f64(x) + d;
+    if x >= 0.0 {
+        if s >= R::ZERO { d } else { -(d + R::from_f64(2.0 * x)) }
+    } else if s > R::ZERO {
+        d + R::from_f64(2.0 * x)
+    } else {
+        -d
+    }
+}
+
+/// The sign a fold's derivative takes at x (+1 at 0).
+#[inline(always)]
+fn sgn(x: f64) -> f64 {
+    if x < 0.0 { -1.0 } else { 1.0 }
+}
+
+/// The binomial coefficient C(n, k) for n <= [`MAX_POWER`], as an f64 (exact).
+#[inline(always)]
+pub fn binomial(n: u32, k: u32) -> f64 {
+    let mut c = 1.0;
+    for i in 0..k {
+        c = c * (n - i) as f64 / (i + 1) as f64;
+    }
+    c
+}
+
+/// Folds the parts `fold` names.
+#[inline(always)]
+fn fold(fold: u8, z: [f64; 2]) -> [f64; 2] {
+    let x = if fold & FOLD_RE != 0 { z[0].abs() } else { z[0] };
+    let y = if fold & FOLD_IM != 0 { z[1].abs() } else { z[1] };
+    [x, y]
+}
+
+/// Negates the part `sign` names.
+#[inline(always)]
+fn signed<T: std::ops::Neg<Output = T> + Copy>(sign: u8, z: [T; 2]) -> [T; 2] {
+    match sign {
+        SIGN_IM => [z[0], -z[1]],
+        SIGN_RE => [-z[0], z[1]],
+        _ => z,
+    }
+}
+
+/// w^p in f64 (squaring as z² + c's kernels do; higher powers by repeated products).
+#[inline(always)]
+fn power<const P: u32>(w: [f64; 2]) -> [f64; 2] {
+    let [x, y] = w;
+    let square = [x.mul_add(x, -(y * y)), (x + x) * y];
+    let mut u = square;
+    for _ in 2..P {
+        u = cmul(u, w);
+    }
+    if P == 1 { w } else { u }
+}
+
+/// (W + d)^p - W^p by Horner's rule in d over the binomial expansion.
+#[inline(always)]
+fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
+    // Powers W^0 .. W^(P-1).
+    let mut pw = [[1.0, 0.0]; MAX_POWER as usize];
+    for k in 1..P as usize {
+        pw[k] = cmul(pw[k - 1], w);
+    }
+    let mut t = [R::from_f64(1.0), R::ZERO];
+    for k in (1..P).rev() {
+        let c = binomial(P, k);
+        let a = pw[(P - k) as usize];
+        t = cadd(cmul(t, d), [R::from_f64(c * a[0]), R::from_f64(c * a[1])]);
+    }
+    cmul(t, d)
+}
+
+impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, P, OUT, SIGN> {
+    const POWER: u32 = P;
+    const CONFORMAL: bool = IN == FOLD_NONE && OUT == FOLD_NONE && SIGN == SIGN_NONE;
+
+    #[inline(always)]
+    fn apply(z: [f64; 2]) -> [f64; 2] {
+        signed(SIGN, fold(OUT, power::<P>(fold(IN, z))))
+    }
+
+    fn apply_big(z: &BigC) -> BigC {
+        let abs = |f: &Float| if *f < 0u32 { -f.clone() } else { f.clone() };
+        let fold_big = |fold: u8, z: BigC| BigC {
+            re: if fold & FOLD_RE != 0 { abs(&z.re) } else { z.re },
+            im: if fold & FOLD_IM != 0 { abs(&z.im) } else { z.im },
+            bits: z.bits,
+        };
+        let w = fold_big(IN, z.clone());
+        let mut u = w.square();
+        for _ in 2..P {
+            u = u.mul(&w);
+        }
+        let u = fold_big(OUT, u);
+        match SIGN {
+            SIGN_IM => BigC { re: u.re, im: -u.im, bits: u.bits },
+            SIGN_RE => BigC { re: -u.re, im: u.im, bits: u.bits },
+            _ => u,
+        }
+    }
+
+    #[inline(always)]
+    fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2] {
+        let dw = [
+            if IN & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
+            if IN & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
+        ];
+        let w = fold(IN, z);
+        let du = power_delta::<P, R>(w, dw);
+        let du = if OUT == FOLD_NONE {
+            du
+        } else {
+            let u = power::<P>(w);
+            [
+                if OUT & FOLD_RE != 0 { diffabs(u[0], du[0]) } else { du[0] },
+                if OUT & FOLD_IM != 0 { diffabs(u[1], du[1]) } else { du[1] },
+            ]
+        };
+        signed(SIGN, du)
+    }
+
+    #[inline(always)]
+    fn jacobian(z: [f64; 2]) -> Mat2 {
+        let w = fold(IN, z);
+        // p w^(p-1), the complex derivative of the power.
+        let mut a = [1.0, 0.0];
+        for _ in 1..P {
+            a = cmul(a, w);
+        }
+        let a = [a[0] * P as f64, a[1] * P as f64];
+        let (si, sj) = (
+            if IN & FOLD_RE != 0 { sgn(z[0]) } else { 1.0 },
+            if IN & FOLD_IM != 0 { sgn(z[1]) } else { 1.0 },
+        );
+        let (so, sp) = if OUT == FOLD_NONE {
+            (1.0, 1.0)
+        } else {
+            let u = power::<P>(w);
+            (
+                if OUT & FOLD_RE != 0 { sgn(u[0]) } else { 1.0 },
+                if OUT & FOLD_IM != 0 { sgn(u[1]) } else { 1.0 },
+            )
+        };
+        let (sr, sm) = match SIGN {
+            SIGN_IM => (1.0, -1.0),
+            SIGN_RE => (-1.0, 1.0),
+            _ => (1.0, 1.0),
+        };
+        let (r, m) = (sr * so, sm * sp);
+        [[r * a[0] * si, -r * a[1] * sj], [m * a[1] * si, m * a[0] * sj]]
+    }
+}
+
+/// m v.
+#[inline(always)]
+pub fn mat_vec(m: Mat2, v: [f64; 2]) -> [f64; 2] {
+    [m[0][0].mul_add(v[0], m[0][1] * v[1]), m[1][0].mul_add(v[0], m[1][1] * v[1])]
+}
+
+/// a b.
+#[inline(always)]
+pub fn mat_mul(a: Mat2, b: Mat2) -> Mat2 {
+    [
+        [a[0][0] * b[0][0] + a[0][1] * b[1][0], a[0][0] * b[0][1] + a[0][1] * b[1][1]],
+        [a[1][0] * b[0][0] + a[1][1] * b[1][0], a[1][0] * b[0][1] + a[1][1] * b[1][1]],
+    ]
+}
+
+/// The derivative a distance estimate uses, from the Jacobian J of z_n in the sample's
+/// parameter: the complex number dz with conj(dz) z = Jᵀ z (the gradient of ln|z_n|,
+/// times |z_n|²). Where J is conformal (J = dz as a matrix) this is dz itself; elsewhere
+/// |dz| = |Jᵀ ẑ|, the derivative along the direction in which |z_n| grows fastest, so the
+/// estimate |z| ln|z| / |dz| is the distance to the level set of the potential.
+#[inline]
+pub fn gradient_dz(z: [f64; 2], j: Mat2) -> [f64; 2] {
+    // g = Jᵀ z as a complex number; dz = conj(g / z).
+    let g = [j[0][0] * z[0] + j[1][0] * z[1], j[0][1] * z[0] + j[1][1] * z[1]];
+    let n = z[0] * z[0] + z[1] * z[1];
+    let q = [(g[0] * z[0] + g[1] * z[1]) / n, (g[1] * z[0] - g[0] * z[1]) / n];
+    [q[0], -q[1]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Ship3 = Ops<FOLD_BOTH, 3, FOLD_NONE, SIGN_NONE>;
+    type Buffalo2 = Ops<FOLD_NONE, 2, FOLD_BOTH, SIGN_NONE>;
+    type Perp = Ops<FOLD_RE, 2, FOLD_RE, SIGN_IM>;
+    type Multi5 = Ops<FOLD_NONE, 5, FOLD_NONE, SIGN_NONE>;
+
+    const POINTS: [[f64; 2]; 6] = [[0.3, -0.7], [-1.1, 0.2], [0.05, 0.9], [-0.4, -0.35], [1.3, 1e-3], [-2e-3, 0.6]];
+
+    fn check_delta<M: Map>() {
+        let bits = 200;
+        for z in POINTS {
+            for d in [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8]] {
+                let got = M::delta::<f64>(z, d);
+                let zb = BigC::from_f64(z[0], z[1], bits);
+                let zd = BigC::from_f64(z[0] + d[0], z[1] + d[1], bits);
+                let want = M::apply_big(&zd).sub(&M::apply_big(&zb));
+                let want = [want.re.to_string().parse::<f64>().unwrap(), want.im.to_string().parse::<f64>().unwrap()];
+                let scale = 1e-13 * (1.0 + want[0].abs().max(want[1].abs()));
+                // z + d is rounded; it is exact for these sizes only to about 1e-16 of |z|.
+                let tol = scale + 1e-15 * (d[0].abs() + d[1].abs() + 1.0) * 40.0;
+                assert!((got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol, "{z:?} {d:?}: {got:?} {want:?}");
+            }
+        }
+    }
+
+    fn check_jacobian<M: Map>() {
+        let h = 1e-7;
+        for z in POINTS {
+            let j = M::jacobian(z);
+            for (col, e) in [[1.0, 0.0], [0.0, 1.0]].into_iter().enumerate() {
+                let p = M::apply([z[0] + h * e[0], z[1] + h * e[1]]);
+                let m = M::apply([z[0] - h * e[0], z[1] - h * e[1]]);
+                for row in 0..2 {
+                    let fd = (p[row] - m[row]) / (2.0 * h);
+                    assert!((fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()), "{z:?} [{row}][{col}] {fd} {}", j[row][col]);
+                }
+            }
+        }
+    }
+
+    fn check_big<M: Map>() {
+        for z in POINTS {
+            let f = M::apply(z);
+            let b = M::apply_big(&BigC::from_f64(z[0], z[1], 200));
+            let b = [b.re.to_string().parse::<f64>().unwrap(), b.im.to_string().parse::<f64>().unwrap()];
+            assert!((f[0] - b[0]).abs() < 1e-14 && (f[1] - b[1]).abs() < 1e-14, "{z:?}");
+        }
+    }
+
+    #[test]
+    fn delta_is_the_difference_of_two_steps() {
+        check_delta::<Ship3>();
+        check_delta::<Buffalo2>();
+        check_delta::<Perp>();
+        check_delta::<Multi5>();
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        check_jacobian::<Ship3>();
+        check_jacobian::<Buffalo2>();
+        check_jacobian::<Perp>();
+        check_jacobian::<Multi5>();
+    }
+
+    #[test]
+    fn f64_and_big_float_steps_agree() {
+        check_big::<Ship3>();
+        check_big::<Buffalo2>();
+        check_big::<Perp>();
+        check_big::<Multi5>();
+    }
+
+    #[test]
+    fn diffabs_never_cancels() {
+        // |X + d| - |X| where both are large and nearly equal: the direct difference loses
+        // everything, diffabs keeps d exactly.
+        assert_eq!(diffabs(1e10, 1e-9f64), 1e-9);
+        assert_eq!(diffabs(-1e10, 1e-9f64), -1e-9);
+        assert_eq!(diffabs(1e-3, -3e-3f64), 1e-3);
+        assert_eq!(diffabs(-1e-3, 3e-3f64), 1e-3);
+    }
+
+    #[test]
+    fn gradient_dz_is_dz_where_the_map_is_conformal() {
+        let dz = [0.7, -1.3];
+        let j = [[dz[0], -dz[1]], [dz[1], dz[0]]];
+        let g = gradient_dz([0.4, 2.5], j);
+        assert!((g[0] - dz[0]).abs() < 1e-15 && (g[1] - dz[1]).abs() < 1e-15, "{g:?}");
+    }
+
+    #[test]
+    fn binomials() {
+        assert_eq!(binomial(10, 5), 252.0);
+        assert_eq!(binomial(4, 0), 1.0);
+        assert_eq!(binomial(7, 7), 1.0);
+    }
+}

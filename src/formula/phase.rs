@@ -1,0 +1,359 @@
+//! A formula as users choose it: one family at one power, or a hybrid, a cycle of such
+//! phases (what Kalles Fraktaler's hybrid designer and Fraktaler-3's formula lines express:
+//! Burning Ship then Mandelbrot³ alternately is `burning-ship,mandelbrot^3`).
+//!
+//! [`Stepper`] is what the generic kernels iterate. A single family is [`Single`], a
+//! zero-sized type per family and power, so those kernels are compiled per family; a
+//! hybrid is [`Cycle`], which picks the phase of each iteration by its index (one
+//! predictable branch per step; each phase's arithmetic is still the family's compiled
+//! code). [`with_stepper!`](crate::with_stepper) turns a [`Formula`] into one of them.
+
+use std::fmt;
+
+use super::kind::Kind;
+use super::map::{Map, Mat2};
+use crate::num::bigcomplex::BigC;
+use crate::num::real::Real;
+
+/// The most phases a hybrid may have.
+pub const MAX_PHASES: usize = 8;
+
+/// One family at one power.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Phase {
+    /// The family.
+    pub kind: Kind,
+    /// Its power.
+    pub power: u32,
+}
+
+impl Phase {
+    /// z² + c.
+    pub const QUADRATIC: Phase = Phase { kind: Kind::Mandelbrot, power: 2 };
+}
+
+impl fmt::Display for Phase {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.power == self.kind.default_power() {
+            write!(f, "{}", self.kind.name())
+        } else {
+            write!(f, "{}^{}", self.kind.name(), self.power)
+        }
+    }
+}
+
+/// The map a scene iterates: a cycle of one to [`MAX_PHASES`] phases (iteration n, from
+/// z_n to z_(n+1), uses phase n mod the cycle's length).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Formula {
+    phases: [Phase; MAX_PHASES],
+    len: u8,
+}
+
+impl Default for Formula {
+    fn default() -> Self {
+        Formula::single(Phase::QUADRATIC)
+    }
+}
+
+/// Why a formula's text was refused.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FormulaError(pub String);
+
+impl fmt::Display for FormulaError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for FormulaError {}
+
+impl Formula {
+    /// One phase.
+    pub fn single(phase: Phase) -> Formula {
+        Formula { phases: [phase; MAX_PHASES], len: 1 }
+    }
+
+    /// A cycle of phases; None when there are none or more than [`MAX_PHASES`].
+    pub fn cycle(phases: &[Phase]) -> Option<Formula> {
+        if phases.is_empty() || phases.len() > MAX_PHASES {
+            return None;
+        }
+        let mut all = [phases[0]; MAX_PHASES];
+        all[..phases.len()].copy_from_slice(phases);
+        Some(Formula { phases: all, len: phases.len() as u8 })
+    }
+
+    /// The phases, in order.
+    pub fn phases(&self) -> &[Phase] {
+        &self.phases[..self.len as usize]
+    }
+
+    /// The phase iteration `n` uses.
+    #[inline(always)]
+    pub fn phase(&self, n: u32) -> Phase {
+        self.phases[(n % self.len as u32) as usize]
+    }
+
+    /// True for z² + c alone, which has engines of its own (fixed-point references,
+    /// interior detection, the GPU paths).
+    pub fn is_quadratic(&self) -> bool {
+        self.len == 1 && self.phases[0] == Phase::QUADRATIC
+    }
+
+    /// True when every phase is complex-analytic (one complex derivative).
+    pub fn is_conformal(&self) -> bool {
+        self.phases().iter().all(|p| {
+            let (i, _, o, s) = p.kind.shape(p.power);
+            i == 0 && o == 0 && s == 0
+        })
+    }
+
+    /// ln of the escape rate: the mean of ln p over the cycle (smooth iteration divides by
+    /// it, so a hybrid's bands are as smooth as its phases' mean degree makes them).
+    pub fn ln_degree(&self) -> f64 {
+        self.phases().iter().map(|p| (p.power as f64).ln()).sum::<f64>() / self.len as f64
+    }
+
+    /// The formula written `text`: `NAME`, `NAME^P`, or phases joined by `,` (a hybrid).
+    /// `power` (from `--power` or the scene's `power`) sets the power of a single family
+    /// written without one.
+    pub fn parse(text: &str, power: Option<u32>) -> Result<Formula, FormulaError> {
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        if parts.len() > MAX_PHASES {
+            return Err(FormulaError(format!("a hybrid has at most {MAX_PHASES} phases; `{text}` has {}", parts.len())));
+        }
+        if parts.len() > 1 && power.is_some() {
+            return Err(FormulaError(
+                "a hybrid gives each phase its power (`burning-ship,mandelbrot^3`), not one `power`".into(),
+            ));
+        }
+        let mut phases = Vec::with_capacity(parts.len());
+        for part in parts {
+            let (name, p) = match part.split_once('^') {
+                Some((n, p)) => {
+                    let p: u32 = p.trim().parse().map_err(|_| {
+                        FormulaError(format!("`{part}`: the power after `^` must be an integer from 2 to 10"))
+                    })?;
+                    (n.trim(), Some(p))
+                }
+                None => (part, None),
+            };
+            let kind = Kind::from_name(name).ok_or_else(|| {
+                FormulaError(format!("unknown formula `{name}`; expected one of: julia, {}", Kind::names()))
+            })?;
+            let p = p.or(power).unwrap_or(kind.default_power());
+            if !kind.has_power(p) {
+                let i = kind.info();
+                let range = if i.min_power == i.max_power {
+                    format!("only power {}", i.min_power)
+                } else {
+                    format!("powers {} to {}", i.min_power, i.max_power)
+                };
+                return Err(FormulaError(format!("`{name}` comes in {range}, not {p}")));
+            }
+            phases.push(Phase { kind, power: p });
+        }
+        Formula::cycle(&phases).ok_or_else(|| FormulaError("a formula needs a family".into()))
+    }
+}
+
+impl fmt::Display for Formula {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (k, p) in self.phases().iter().enumerate() {
+            if k > 0 {
+                f.write_str(",")?;
+            }
+            write!(f, "{p}")?;
+        }
+        Ok(())
+    }
+}
+
+/// What the generic kernels iterate: the map of iteration `n` in every arithmetic.
+pub trait Stepper: Copy + Send + Sync + 'static {
+    /// f_n(z) (c not added).
+    fn apply(&self, n: u32, z: [f64; 2]) -> [f64; 2];
+    /// f_n(Z + d) - f_n(Z).
+    fn delta<R: Real>(&self, n: u32, z: [f64; 2], d: [R; 2]) -> [R; 2];
+    /// The Jacobian of f_n at z.
+    fn jacobian(&self, n: u32, z: [f64; 2]) -> Mat2;
+    /// f_n(z) in big floats.
+    fn apply_big(&self, n: u32, z: &BigC) -> BigC;
+    /// The length of the cycle of maps (1 for a single family).
+    fn period(&self) -> u32;
+}
+
+/// One family at one power, as a type.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Single<M: Map>(pub M);
+
+impl<M: Map> Stepper for Single<M> {
+    #[inline(always)]
+    fn apply(&self, _: u32, z: [f64; 2]) -> [f64; 2] {
+        M::apply(z)
+    }
+    #[inline(always)]
+    fn delta<R: Real>(&self, _: u32, z: [f64; 2], d: [R; 2]) -> [R; 2] {
+        M::delta(z, d)
+    }
+    #[inline(always)]
+    fn jacobian(&self, _: u32, z: [f64; 2]) -> Mat2 {
+        M::jacobian(z)
+    }
+    fn apply_big(&self, _: u32, z: &BigC) -> BigC {
+        M::apply_big(z)
+    }
+    #[inline(always)]
+    fn period(&self) -> u32 {
+        1
+    }
+}
+
+/// A hybrid: the phase of each iteration picked by its index.
+#[derive(Debug, Clone, Copy)]
+pub struct Cycle(pub Formula);
+
+impl Stepper for Cycle {
+    #[inline(always)]
+    fn apply(&self, n: u32, z: [f64; 2]) -> [f64; 2] {
+        crate::with_map!(self.0.phase(n), M => M::apply(z), unreachable!("validated phase"))
+    }
+    #[inline(always)]
+    fn delta<R: Real>(&self, n: u32, z: [f64; 2], d: [R; 2]) -> [R; 2] {
+        crate::with_map!(self.0.phase(n), M => M::delta(z, d), unreachable!("validated phase"))
+    }
+    #[inline(always)]
+    fn jacobian(&self, n: u32, z: [f64; 2]) -> Mat2 {
+        crate::with_map!(self.0.phase(n), M => M::jacobian(z), unreachable!("validated phase"))
+    }
+    fn apply_big(&self, n: u32, z: &BigC) -> BigC {
+        crate::with_map!(self.0.phase(n), M => M::apply_big(z), unreachable!("validated phase"))
+    }
+    #[inline(always)]
+    fn period(&self) -> u32 {
+        self.0.len as u32
+    }
+}
+
+/// Runs `$body` with `$M` the [`Map`] type of `$phase` (a [`Phase`]), or `$none` when the
+/// phase is not one the table of families holds (a test checks none is missing). The list
+/// is every (fold in, power, fold out, sign) the table of families uses.
+#[macro_export]
+macro_rules! with_map {
+    ($phase:expr, $M:ident => $body:expr, $none:expr) => {
+        $crate::__map_arms!($phase, $M, $body, $none;
+            // mandelbrot
+            (0, 2, 0, 0), (0, 3, 0, 0), (0, 4, 0, 0), (0, 5, 0, 0), (0, 6, 0, 0), (0, 7, 0, 0),
+            (0, 8, 0, 0), (0, 9, 0, 0), (0, 10, 0, 0),
+            // burning-ship
+            (3, 2, 0, 0), (3, 3, 0, 0), (3, 4, 0, 0), (3, 5, 0, 0),
+            // buffalo
+            (0, 2, 3, 0), (0, 3, 3, 0), (0, 4, 3, 0), (0, 5, 3, 0),
+            // celtic
+            (0, 2, 1, 0), (0, 3, 1, 0), (0, 4, 1, 0), (0, 5, 1, 0),
+            // mandelbar
+            (0, 2, 0, 1), (0, 3, 0, 2), (0, 4, 0, 1), (0, 5, 0, 1),
+            // types 5 to 9
+            (0, 2, 1, 1), (1, 2, 0, 1), (2, 2, 0, 1), (1, 2, 1, 1), (2, 2, 1, 1),
+            // the partial folds of powers 3 to 5
+            (1, 3, 2, 1), (1, 3, 0, 0), (2, 3, 0, 0), (0, 3, 2, 0),
+            (2, 4, 0, 0), (1, 4, 0, 0), (1, 4, 0, 1), (2, 4, 1, 0), (1, 4, 1, 0), (1, 4, 1, 1),
+            (0, 4, 2, 0), (0, 4, 1, 1),
+            (1, 5, 0, 0), (1, 5, 0, 1), (0, 5, 1, 1), (1, 5, 2, 1)
+        )
+    };
+}
+
+/// The arms of [`with_map!`](crate::with_map).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __map_arms {
+    ($phase:expr, $M:ident, $body:expr, $none:expr; $( ($i:literal, $p:literal, $o:literal, $s:literal) ),* ) => {{
+        let phase: $crate::formula::Phase = $phase;
+        match phase.kind.shape(phase.power) {
+            $( ($i, $p, $o, $s) => {
+                type $M = $crate::formula::map::Ops<$i, $p, $o, $s>;
+                $body
+            } )*
+            _ => $none,
+        }
+    }};
+}
+
+/// Runs `$body` with `$s` a [`Stepper`] for `$formula`: a [`Single`] per family and power,
+/// or a [`Cycle`] for hybrids.
+#[macro_export]
+macro_rules! with_stepper {
+    ($formula:expr, $s:ident => $body:expr) => {{
+        let formula: $crate::formula::Formula = $formula;
+        if formula.phases().len() == 1 {
+            $crate::with_map!(formula.phases()[0], M => {
+                let $s = $crate::formula::Single::<M>(M::default());
+                $body
+            }, {
+                let $s = $crate::formula::Cycle(formula);
+                $body
+            })
+        } else {
+            let $s = $crate::formula::Cycle(formula);
+            $body
+        }
+    }};
+}
+
+/// The map of `phase` in f64 (c not added): the one-off uses (seeds, tests) that need no
+/// compiled loop.
+pub fn apply(phase: Phase, z: [f64; 2]) -> [f64; 2] {
+    crate::with_map!(phase, M => M::apply(z), [f64::NAN; 2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::kind::KINDS;
+
+    #[test]
+    fn every_family_at_every_power_has_compiled_code() {
+        for k in KINDS {
+            for p in k.min_power..=k.max_power {
+                let phase = Phase { kind: k.kind, power: p };
+                let known = crate::with_map!(phase, M => M::POWER == p, false);
+                assert!(known, "{phase} has no arm in with_map!");
+            }
+        }
+    }
+
+    #[test]
+    fn parse_and_display_round_trip() {
+        for text in ["mandelbrot", "burning-ship^3", "burning-ship,mandelbrot^3", "celtic^5,buffalo,mandelbar^3"] {
+            let f = Formula::parse(text, None).unwrap();
+            assert_eq!(f.to_string(), text);
+        }
+        assert_eq!(Formula::parse("mandelbrot", Some(2)).unwrap(), Formula::default());
+        assert!(Formula::parse("mandelbrot", None).unwrap().is_quadratic());
+        assert_eq!(Formula::parse("buffalo", Some(4)).unwrap().to_string(), "buffalo^4");
+    }
+
+    #[test]
+    fn bad_formulas_say_what_was_expected() {
+        let e = |t: &str, p| Formula::parse(t, p).unwrap_err().0;
+        assert!(e("burning-boat", None).contains("unknown formula `burning-boat`"));
+        assert!(e("burning-ship^7", None).contains("powers 2 to 5, not 7"));
+        assert!(e("perpendicular-celtic", Some(3)).contains("only power 2"));
+        assert!(e("mandelbrot^x", None).contains("integer"));
+        assert!(e("mandelbrot,celtic", Some(3)).contains("each phase its power"));
+        assert!(e(&["mandelbrot"; 9].join(","), None).contains("at most 8"));
+    }
+
+    #[test]
+    fn a_cycle_steps_through_its_phases() {
+        let f = Formula::parse("burning-ship,mandelbrot^3", None).unwrap();
+        let s = Cycle(f);
+        let z = [0.3, -0.4];
+        assert_eq!(s.apply(0, z), apply(f.phases()[0], z));
+        assert_eq!(s.apply(1, z), apply(f.phases()[1], z));
+        assert_eq!(s.apply(2, z), apply(f.phases()[0], z));
+        assert_eq!(s.period(), 2);
+    }
+}
