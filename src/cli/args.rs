@@ -29,6 +29,8 @@ pub enum Command {
     Sheet(Box<SheetArgs>),
     /// List, preview and import palettes.
     Palettes(PalettesArgs),
+    /// List the formula families, their powers, Kalles Fraktaler type numbers and maps.
+    Formulas,
     /// Explore interactively (egui window; wgpu renderer).
     View(ViewArgs),
     /// Search a view for the lowest-period minibrot (or the simplest Misiurewicz point) and
@@ -382,10 +384,18 @@ pub struct SceneArgs {
     /// Without one, flags alone describe the scene (default: the whole Mandelbrot set).
     #[arg(value_name = "SCENE")]
     pub path: Option<PathBuf>,
-    /// Formula.
-    #[arg(long, value_parser = ["mandelbrot", "julia"])]
+    /// Formula: a family (mandelbrot, burning-ship, buffalo, celtic, mandelbar,
+    /// perpendicular-burning-ship, ...), NAME^P for its
+    /// power, a hybrid (phases joined by `,`: burning-ship,mandelbrot^3), or julia (z^2 + c's
+    /// Julia set; needs --julia-c). `deepfield formulas` lists the families.
+    #[arg(long, value_name = "NAME")]
     pub formula: Option<String>,
-    /// Julia parameter c, as RE,IM (decimal strings); implies --formula julia.
+    /// The power of a single family (2 to 10 for mandelbrot, 2 to 5 for burning-ship,
+    /// buffalo, celtic and mandelbar).
+    #[arg(long, value_name = "P")]
+    pub power: Option<u32>,
+    /// Julia parameter c, as RE,IM (decimal strings): the formula's Julia form (z_0 the
+    /// pixel, c fixed).
     #[arg(long, value_name = "RE,IM", value_parser = parse_pair, allow_hyphen_values = true)]
     pub julia_c: Option<[String; 2]>,
     /// View centre, as RE,IM (decimal strings, any precision).

@@ -92,6 +92,27 @@ fn simd_level(flag: Option<&str>) -> Result<deepfield::simd_level::SimdLevel, Fa
     choice.resolve().map_err(Failure::input)
 }
 
+/// `deepfield formulas`: every family with its powers, Kalles Fraktaler type and map.
+fn formulas_table() -> String {
+    use deepfield::formula::kind::KINDS;
+    let mut out =
+        String::from("name                                       powers  KF type  map (at the smallest power)\n");
+    for k in KINDS {
+        let powers = if k.min_power == k.max_power {
+            k.min_power.to_string()
+        } else {
+            format!("{}-{}", k.min_power, k.max_power)
+        };
+        out.push_str(&format!("{:<42} {:<7} {:<8} {}\n", k.name, powers, k.kf_type, k.kind.definition(k.min_power)));
+    }
+    out.push_str(
+        "\njulia: z^2 + c's Julia set (--julia-c RE,IM); --julia-c gives any family its Julia form.\n\
+         Hybrids: phases joined by ',', each NAME or NAME^P, iteration n using phase n mod their number\n\
+         (burning-ship,mandelbrot^3).\n",
+    );
+    out
+}
+
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = match args::Cli::try_parse() {
@@ -107,6 +128,10 @@ pub fn main() -> ExitCode {
         args::Command::Recolor(r) => recolor::run(*r),
         args::Command::Sheet(s) => sheet::run(*s),
         args::Command::Palettes(p) => palettes::run(p),
+        args::Command::Formulas => {
+            print!("{}", formulas_table());
+            Ok(())
+        }
         args::Command::View(v) => view::run(v),
         args::Command::Find(f) => find::run(*f),
         args::Command::Reference(r) => reference::run(*r),

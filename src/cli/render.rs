@@ -124,7 +124,8 @@ fn report(
     if args.stats {
         let mut out = std::io::stdout().lock();
         let mut text = format!(
-            "engine      {}\n  why       {}\nprecision   {}\nsimd        {}\nthreads     {}\npixels      {}\nsamples     {}\niterations  {}\nwall time   {:.3} s\nspeed       {:.3e} iterations/s\nglitches    {}\n",
+            "formula     {}\nengine      {}\n  why       {}\nprecision   {}\nsimd        {}\nthreads     {}\npixels      {}\nsamples     {}\niterations  {}\nwall time   {:.3} s\nspeed       {:.3e} iterations/s\nglitches    {}\n",
+            stats.formula,
             stats.engine,
             stats.engine_reason,
             stats.precision,

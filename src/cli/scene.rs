@@ -105,12 +105,23 @@ pub fn apply_palette(file: &mut SceneFile, p: &str) {
 fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
     if let Some(f) = &a.formula {
         file.formula.kind = cli(f.clone());
-        if f == "mandelbrot" {
+        file.formula.power = None;
+        if f != "julia" {
+            // A family named on the command line is its Mandelbrot form unless --julia-c
+            // says otherwise.
             file.formula.c = None;
         }
     }
+    if let Some(p) = a.power {
+        file.formula.power = Some(cli(i64::from(p)));
+    }
     if let Some(c) = &a.julia_c {
-        file.formula.kind = cli("julia".into());
+        // z² + c's Julia set keeps its name; any other formula takes c as its Julia form.
+        if file.formula.kind.get_ref() == "mandelbrot" && file.formula.power.as_ref().is_none_or(|p| *p.get_ref() == 2)
+        {
+            file.formula.kind = cli("julia".into());
+            file.formula.power = None;
+        }
         file.formula.c = Some(cli(c.clone()));
     }
     if let Some(c) = &a.center {

@@ -7,6 +7,8 @@
 //! several traps go through the scalar kernel ([`scalar`]), which shares the exact step
 //! functions so both agree bit for bit.
 
+pub mod generic;
+pub mod generic_lanes;
 mod grid;
 mod planes;
 pub mod projection;
@@ -27,8 +29,8 @@ pub use projection::Projection;
 pub use transform::Transform;
 
 use crate::cancel::Cancelled;
-use crate::formula::Family;
 use crate::formula::end::{INTERIOR, Orbit};
+use crate::formula::{Family, Formula};
 use crate::orbit::{Counters, Perturbation};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
@@ -36,8 +38,10 @@ use crate::trap::{Trap, TrapState};
 /// Parameters of the orbit loop itself.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrbitParams {
-    /// Mandelbrot or Julia.
+    /// Mandelbrot or Julia form.
     pub family: Family,
+    /// The map (z² + c runs its own kernels; every other formula [`generic`]'s).
+    pub formula: Formula,
     /// Largest iteration index examined.
     pub max_iter: u32,
     /// Escape radius R.
@@ -89,7 +93,14 @@ pub struct FieldParams {
 impl FieldParams {
     /// Builds the parameters; the derivative is tracked exactly when distance is needed.
     pub fn new(family: Family, max_iter: u32, escape_radius: f64, needs: Needs, grid: SampleGrid) -> Self {
-        let orbit = OrbitParams { family, max_iter, escape_radius, derivative: needs.de, simd: SimdLevel::detect() };
+        let orbit = OrbitParams {
+            family,
+            formula: Formula::default(),
+            max_iter,
+            escape_radius,
+            derivative: needs.de,
+            simd: SimdLevel::detect(),
+        };
         Self { orbit, needs, grid, deep: None, single: false }
     }
 }
@@ -156,6 +167,9 @@ fn compute_plane_strip(
         // (An exact-size iterator: no capacity test per point.)
         points.extend((0..grid.width).map(|i| grid.point(i, j)));
     }
+    if !params.orbit.formula.is_quadratic() {
+        return generic_strip(params, &points, planes, cancel);
+    }
     // The IFS field observes no orbit: alone it leaves the vectorised kernel in charge.
     let orbit_free = params.needs.traps.iter().all(|t| !t.observes_orbit());
     let n = &params.needs;
@@ -200,10 +214,51 @@ fn compute_plane_strip(
         }
         traps => scalar::iterate_with_traps(&params.orbit, traps, &points, &mut orbits, &mut planes.traps, cancel)?,
     };
-    fill_quantities(&params.needs, &orbits, ln_r, spacing, &mut planes);
+    fill_quantities(&params.needs, &orbits, ln_r, std::f64::consts::LN_2, spacing, &mut planes);
     fill_ifs(&params.needs.traps, &points, &mut planes);
     Ok(Strip { planes, iterations, counters: Counters::default() })
 }
+
+/// The direct kernel of a formula other than z² + c over `points`, in parallel calls of
+/// [`GENERIC_CHUNK`] samples (each sample's result the same in any call).
+fn generic_strip(
+    params: &FieldParams,
+    points: &[[f64; 2]],
+    mut planes: Planes,
+    cancel: &AtomicBool,
+) -> Result<Strip, Cancelled> {
+    let traps = &params.needs.traps;
+    let mut orbits = vec![Orbit::interior(); points.len()];
+    let formula = params.orbit.formula;
+    let iterations = if traps.iter().all(|t| !t.observes_orbit()) && formula.phases().len() == 1 {
+        crate::with_map!(formula.phases()[0], M => {
+            points
+                .par_chunks(GENERIC_CHUNK)
+                .zip(orbits.par_chunks_mut(GENERIC_CHUNK))
+                .map(|(p, o)| generic_lanes::iterate::<M>(&params.orbit, p, o, cancel))
+                .try_reduce(|| 0, |a, b| Ok(a + b))?
+        }, unreachable!("a validated formula has compiled code"))
+    } else if traps.iter().all(|t| !t.observes_orbit()) {
+        crate::with_stepper!(params.orbit.formula, s => {
+            points
+                .par_chunks(GENERIC_CHUNK)
+                .zip(orbits.par_chunks_mut(GENERIC_CHUNK))
+                .map(|(p, o)| generic::iterate(s, &params.orbit, &[], p, o, &mut [], cancel))
+                .try_reduce(|| 0, |a, b| Ok(a + b))?
+        })
+    } else {
+        crate::with_stepper!(params.orbit.formula, s => {
+            generic::iterate(s, &params.orbit, traps, points, &mut orbits, &mut planes.traps, cancel)?
+        })
+    };
+    let ln_r = params.orbit.escape_radius.ln();
+    fill_quantities(&params.needs, &orbits, ln_r, params.orbit.formula.ln_degree(), params.grid.spacing(), &mut planes);
+    fill_ifs(traps, points, &mut planes);
+    Ok(Strip { planes, iterations, counters: Counters::default() })
+}
+
+/// Samples per parallel call of the generic direct kernel.
+const GENERIC_CHUNK: usize = 1024;
 
 /// Runs a direct kernel `f` over `points` and their outputs `out` in calls of
 /// [`DIRECT_CHUNK`] samples, in parallel; the iterations summed.
@@ -232,12 +287,13 @@ fn fill_ifs(traps: &[Trap], points: &[[f64; 2]], planes: &mut Planes) {
 
 /// Writes N and the quantities derived from each orbit's end into the planes, and smooths
 /// stripe averages across bands.
-fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, planes: &mut Planes) {
+/// `ln_degree` is the formula's escape rate (ln 2 for z² + c).
+fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, ln_degree: f64, spacing: f64, planes: &mut Planes) {
     for plane in &mut planes.traps {
         if let TrapPlane::Stripe { value, prev } = plane {
             for (k, orbit) in orbits.iter().enumerate() {
                 if orbit.n != INTERIOR {
-                    let nf = quantities::smooth_fraction(orbit.z, ln_r);
+                    let nf = quantities::smooth_fraction_of_degree(orbit.z, ln_r, ln_degree);
                     value[k] = crate::trap::stripe::smoothed(prev[k], value[k], nf);
                 }
             }
@@ -250,7 +306,7 @@ fn fill_quantities(needs: &Needs, orbits: &[Orbit], ln_r: f64, spacing: f64, pla
             continue;
         }
         if needs.nf {
-            planes.nf[k] = quantities::smooth_fraction(orbit.z, ln_r);
+            planes.nf[k] = quantities::smooth_fraction_of_degree(orbit.z, ln_r, ln_degree);
         }
         if needs.t {
             planes.t[k] = quantities::phase(orbit.z);
@@ -351,7 +407,8 @@ fn deep_strip(
     if cancel.load(Ordering::Relaxed) {
         return Err(Cancelled);
     }
-    fill_quantities(&params.needs, &orbits, params.orbit.escape_radius.ln(), 1.0, planes);
+    let ln_degree = params.orbit.formula.ln_degree();
+    fill_quantities(&params.needs, &orbits, params.orbit.escape_radius.ln(), ln_degree, 1.0, planes);
     if traps.iter().any(|t| !t.observes_orbit()) {
         let points: Vec<[f64; 2]> =
             rows.flat_map(|j| (0..grid.width).map(move |i| (i, j))).map(|(i, j)| grid.point(i, j)).collect();

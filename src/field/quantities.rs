@@ -14,6 +14,18 @@ pub fn smooth_fraction(z: [f64; 2], ln_r: f64) -> f32 {
     (f as f32).clamp(0.0, BELOW_ONE)
 }
 
+/// The smooth fraction of a map of escape rate e^`ln_degree`: 1 - log_p(ln|z| / ln R),
+/// clamped to [0, 1). At degree 2 it is [`smooth_fraction`], bit for bit.
+#[inline]
+pub fn smooth_fraction_of_degree(z: [f64; 2], ln_r: f64, ln_degree: f64) -> f32 {
+    if ln_degree == std::f64::consts::LN_2 {
+        return smooth_fraction(z, ln_r);
+    }
+    let ln_abs = 0.5 * (z[0] * z[0] + z[1] * z[1]).ln();
+    let f = 1.0 - (ln_abs / ln_r).ln() / ln_degree;
+    (f as f32).clamp(0.0, BELOW_ONE)
+}
+
 /// Phase of z_n in turns, in [0, 1).
 #[inline]
 pub fn phase(z: [f64; 2]) -> f32 {

@@ -762,7 +762,7 @@ mod tests {
         simd: SimdLevel,
     ) {
         let points = grid_points(center, radius, 67, 31);
-        let params = OrbitParams { family, max_iter, escape_radius, derivative, simd };
+        let params = OrbitParams { family, formula: Default::default(), max_iter, escape_radius, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let its = iterate(&params, &points, &mut out, true, &AtomicBool::new(false)).unwrap();
         let mut total = 0;
@@ -808,7 +808,8 @@ mod tests {
         simd: SimdLevel,
     ) {
         let points = grid_points(center, radius, 53, 29);
-        let params = OrbitParams { family, max_iter, escape_radius: 1024.0, derivative, simd };
+        let params =
+            OrbitParams { family, formula: Default::default(), max_iter, escape_radius: 1024.0, derivative, simd };
         let mut out = vec![Orbit::interior(); points.len()];
         let mut dist = vec![0.0; points.len()];
         iterate_with_trap(&params, shape, &points, &mut out, &mut dist, &AtomicBool::new(false)).unwrap();

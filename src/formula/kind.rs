@@ -103,7 +103,18 @@ const fn row(
     fold_out: u8,
     sign: u8,
 ) -> KindInfo {
-    KindInfo { kind, name, kf_name, kf_type, min_power: powers.0, max_power: powers.1, fold_in, fold_out, sign, sign3: sign }
+    KindInfo {
+        kind,
+        name,
+        kf_name,
+        kf_type,
+        min_power: powers.0,
+        max_power: powers.1,
+        fold_in,
+        fold_out,
+        sign,
+        sign3: sign,
+    }
 }
 
 use Kind as K;
@@ -114,28 +125,184 @@ pub const KINDS: [KindInfo; 26] = [
     row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
     row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
     row(K::Celtic, "celtic", "Celtic", 3, (2, 5), FOLD_NONE, FOLD_RE, SIGN_NONE),
-    KindInfo { sign3: SIGN_RE, ..row(K::Mandelbar, "mandelbar", "Mandelbar", 4, (2, 5), FOLD_NONE, FOLD_NONE, SIGN_IM) },
+    KindInfo {
+        sign3: SIGN_RE,
+        ..row(K::Mandelbar, "mandelbar", "Mandelbar", 4, (2, 5), FOLD_NONE, FOLD_NONE, SIGN_IM)
+    },
     row(K::MandelbarCeltic, "mandelbar-celtic", "Mandelbar Celtic", 5, (2, 2), FOLD_NONE, FOLD_RE, SIGN_IM),
-    row(K::PerpendicularMandelbrot, "perpendicular-mandelbrot", "Perpendicular Mandelbrot", 6, (2, 2), FOLD_RE, FOLD_NONE, SIGN_IM),
-    row(K::PerpendicularBurningShip, "perpendicular-burning-ship", "Perpendicular Burning Ship", 7, (2, 2), FOLD_IM, FOLD_NONE, SIGN_IM),
+    row(
+        K::PerpendicularMandelbrot,
+        "perpendicular-mandelbrot",
+        "Perpendicular Mandelbrot",
+        6,
+        (2, 2),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_IM,
+    ),
+    row(
+        K::PerpendicularBurningShip,
+        "perpendicular-burning-ship",
+        "Perpendicular Burning Ship",
+        7,
+        (2, 2),
+        FOLD_IM,
+        FOLD_NONE,
+        SIGN_IM,
+    ),
     row(K::PerpendicularCeltic, "perpendicular-celtic", "Perpendicular Celtic", 8, (2, 2), FOLD_RE, FOLD_RE, SIGN_IM),
-    row(K::PerpendicularBuffalo, "perpendicular-buffalo", "Perpendicular Buffalo", 9, (2, 2), FOLD_IM, FOLD_RE, SIGN_IM),
-    row(K::CubicQuasiBurningShip, "cubic-quasi-burning-ship", "Cubic Quasi Burning Ship", 10, (3, 3), FOLD_RE, FOLD_IM, SIGN_IM),
-    row(K::CubicPartialBsReal, "cubic-partial-bs-real", "Cubic Partial BS Real", 11, (3, 3), FOLD_RE, FOLD_NONE, SIGN_NONE),
-    row(K::CubicPartialBsImag, "cubic-partial-bs-imag", "Cubic Partial BS Imag", 12, (3, 3), FOLD_IM, FOLD_NONE, SIGN_NONE),
-    row(K::CubicFlyingSquirrel, "cubic-flying-squirrel", "Cubic Flying Squirrel (Buffalo Imag)", 13, (3, 3), FOLD_NONE, FOLD_IM, SIGN_NONE),
-    row(K::BurningShip4PartialImag, "4th-burning-ship-partial-imag", "4th Burning Ship Partial Imag", 15, (4, 4), FOLD_IM, FOLD_NONE, SIGN_NONE),
-    row(K::BurningShip4PartialReal, "4th-burning-ship-partial-real", "4th Burning Ship Partial Real", 16, (4, 4), FOLD_RE, FOLD_NONE, SIGN_NONE),
-    row(K::BurningShip4PartialRealMbar, "4th-burning-ship-partial-real-mbar", "4th Burning Ship Partial Real Mbar", 17, (4, 4), FOLD_RE, FOLD_NONE, SIGN_IM),
-    row(K::CelticBurningShip4PartialImag, "4th-celtic-burning-ship-partial-imag", "4th Celtic Burning Ship Partial Imag", 18, (4, 4), FOLD_IM, FOLD_RE, SIGN_NONE),
-    row(K::CelticBurningShip4PartialReal, "4th-celtic-burning-ship-partial-real", "4th Celtic Burning Ship Partial Real", 19, (4, 4), FOLD_RE, FOLD_RE, SIGN_NONE),
-    row(K::CelticBurningShip4PartialRealMbar, "4th-celtic-burning-ship-partial-real-mbar", "4th Celtic Burning Ship Partial Real Mbar", 20, (4, 4), FOLD_RE, FOLD_RE, SIGN_IM),
-    row(K::Buffalo4PartialImag, "4th-buffalo-partial-imag", "4th Buffalo Partial Imag", 21, (4, 4), FOLD_NONE, FOLD_IM, SIGN_NONE),
+    row(
+        K::PerpendicularBuffalo,
+        "perpendicular-buffalo",
+        "Perpendicular Buffalo",
+        9,
+        (2, 2),
+        FOLD_IM,
+        FOLD_RE,
+        SIGN_IM,
+    ),
+    row(
+        K::CubicQuasiBurningShip,
+        "cubic-quasi-burning-ship",
+        "Cubic Quasi Burning Ship",
+        10,
+        (3, 3),
+        FOLD_RE,
+        FOLD_IM,
+        SIGN_IM,
+    ),
+    row(
+        K::CubicPartialBsReal,
+        "cubic-partial-bs-real",
+        "Cubic Partial BS Real",
+        11,
+        (3, 3),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_NONE,
+    ),
+    row(
+        K::CubicPartialBsImag,
+        "cubic-partial-bs-imag",
+        "Cubic Partial BS Imag",
+        12,
+        (3, 3),
+        FOLD_IM,
+        FOLD_NONE,
+        SIGN_NONE,
+    ),
+    row(
+        K::CubicFlyingSquirrel,
+        "cubic-flying-squirrel",
+        "Cubic Flying Squirrel (Buffalo Imag)",
+        13,
+        (3, 3),
+        FOLD_NONE,
+        FOLD_IM,
+        SIGN_NONE,
+    ),
+    row(
+        K::BurningShip4PartialImag,
+        "4th-burning-ship-partial-imag",
+        "4th Burning Ship Partial Imag",
+        15,
+        (4, 4),
+        FOLD_IM,
+        FOLD_NONE,
+        SIGN_NONE,
+    ),
+    row(
+        K::BurningShip4PartialReal,
+        "4th-burning-ship-partial-real",
+        "4th Burning Ship Partial Real",
+        16,
+        (4, 4),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_NONE,
+    ),
+    row(
+        K::BurningShip4PartialRealMbar,
+        "4th-burning-ship-partial-real-mbar",
+        "4th Burning Ship Partial Real Mbar",
+        17,
+        (4, 4),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_IM,
+    ),
+    row(
+        K::CelticBurningShip4PartialImag,
+        "4th-celtic-burning-ship-partial-imag",
+        "4th Celtic Burning Ship Partial Imag",
+        18,
+        (4, 4),
+        FOLD_IM,
+        FOLD_RE,
+        SIGN_NONE,
+    ),
+    row(
+        K::CelticBurningShip4PartialReal,
+        "4th-celtic-burning-ship-partial-real",
+        "4th Celtic Burning Ship Partial Real",
+        19,
+        (4, 4),
+        FOLD_RE,
+        FOLD_RE,
+        SIGN_NONE,
+    ),
+    row(
+        K::CelticBurningShip4PartialRealMbar,
+        "4th-celtic-burning-ship-partial-real-mbar",
+        "4th Celtic Burning Ship Partial Real Mbar",
+        20,
+        (4, 4),
+        FOLD_RE,
+        FOLD_RE,
+        SIGN_IM,
+    ),
+    row(
+        K::Buffalo4PartialImag,
+        "4th-buffalo-partial-imag",
+        "4th Buffalo Partial Imag",
+        21,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_IM,
+        SIGN_NONE,
+    ),
     row(K::Celtic4Mbar, "4th-celtic-mbar", "4th Celtic Mbar", 22, (4, 4), FOLD_NONE, FOLD_RE, SIGN_IM),
-    row(K::BurningShip5Partial, "5th-burning-ship-partial", "5th Burning Ship Partial", 27, (5, 5), FOLD_RE, FOLD_NONE, SIGN_NONE),
-    row(K::BurningShip5PartialMbar, "5th-burning-ship-partial-mbar", "5th Burning Ship Partial Mbar", 28, (5, 5), FOLD_RE, FOLD_NONE, SIGN_IM),
+    row(
+        K::BurningShip5Partial,
+        "5th-burning-ship-partial",
+        "5th Burning Ship Partial",
+        27,
+        (5, 5),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_NONE,
+    ),
+    row(
+        K::BurningShip5PartialMbar,
+        "5th-burning-ship-partial-mbar",
+        "5th Burning Ship Partial Mbar",
+        28,
+        (5, 5),
+        FOLD_RE,
+        FOLD_NONE,
+        SIGN_IM,
+    ),
     row(K::Celtic5Mbar, "5th-celtic-mbar", "5th Celtic Mbar", 29, (5, 5), FOLD_NONE, FOLD_RE, SIGN_IM),
-    row(K::QuasiBurningShip5, "5th-quasi-burning-ship", "5th Quasi Burning Ship (BS/Buffalo Hybrid)", 30, (5, 5), FOLD_RE, FOLD_IM, SIGN_IM),
+    row(
+        K::QuasiBurningShip5,
+        "5th-quasi-burning-ship",
+        "5th Quasi Burning Ship (BS/Buffalo Hybrid)",
+        30,
+        (5, 5),
+        FOLD_RE,
+        FOLD_IM,
+        SIGN_IM,
+    ),
 ];
 
 impl Kind {
@@ -176,6 +343,37 @@ impl Kind {
         (i.fold_in, p, i.fold_out, if p == 3 { i.sign3 } else { i.sign })
     }
 
+    /// The map at power `p` in words, derived from its four steps (what `deepfield formulas`
+    /// prints): `|Re w| - i Im w + c, w = (|x| + iy)^2`.
+    pub fn definition(self, p: u32) -> String {
+        let (fold_in, _, fold_out, sign) = self.shape(p);
+        let base = match fold_in {
+            FOLD_RE => "(|x| + iy)",
+            FOLD_IM => "(x + i|y|)",
+            FOLD_BOTH => "(|x| + i|y|)",
+            _ => "z",
+        };
+        let w = format!("{base}^{p}");
+        let (re, im) = match fold_out {
+            FOLD_RE => ("|Re w|", "Im w"),
+            FOLD_IM => ("Re w", "|Im w|"),
+            FOLD_BOTH => ("|Re w|", "|Im w|"),
+            _ => ("Re w", "Im w"),
+        };
+        let (re, op) = match sign {
+            SIGN_RE => (format!("-{re}"), "+"),
+            SIGN_IM => (re.to_string(), "-"),
+            _ => (re.to_string(), "+"),
+        };
+        if fold_out == FOLD_NONE && sign == SIGN_NONE {
+            format!("{w} + c")
+        } else if fold_out == FOLD_NONE && sign == SIGN_IM {
+            format!("conj({w}) + c")
+        } else {
+            format!("{re} {op} i {im} + c, w = {w}")
+        }
+    }
+
     /// Every name, for messages.
     pub fn names() -> String {
         KINDS.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
@@ -198,5 +396,14 @@ mod tests {
             assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
         }
         assert_eq!(Kind::from_kf_type(14), None, "14 is not a composition of folds and a power");
+    }
+
+    #[test]
+    fn definitions_in_words() {
+        assert_eq!(Kind::Mandelbrot.definition(3), "z^3 + c");
+        assert_eq!(Kind::BurningShip.definition(2), "(|x| + i|y|)^2 + c");
+        assert_eq!(Kind::Mandelbar.definition(2), "conj(z^2) + c");
+        assert_eq!(Kind::Mandelbar.definition(3), "-Re w + i Im w + c, w = z^3");
+        assert_eq!(Kind::PerpendicularCeltic.definition(2), "|Re w| - i Im w + c, w = (|x| + iy)^2");
     }
 }

@@ -38,6 +38,98 @@ pub const MAX_POWER: u32 = 10;
 /// A 2×2 real matrix, rows first: `[[d re/dx, d re/dy], [d im/dx, d im/dy]]`.
 pub type Mat2 = [[f64; 2]; 2];
 
+/// What the f64 map needs of its numbers: f64 itself, or `[f64; L]`, L samples at once
+/// (loops over lanes that the compiler turns into vector instructions). Both run the same
+/// IEEE operations in the same order, so every lane gives the bits of the scalar map.
+pub trait Num: Copy {
+    /// The value `x` in every lane.
+    fn splat(x: f64) -> Self;
+    /// self + o.
+    fn add(self, o: Self) -> Self;
+    /// self - o.
+    fn sub(self, o: Self) -> Self;
+    /// self * o.
+    fn mul(self, o: Self) -> Self;
+    /// self * a + b, rounded once.
+    fn mul_add(self, a: Self, b: Self) -> Self;
+    /// |self|.
+    fn abs(self) -> Self;
+    /// -self.
+    fn neg(self) -> Self;
+    /// +1 where self >= 0 (or is NaN), -1 where self < 0.
+    fn sgn(self) -> Self;
+}
+
+impl Num for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self + o
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        self - o
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self * o
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        f64::mul_add(self, a, b)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        -self
+    }
+    #[inline(always)]
+    fn sgn(self) -> Self {
+        if self < 0.0 { -1.0 } else { 1.0 }
+    }
+}
+
+impl<const L: usize> Num for [f64; L] {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        [x; L]
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        std::array::from_fn(|k| self[k] + o[k])
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        std::array::from_fn(|k| self[k] - o[k])
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        std::array::from_fn(|k| self[k] * o[k])
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        std::array::from_fn(|k| f64::mul_add(self[k], a[k], b[k]))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        std::array::from_fn(|k| f64::abs(self[k]))
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        std::array::from_fn(|k| -self[k])
+    }
+    #[inline(always)]
+    fn sgn(self) -> Self {
+        std::array::from_fn(|k| if self[k] < 0.0 { -1.0 } else { 1.0 })
+    }
+}
+
 /// One map z -> f(z) of a family (c is added by the caller), in every arithmetic the
 /// engines use.
 pub trait Map: Copy + Default + Send + Sync + 'static {
@@ -47,14 +139,24 @@ pub trait Map: Copy + Default + Send + Sync + 'static {
     /// Jacobian is then a complex number.
     const CONFORMAL: bool;
     /// f(z) in f64.
-    fn apply(z: [f64; 2]) -> [f64; 2];
+    #[inline(always)]
+    fn apply(z: [f64; 2]) -> [f64; 2] {
+        Self::apply_n(z)
+    }
+    /// f(z) for one sample (f64) or several in lanes, the same operations in each.
+    fn apply_n<N: Num>(z: [N; 2]) -> [N; 2];
     /// f(z) in big floats at `z.bits`.
     fn apply_big(z: &BigC) -> BigC;
     /// f(Z + d) - f(Z) for a reference value Z (f64) and a delta d, without cancellation:
     /// the power by the binomial expansion in d, the folds by [`diffabs`].
     fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2];
     /// The Jacobian of f at z (a fold's derivative taken as +1 at 0).
-    fn jacobian(z: [f64; 2]) -> Mat2;
+    #[inline(always)]
+    fn jacobian(z: [f64; 2]) -> Mat2 {
+        Self::jacobian_n(z)
+    }
+    /// The Jacobian for one sample or several in lanes.
+    fn jacobian_n<N: Num>(z: [N; 2]) -> [[N; 2]; 2];
 }
 
 /// The family composed of a fold `IN`, the power `P`, a fold `OUT` and a negation `SIGN`.
@@ -75,12 +177,6 @@ pub fn diffabs<R: Real>(x: f64, d: R) -> R {
     }
 }
 
-/// The sign a fold's derivative takes at x (+1 at 0).
-#[inline(always)]
-fn sgn(x: f64) -> f64 {
-    if x < 0.0 { -1.0 } else { 1.0 }
-}
-
 /// The binomial coefficient C(n, k) for n <= [`MAX_POWER`], as an f64 (exact).
 #[inline(always)]
 pub fn binomial(n: u32, k: u32) -> f64 {
@@ -93,7 +189,7 @@ pub fn binomial(n: u32, k: u32) -> f64 {
 
 /// Folds the parts `fold` names.
 #[inline(always)]
-fn fold(fold: u8, z: [f64; 2]) -> [f64; 2] {
+fn fold<N: Num>(fold: u8, z: [N; 2]) -> [N; 2] {
     let x = if fold & FOLD_RE != 0 { z[0].abs() } else { z[0] };
     let y = if fold & FOLD_IM != 0 { z[1].abs() } else { z[1] };
     [x, y]
@@ -101,22 +197,28 @@ fn fold(fold: u8, z: [f64; 2]) -> [f64; 2] {
 
 /// Negates the part `sign` names.
 #[inline(always)]
-fn signed<T: std::ops::Neg<Output = T> + Copy>(sign: u8, z: [T; 2]) -> [T; 2] {
+fn signed<N: Num>(sign: u8, z: [N; 2]) -> [N; 2] {
     match sign {
-        SIGN_IM => [z[0], -z[1]],
-        SIGN_RE => [-z[0], z[1]],
+        SIGN_IM => [z[0], z[1].neg()],
+        SIGN_RE => [z[0].neg(), z[1]],
         _ => z,
     }
 }
 
-/// w^p in f64 (squaring as z² + c's kernels do; higher powers by repeated products).
+/// a b for complex numbers in [`Num`]s.
 #[inline(always)]
-fn power<const P: u32>(w: [f64; 2]) -> [f64; 2] {
+fn nmul<N: Num>(a: [N; 2], b: [N; 2]) -> [N; 2] {
+    [a[0].mul(b[0]).sub(a[1].mul(b[1])), a[0].mul(b[1]).add(a[1].mul(b[0]))]
+}
+
+/// w^p (squaring as z² + c's kernels do; higher powers by repeated products).
+#[inline(always)]
+fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
     let [x, y] = w;
-    let square = [x.mul_add(x, -(y * y)), (x + x) * y];
+    let square = [x.mul_add(x, y.mul(y).neg()), x.add(x).mul(y)];
     let mut u = square;
     for _ in 2..P {
-        u = cmul(u, w);
+        u = nmul(u, w);
     }
     if P == 1 { w } else { u }
 }
@@ -143,8 +245,8 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     const CONFORMAL: bool = IN == FOLD_NONE && OUT == FOLD_NONE && SIGN == SIGN_NONE;
 
     #[inline(always)]
-    fn apply(z: [f64; 2]) -> [f64; 2] {
-        signed(SIGN, fold(OUT, power::<P>(fold(IN, z))))
+    fn apply_n<N: Num>(z: [N; 2]) -> [N; 2] {
+        signed(SIGN, fold(OUT, power::<P, N>(fold(IN, z))))
     }
 
     fn apply_big(z: &BigC) -> BigC {
@@ -178,44 +280,44 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
         let du = if OUT == FOLD_NONE {
             du
         } else {
-            let u = power::<P>(w);
+            let u = power::<P, f64>(w);
             [
                 if OUT & FOLD_RE != 0 { diffabs(u[0], du[0]) } else { du[0] },
                 if OUT & FOLD_IM != 0 { diffabs(u[1], du[1]) } else { du[1] },
             ]
         };
-        signed(SIGN, du)
+        match SIGN {
+            SIGN_IM => [du[0], -du[1]],
+            SIGN_RE => [-du[0], du[1]],
+            _ => du,
+        }
     }
 
     #[inline(always)]
-    fn jacobian(z: [f64; 2]) -> Mat2 {
+    fn jacobian_n<N: Num>(z: [N; 2]) -> [[N; 2]; 2] {
+        let one = N::splat(1.0);
         let w = fold(IN, z);
         // p w^(p-1), the complex derivative of the power.
-        let mut a = [1.0, 0.0];
+        let mut a = [one, N::splat(0.0)];
         for _ in 1..P {
-            a = cmul(a, w);
+            a = nmul(a, w);
         }
-        let a = [a[0] * P as f64, a[1] * P as f64];
-        let (si, sj) = (
-            if IN & FOLD_RE != 0 { sgn(z[0]) } else { 1.0 },
-            if IN & FOLD_IM != 0 { sgn(z[1]) } else { 1.0 },
-        );
+        let k = N::splat(P as f64);
+        let a = [a[0].mul(k), a[1].mul(k)];
+        let si = if IN & FOLD_RE != 0 { z[0].sgn() } else { one };
+        let sj = if IN & FOLD_IM != 0 { z[1].sgn() } else { one };
         let (so, sp) = if OUT == FOLD_NONE {
-            (1.0, 1.0)
+            (one, one)
         } else {
-            let u = power::<P>(w);
-            (
-                if OUT & FOLD_RE != 0 { sgn(u[0]) } else { 1.0 },
-                if OUT & FOLD_IM != 0 { sgn(u[1]) } else { 1.0 },
-            )
+            let u = power::<P, N>(w);
+            (if OUT & FOLD_RE != 0 { u[0].sgn() } else { one }, if OUT & FOLD_IM != 0 { u[1].sgn() } else { one })
         };
-        let (sr, sm) = match SIGN {
-            SIGN_IM => (1.0, -1.0),
-            SIGN_RE => (-1.0, 1.0),
-            _ => (1.0, 1.0),
+        let (r, m) = match SIGN {
+            SIGN_IM => (so, sp.neg()),
+            SIGN_RE => (so.neg(), sp),
+            _ => (so, sp),
         };
-        let (r, m) = (sr * so, sm * sp);
-        [[r * a[0] * si, -r * a[1] * sj], [m * a[1] * si, m * a[0] * sj]]
+        [[r.mul(a[0]).mul(si), r.mul(a[1]).mul(sj).neg()], [m.mul(a[1]).mul(si), m.mul(a[0]).mul(sj)]]
     }
 }
 
@@ -271,7 +373,10 @@ mod tests {
                 let scale = 1e-13 * (1.0 + want[0].abs().max(want[1].abs()));
                 // z + d is rounded; it is exact for these sizes only to about 1e-16 of |z|.
                 let tol = scale + 1e-15 * (d[0].abs() + d[1].abs() + 1.0) * 40.0;
-                assert!((got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol, "{z:?} {d:?}: {got:?} {want:?}");
+                assert!(
+                    (got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol,
+                    "{z:?} {d:?}: {got:?} {want:?}"
+                );
             }
         }
     }
@@ -285,7 +390,11 @@ mod tests {
                 let m = M::apply([z[0] - h * e[0], z[1] - h * e[1]]);
                 for row in 0..2 {
                     let fd = (p[row] - m[row]) / (2.0 * h);
-                    assert!((fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()), "{z:?} [{row}][{col}] {fd} {}", j[row][col]);
+                    assert!(
+                        (fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()),
+                        "{z:?} [{row}][{col}] {fd} {}",
+                        j[row][col]
+                    );
                 }
             }
         }

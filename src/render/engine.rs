@@ -7,8 +7,10 @@
 //! preparation, the deep engine and the statistics. Messages name the scene setting
 //! (`render.engine`); the command line adds its flag.
 
+use crate::formula::Formula;
 use crate::gpu::{self, Precision};
 use crate::orbit::Numbers;
+use crate::orbit::interior::Detection;
 use crate::scene::{EngineChoice, FamilySpec, Scene};
 
 /// The f64 engine needs the pixel spacing to be at least this many ulps of the largest
@@ -80,6 +82,24 @@ pub enum EngineError {
         /// The smallest spacing f64 deltas take.
         min_log10_spacing: f64,
     },
+    /// A GPU engine on a formula other than z² + c.
+    #[error(
+        "render.engine = \"{engine}\": the GPU paths draw z^2 + c only, not {formula}; set it to \"auto\" or \"f64\""
+    )]
+    GpuFormula {
+        /// The engine's name.
+        engine: &'static str,
+        /// The scene's formula.
+        formula: String,
+    },
+    /// Interior detection requested for a formula it does not serve.
+    #[error(
+        "render.interior_detection = true: interior detection (attracting cycles by Newton's method on the quadratic model of a minibrot) is built for z^2 + c only, not {formula}; remove the key or set it to false"
+    )]
+    InteriorFormula {
+        /// The scene's formula.
+        formula: String,
+    },
     /// A GPU engine cannot draw the scene's traps.
     #[error("render.engine = \"{engine}\": {reason}; set it to \"auto\"")]
     GpuTraps {
@@ -138,6 +158,14 @@ pub enum EngineError {
 /// stay a normal f64 for deltas down to the sample spacing.
 pub const PERTURB_F64_MIN_LOG10_SPACING_JULIA: f64 = -150.0;
 
+/// The smallest sample spacing (log10) f64 deltas take in a Julia form: the rebased step
+/// is δ -> f(δ) with nothing added, and δ^p must stay a normal f64 for deltas down to the
+/// spacing (p the largest power of the formula's phases).
+fn julia_min_spacing(formula: &Formula) -> f64 {
+    let p = formula.phases().iter().map(|p| p.power).max().unwrap_or(2);
+    PERTURB_F64_MIN_LOG10_SPACING_JULIA * 2.0 / p as f64
+}
+
 /// Chooses the engine for `scene`'s view (or checks the one its `render.engine` forces),
 /// and says why. A render computes this once and hands it down.
 pub fn plan(scene: &Scene) -> Result<EnginePlan, EngineError> {
@@ -151,9 +179,12 @@ pub fn plan_for(scene: &Scene, choice: EngineChoice) -> Result<EnginePlan, Engin
     let spacing = scene.log10_spacing();
     let f64_ok = ulps >= F64_MIN_ULPS_PER_PIXEL;
     let f64_exact = f64_ok && depth <= F64_AUTO_MAX_LOG10_ZOOM;
+    if !scene.formula.is_quadratic() && scene.interior_detection == Detection::On {
+        return Err(EngineError::InteriorFormula { formula: scene.formula.to_string() });
+    }
     let min_spacing = match scene.family {
         FamilySpec::Mandelbrot => PERTURB_F64_MIN_LOG10_SPACING,
-        FamilySpec::Julia { .. } => PERTURB_F64_MIN_LOG10_SPACING_JULIA,
+        FamilySpec::Julia { .. } => julia_min_spacing(&scene.formula),
     };
     let deltas_ok = spacing > min_spacing;
     let bla = if scene.traps.iter().all(|t| !t.observes_orbit()) { scene.bla } else { None };
@@ -218,6 +249,9 @@ pub fn plan_for(scene: &Scene, choice: EngineChoice) -> Result<EnginePlan, Engin
 /// range, or a view deeper than the precision resolves ([`Precision::exhausted`]).
 fn gpu_plan(scene: &Scene, precision: Precision) -> Result<EnginePlan, EngineError> {
     let name = precision.name();
+    if !scene.formula.is_quadratic() {
+        return Err(EngineError::GpuFormula { engine: name, formula: scene.formula.to_string() });
+    }
     gpu::field::supported_trap(&scene.traps)
         .map_err(|e| EngineError::GpuTraps { engine: name, reason: e.to_string() })?;
     if !scene.transform.is_identity() || !scene.projection.is_flat() {

@@ -236,6 +236,8 @@ pub struct DeepStats {
 /// What a render did.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Stats {
+    /// The formula and its form, as users write it (`burning-ship^3, Julia form`).
+    pub formula: String,
     /// Engine that ran.
     pub engine: String,
     /// Why it was chosen.
@@ -315,6 +317,15 @@ fn gcd(a: u32, b: u32) -> u32 {
     if b == 0 { a } else { gcd(b, a % b) }
 }
 
+/// The scene's formula and form as `--stats` and reports name it.
+pub fn describe_formula(scene: &Scene) -> String {
+    let form = match &scene.family {
+        FamilySpec::Mandelbrot => "Mandelbrot form".to_string(),
+        FamilySpec::Julia { c } => format!("Julia form, c = {}, {}", c[0].text(), c[1].text()),
+    };
+    format!("{} ({form})", scene.formula)
+}
+
 /// The field parameters of a scene.
 pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
     let mut needs: Needs = scene.stack.needs(&scene.traps);
@@ -331,7 +342,9 @@ pub fn field_params(scene: &Scene, exr_channels: ChannelSet) -> FieldParams {
         transform: scene.transform,
         projection: scene.projection,
     };
-    FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid)
+    let mut params = FieldParams::new(family, scene.max_iter, scene.escape_radius, needs, grid);
+    params.orbit.formula = scene.formula;
+    params
 }
 
 /// What the deep engine needs to know about `scene` under `plan` (None unless the plan
@@ -613,6 +626,7 @@ pub fn render<P: Send>(
         EngineKind::Gpu(p) => p.describe().to_string(),
     };
     Ok(Stats {
+        formula: describe_formula(scene),
         engine: plan.name.to_string(),
         engine_reason: plan.reason.clone(),
         precision,

@@ -16,6 +16,7 @@ use super::context::{BitmapLoadError, Ctx};
 use super::raw::{KeyValueMut, LayerRaw, SceneFile, cli};
 use super::validate::{self, View};
 use super::{FamilySpec, Scene};
+use crate::formula::Formula;
 use crate::num::Decimal;
 use crate::orbit::Scale;
 use crate::source::SourceError;
@@ -77,13 +78,30 @@ impl Scene {
         Ok(self)
     }
 
-    /// The Julia set of `c`, or the Mandelbrot set for None. Only the formula is checked
-    /// again.
+    /// The Julia form of the scene's formula at `c`, or its Mandelbrot form for None. Only
+    /// the formula is checked again.
     pub fn with_julia(mut self, c: Option<[Decimal; 2]>) -> Result<Scene, SourceError> {
         let mut file = self.file.clone();
-        file.formula.kind = cli(if c.is_some() { "julia" } else { "mandelbrot" }.to_string());
+        if self.formula.is_quadratic() {
+            // z² + c keeps the names its scenes have always had.
+            file.formula.kind = cli(if c.is_some() { "julia" } else { "mandelbrot" }.to_string());
+            file.formula.power = None;
+        }
         file.formula.c = c.map(|c| cli([c[0].text().to_string(), c[1].text().to_string()]));
-        self.family = self.check(&file, |cx, f| validate::family(cx, &f.formula))?;
+        (self.family, self.formula) = self.check(&file, |cx, f| validate::family(cx, &f.formula))?;
+        self.file = file;
+        Ok(self)
+    }
+
+    /// The scene iterating `formula`, in the form (Mandelbrot or Julia) it had. Only the
+    /// formula is checked again.
+    pub fn with_formula(mut self, formula: Formula) -> Result<Scene, SourceError> {
+        let mut file = self.file.clone();
+        let julia = file.formula.c.is_some();
+        file.formula.kind =
+            cli(if formula.is_quadratic() && julia { "julia".to_string() } else { formula.to_string() });
+        file.formula.power = None;
+        (self.family, self.formula) = self.check(&file, |cx, f| validate::family(cx, &f.formula))?;
         self.file = file;
         Ok(self)
     }
@@ -123,6 +141,7 @@ pub(super) fn label(file: &mut SceneFile) -> Vec<String> {
     let mut l = Labels::default();
     l.tag(&mut file.version, "version");
     l.tag(&mut file.formula.kind, "formula.kind");
+    l.tag_opt(&mut file.formula.power, "formula.power");
     l.tag_opt(&mut file.formula.c, "formula.c");
     let v = &mut file.view;
     l.tag(&mut v.center, "view.center");
@@ -258,7 +277,11 @@ mod tests {
     fn a_file_built_in_code_is_the_scene_its_text_is() {
         let file = SceneFile {
             version: cli(1),
-            formula: FormulaRaw { kind: cli("julia".into()), c: Some(cli(["-0.8".into(), "0.156".into()])) },
+            formula: FormulaRaw {
+                kind: cli("julia".into()),
+                power: None,
+                c: Some(cli(["-0.8".into(), "0.156".into()])),
+            },
             view: ViewRaw {
                 center: cli(["0.1".into(), "-0.2".into()]),
                 zoom: Some(cli("3.5".into())),

@@ -46,12 +46,13 @@ pub const MAX_LOG10_COORDINATE: f64 = 6.0;
 pub const MAX_AA: i64 = 16;
 /// Largest accepted number of samples (width * height * aa^2).
 pub const MAX_SAMPLES: u64 = 1 << 36;
-/// Mandelbrot or Julia, with Julia's parameter kept exact.
+/// The Mandelbrot form of the scene's formula or its Julia form, with Julia's parameter
+/// kept exact.
 #[derive(Debug, Clone, PartialEq)]
 pub enum FamilySpec {
-    /// z -> z^2 + c, c the pixel.
+    /// z -> f(z) + c, c the pixel, z_0 = 0.
     Mandelbrot,
-    /// z -> z^2 + c, z_0 the pixel.
+    /// z -> f(z) + c, z_0 the pixel.
     Julia {
         /// The parameter [re, im].
         c: [Decimal; 2],
@@ -102,8 +103,10 @@ pub struct Scene {
     pub origin: String,
     /// Folder that relative paths in the scene are resolved against.
     pub base_dir: PathBuf,
-    /// The map.
+    /// Whether the pixel is the map's parameter (Mandelbrot form) or its start (Julia form).
     pub family: FamilySpec,
+    /// The map: a family at a power, or a hybrid ([`Formula::default`] is z² + c).
+    pub formula: crate::formula::Formula,
     /// View centre.
     pub center: [Decimal; 2],
     /// log10 of the view's half-height (works beyond the f64 range).

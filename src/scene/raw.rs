@@ -49,16 +49,20 @@ pub struct SceneFile {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FormulaRaw {
-    /// "mandelbrot" or "julia".
+    /// A family's name ("mandelbrot", "burning-ship", ...), a hybrid (phases joined by
+    /// `,`, each `NAME` or `NAME^P`), or "julia" (z² + c's Julia set).
     pub kind: Spanned<String>,
-    /// Julia parameter as decimal strings [re, im].
+    /// The power of a single family (its smallest when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub power: Option<Spanned<i64>>,
+    /// Julia parameter as decimal strings [re, im]: the formula's Julia form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub c: Option<Spanned<[String; 2]>>,
 }
 
 impl Default for FormulaRaw {
     fn default() -> Self {
-        Self { kind: Spanned::new(0..0, "mandelbrot".into()), c: None }
+        Self { kind: Spanned::new(0..0, "mandelbrot".into()), power: None, c: None }
     }
 }
 

@@ -11,6 +11,7 @@ use super::{EngineChoice, FamilySpec, MAX_AA, MAX_ITER_LIMIT, MAX_LOG10_ZOOM, MA
 use crate::compose::Stack;
 use crate::field::transform::MAX_STRETCH_AMOUNT;
 use crate::field::{Channel, ChannelSet};
+use crate::formula::Formula;
 use crate::num::Decimal;
 use crate::orbit::interior::Detection;
 use crate::orbit::{DEFAULT_BLA_TOLERANCE, Scale};
@@ -40,7 +41,7 @@ pub(super) fn validate_in(
         return cx
             .err(file.version.span(), format!("unsupported scene version {}; expected 1", file.version.get_ref()));
     }
-    let family = family(cx, &file.formula)?;
+    let (family, formula) = family(cx, &file.formula)?;
     let View { center, log10_radius, radius, scale, transform, projection } = view(cx, &file.view)?;
     let (width, height, aa) = size(cx, &file.view, &file.render.aa)?;
     let max_iter = max_iter(cx, &file.iteration.max)?;
@@ -109,6 +110,7 @@ pub(super) fn validate_in(
         origin: origin.to_string(),
         base_dir: base_dir.to_path_buf(),
         family,
+        formula,
         center,
         log10_radius,
         radius,
@@ -131,24 +133,42 @@ pub(super) fn validate_in(
     })
 }
 
-/// `[formula]`: the map.
-pub(super) fn family(cx: &Ctx<'_>, formula: &FormulaRaw) -> Result<FamilySpec, SourceError> {
-    Ok(match formula.kind.get_ref().as_str() {
-        "mandelbrot" => {
-            if let Some(c) = &formula.c {
-                return cx.err(c.span(), "`c` applies only to kind = \"julia\"");
+/// `[formula]`: the map, and whether the pixel is its parameter or its starting point.
+pub(super) fn family(cx: &Ctx<'_>, formula: &FormulaRaw) -> Result<(FamilySpec, Formula), SourceError> {
+    let kind = formula.kind.get_ref().as_str();
+    let power = match &formula.power {
+        Some(p) => match u32::try_from(*p.get_ref()) {
+            Ok(v) if (2..=crate::formula::map::MAX_POWER).contains(&v) => Some(v),
+            _ => {
+                return cx
+                    .err(p.span(), format!("`power` must be an integer from 2 to {}", crate::formula::map::MAX_POWER));
             }
-            FamilySpec::Mandelbrot
-        }
-        "julia" => match &formula.c {
-            Some(c) => FamilySpec::Julia { c: cx.pair(c, "Julia parameter c")? },
-            None => return cx.err(formula.kind.span(), "a Julia set needs its parameter: c = [\"re\", \"im\"]"),
         },
-        other => {
-            return cx
-                .err(formula.kind.span(), format!("unknown formula `{other}`; expected \"mandelbrot\" or \"julia\""));
+        None => None,
+    };
+    let at_power = |e: String| match &formula.power {
+        Some(p) if e.contains("comes in") || e.contains("each phase") => cx.err(p.span(), e),
+        _ => cx.err(formula.kind.span(), e),
+    };
+    let parsed = if kind == "julia" {
+        if power.is_some_and(|p| p != 2) {
+            return at_power("kind = \"julia\" is z² + c's Julia set; for another power write the family, e.g. kind = \"mandelbrot\", power = 3, and its c".into());
         }
-    })
+        Formula::default()
+    } else {
+        match Formula::parse(kind, power) {
+            Ok(f) => f,
+            Err(e) => return at_power(e.0),
+        }
+    };
+    let family = match (&formula.c, kind) {
+        (Some(c), _) => FamilySpec::Julia { c: cx.pair(c, "Julia parameter c")? },
+        (None, "julia") => {
+            return cx.err(formula.kind.span(), "a Julia set needs its parameter: c = [\"re\", \"im\"]");
+        }
+        (None, _) => FamilySpec::Mandelbrot,
+    };
+    Ok((family, parsed))
 }
 
 /// The `[view]` keys other than the size, validated.
