@@ -17,6 +17,7 @@
 //! GPU adapter exists is for the caller to check ([`crate::gpu::GpuContext::shared`]).
 
 pub mod fuzz;
+pub mod kf_maps;
 mod truth;
 pub mod views;
 
