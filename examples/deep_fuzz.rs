@@ -113,7 +113,7 @@ fn main() {
         draw += 1;
         let Some(view) = views::generate(f.seed, draw, &spec) else { continue };
         let t = Instant::now();
-        let verdict = match fuzz::check(&view.scene, f.pixels, &levels, BAR, &cancel) {
+        let verdict = match fuzz::check(&view.scene, deepfield::compare::scene_formula(&view.scene), f.pixels, &levels, BAR, &cancel) {
             Ok(v) => v,
             Err(e) => {
                 println!("{}: not checked: {e}", view.name);

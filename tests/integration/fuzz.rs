@@ -16,7 +16,7 @@ use deepfield::simd_level::SimdLevel;
 fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) -> Vec<String> {
     let spec = ViewSpec { kind, log10_zoom, max_iter, width: 32, height: 24 };
     let view = (0..16).find_map(|d| views::generate(seed, d, &spec)).unwrap_or_else(|| panic!("no {kind:?} view"));
-    let verdict = fuzz::check(&view.scene, 12, &SimdLevel::usable(), BAR, &AtomicBool::new(false)).expect("ran");
+    let verdict = fuzz::check(&view.scene, deepfield::compare::scene_formula(&view.scene), 12, &SimdLevel::usable(), BAR, &AtomicBool::new(false)).expect("ran");
     let names: Vec<&str> = verdict.rows.iter().map(|r| r.engine.as_str()).collect();
     eprintln!("{}: {names:?}", view.name);
     assert!(names.iter().any(|n| n.contains("bla")) && names.iter().any(|n| !n.contains("bla")), "{names:?}");
