@@ -16,6 +16,7 @@
 //! The GPU engines (`gpu`, `gpu-df`) are listed where they can address the view; whether a
 //! GPU adapter exists is for the caller to check ([`crate::gpu::GpuContext::shared`]).
 
+pub mod boundary;
 pub mod fuzz;
 pub mod kf_maps;
 mod truth;
