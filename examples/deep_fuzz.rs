@@ -12,7 +12,14 @@
 //! views), `--out DIR` (default `fuzz-failures`), `--pixels K` (sampled pixels per view,
 //! default 24), `--size WxH` (default 64x48), `--min-depth D` and `--max-depth D` (log10 of the
 //! shallowest and deepest zoom, default 15 and 2000), `--max-iter N` (default 1000000), `--kinds a,b` (default all:
-//! descent, minibrot, misiurewicz, early-escape, floatexp-line, julia).
+//! descent, minibrot, misiurewicz, early-escape, floatexp-line, julia, boundary, julia-boundary,
+//! mini, real-axis; for a formula other than z² + c only the last four, which work for any
+//! formula), `--formula F` (a family, `NAME^P`, or a hybrid `a,b^3`; default z² + c; the
+//! views' Julia forms come from `julia-boundary`), `--list-formulas` (print every family at
+//! every power, one a line, and stop; `scripts/fuzz-deep.sh --formulas` loops over them).
+//!
+//! Boundary descents sample the view at every step of the way down, so the any-formula kinds
+//! go no deeper than 1e100 (`ANY_FORMULA_DEPTH`).
 #![allow(clippy::print_stdout)] // printing the findings is the point
 
 use std::sync::atomic::AtomicBool;
@@ -20,6 +27,11 @@ use std::time::Instant;
 
 use deepfield::compare::fuzz::{self, BAR};
 use deepfield::compare::views::{self, Rng, ViewKind, ViewSpec};
+use deepfield::formula::Formula;
+use deepfield::formula::kind::KINDS;
+
+/// The deepest zoom (log10) the boundary-descent kinds are drawn at.
+const ANY_FORMULA_DEPTH: f64 = 100.0;
 use deepfield::simd_level::SimdLevel;
 
 struct Flags {
@@ -32,7 +44,8 @@ struct Flags {
     min_depth: f64,
     max_depth: f64,
     max_iter: u32,
-    kinds: Vec<ViewKind>,
+    kinds: Option<Vec<ViewKind>>,
+    formula: Formula,
 }
 
 fn flags() -> Result<Flags, String> {
@@ -46,7 +59,8 @@ fn flags() -> Result<Flags, String> {
         min_depth: 15.0,
         max_depth: 2000.0,
         max_iter: 1_000_000,
-        kinds: ViewKind::ALL.to_vec(),
+        kinds: None,
+        formula: Formula::default(),
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut it = args.iter();
@@ -69,10 +83,23 @@ fn flags() -> Result<Flags, String> {
             }
             "--kinds" => {
                 let v = value()?;
-                f.kinds = v
-                    .split(',')
-                    .map(|k| ViewKind::ALL.into_iter().find(|x| x.name() == k).ok_or(format!("--kinds: no kind {k}")))
-                    .collect::<Result<_, _>>()?;
+                f.kinds = Some(
+                    v.split(',')
+                        .map(|k| {
+                            ViewKind::ALL.into_iter().find(|x| x.name() == k).ok_or(format!("--kinds: no kind {k}"))
+                        })
+                        .collect::<Result<_, _>>()?,
+                );
+            }
+            "--formula" => f.formula = Formula::parse(value()?, None).map_err(|e| format!("--formula: {e}"))?,
+            "--list-formulas" => {
+                for k in KINDS {
+                    for p in k.min_power..=k.max_power {
+                        let phase = deepfield::formula::Phase { kind: k.kind, power: p };
+                        println!("{phase}");
+                    }
+                }
+                std::process::exit(0);
             }
             other => return Err(format!("unknown flag {other}")),
         }
@@ -88,32 +115,51 @@ fn main() {
             std::process::exit(2);
         }
     };
+    let kinds = f.kinds.clone().unwrap_or_else(|| ViewKind::for_formula(f.formula));
+    if let Some(k) = kinds.iter().find(|k| !f.formula.is_quadratic() && !k.any_formula()) {
+        eprintln!(
+            "error: --kinds {}: that kind is z² + c's; for {} use {:?}",
+            k.name(),
+            f.formula,
+            ViewKind::ANY_FORMULA.map(|k| k.name())
+        );
+        std::process::exit(2);
+    }
     let levels = SimdLevel::usable();
     let cancel = AtomicBool::new(false);
     let start = Instant::now();
     let mut rng = Rng::new(f.seed);
     let (mut checked, mut failed) = (0u32, 0u32);
     println!(
-        "seed {}, instruction sets {:?}, bar {BAR:?}",
+        "formula {}, seed {}, instruction sets {:?}, bar {BAR:?}",
+        f.formula,
         f.seed,
         levels.iter().map(|l| l.name()).collect::<Vec<_>>()
     );
     let mut draw = 0u32;
     while checked < f.count && start.elapsed().as_secs_f64() < f.seconds {
-        let kind = f.kinds[draw as usize % f.kinds.len()];
+        let kind = kinds[draw as usize % kinds.len()];
         // Depths log-uniform from the shallowest to the deepest asked (minibrot descents stop sooner
         // where their periods grow past what the check can iterate).
         let top = match kind {
             ViewKind::Misiurewicz | ViewKind::Julia => f.max_depth,
+            k if k.any_formula() => f.max_depth.min(ANY_FORMULA_DEPTH),
             _ => f.max_depth.min(400.0),
         };
         let bottom = f.min_depth.max(1.0);
         let depth = 10f64.powf(rng.uniform(bottom.log10(), top.max(bottom + 1.0).log10()));
-        let spec = ViewSpec { kind, log10_zoom: depth, max_iter: f.max_iter, width: f.size.0, height: f.size.1 };
+        let spec = ViewSpec {
+            kind,
+            log10_zoom: depth,
+            max_iter: f.max_iter,
+            width: f.size.0,
+            height: f.size.1,
+            formula: f.formula,
+        };
         draw += 1;
         let Some(view) = views::generate(f.seed, draw, &spec) else { continue };
         let t = Instant::now();
-        let verdict = match fuzz::check(&view.scene, f.pixels, &levels, BAR, &cancel) {
+        let verdict = match fuzz::check(&view.scene, view.formula, f.pixels, &levels, BAR, &cancel) {
             Ok(v) => v,
             Err(e) => {
                 println!("{}: not checked: {e}", view.name);
@@ -146,8 +192,8 @@ fn main() {
                 );
             }
             let text = format!(
-                "# Generated by the deep-view fuzzer (seed {}, draw {draw}); it broke the bar:\n{header}{}",
-                f.seed, view.toml
+                "# Generated by the deep-view fuzzer (formula {}, seed {}, draw {draw}); it broke the bar:\n{header}{}",
+                view.formula, f.seed, view.toml
             );
             if let Err(e) = std::fs::write(&path, text) {
                 eprintln!("error: {}: {e}", path.display());

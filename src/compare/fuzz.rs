@@ -17,6 +17,7 @@ use std::sync::atomic::AtomicBool;
 use super::{
     Measured, Row, RunError, Variant, VariantKind, mark_ill_conditioned, run, sample_pixels, score, suspects, truths,
 };
+use crate::formula::Formula;
 use crate::formula::end::INTERIOR;
 use crate::render::engine::{self, EngineKind};
 use crate::scene::Scene;
@@ -81,9 +82,10 @@ pub fn configurations(scene: &Scene) -> Vec<Variant> {
 pub const PACKED_AFTER: u32 = 256;
 
 /// Checks every configuration of `scene` on `pixels` sampled pixels, each with every
-/// instruction set in `levels`, against the truth and `bar`.
+/// instruction set in `levels`, against the truth of `scene` iterating `formula` and `bar`.
 pub fn check(
     scene: &Scene,
+    formula: Formula,
     pixels: u32,
     levels: &[SimdLevel],
     bar: Bar,
@@ -117,9 +119,9 @@ pub fn check(
         }
         measured.push(m);
     }
-    let mut truth = truths(scene, &sampled, cancel, &|_| {})?;
+    let mut truth = truths(scene, formula, &sampled, cancel, &|_| {})?;
     let suspect = suspects(&measured, &truth, scene.escape_radius);
-    mark_ill_conditioned(scene, &sampled, &mut truth, &suspect, cancel)?;
+    mark_ill_conditioned(scene, formula, &sampled, &mut truth, &suspect, cancel)?;
     let rows: Vec<Row> = variants
         .iter()
         .zip(&measured)

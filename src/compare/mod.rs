@@ -16,7 +16,9 @@
 //! The GPU engines (`gpu`, `gpu-df`) are listed where they can address the view; whether a
 //! GPU adapter exists is for the caller to check ([`crate::gpu::GpuContext::shared`]).
 
+pub mod boundary;
 pub mod fuzz;
+pub mod kf_maps;
 mod truth;
 pub mod views;
 
@@ -30,6 +32,7 @@ pub use truth::Truth;
 
 use crate::cancel::Cancelled;
 use crate::field::{self, ChannelSet, Planes, Transform};
+use crate::formula::Formula;
 use crate::formula::end::INTERIOR;
 use crate::gpu::{GpuContext, GpuError, Precision};
 use crate::num::bigfloat;
@@ -194,9 +197,16 @@ pub fn sample_pixels(scene: &Scene, count: u32) -> Vec<(u32, u32)> {
     out
 }
 
+/// The formula `scene` iterates, for the truth.
+pub fn scene_formula(_scene: &Scene) -> Formula {
+    // TODO(formula): scene.formula
+    Formula::default()
+}
+
 /// The sample grid in big floats, at the truth's precision.
 struct TruthGrid<'a> {
     scene: &'a Scene,
+    formula: Formula,
     bits: u64,
     spacing: Float,
     center: [Float; 2],
@@ -204,7 +214,7 @@ struct TruthGrid<'a> {
 }
 
 impl<'a> TruthGrid<'a> {
-    fn new(scene: &'a Scene) -> Self {
+    fn new(scene: &'a Scene, formula: Formula) -> Self {
         let bits = bigfloat::precision_for(scene.log10_spacing()) + 64;
         let spacing = scene.scale.spacing_big(scene.height * scene.aa, bits);
         let center = [bigfloat::from_decimal(&scene.center[0], bits), bigfloat::from_decimal(&scene.center[1], bits)];
@@ -212,7 +222,7 @@ impl<'a> TruthGrid<'a> {
             FamilySpec::Mandelbrot => None,
             FamilySpec::Julia { c } => Some([bigfloat::from_decimal(&c[0], bits), bigfloat::from_decimal(&c[1], bits)]),
         };
-        TruthGrid { scene, bits, spacing, center, julia }
+        TruthGrid { scene, formula, bits, spacing, center, julia }
     }
 
     /// The truth at sample (i, j), moved by `shift` sample spacings.
@@ -230,19 +240,20 @@ impl<'a> TruthGrid<'a> {
         let oy = offset(o[1], shift[1]);
         let p = [self.center[0].add_prec_ref_ref(&ox, bits).0, self.center[1].add_prec_ref_ref(&oy, bits).0];
         let s = self.scene;
-        truth::orbit(&p, self.julia.as_ref(), s.max_iter, s.escape_radius, &self.spacing, bits)
+        truth::orbit_formula(&p, self.julia.as_ref(), self.formula, s.max_iter, s.escape_radius, &self.spacing, bits)
     }
 }
 
-/// The ground truth at the sampled pixels, computed in parallel; `progress` receives the
-/// number of pixels done.
+/// The ground truth at the sampled pixels of `scene` iterating `formula`, computed in
+/// parallel; `progress` receives the number of pixels done.
 pub fn truths(
     scene: &Scene,
+    formula: Formula,
     pixels: &[(u32, u32)],
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Truth>, Cancelled> {
-    let grid = TruthGrid::new(scene);
+    let grid = TruthGrid::new(scene, formula);
     let done = AtomicU64::new(0);
     pixels
         .par_iter()
@@ -294,12 +305,13 @@ pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64) -> 
 /// precision) and is marked so.
 pub fn mark_ill_conditioned(
     scene: &Scene,
+    formula: Formula,
     pixels: &[(u32, u32)],
     truths: &mut [Truth],
     suspects: &[usize],
     cancel: &AtomicBool,
 ) -> Result<(), Cancelled> {
-    let grid = TruthGrid::new(scene);
+    let grid = TruthGrid::new(scene, formula);
     let flags: Vec<(usize, bool, bool)> = suspects
         .par_iter()
         .map(|&k| {
@@ -577,9 +589,10 @@ mod tests {
         let scene = Scene::validate(file, "julia-deep-e40", text, &dir, crate::io::load_bitmap).unwrap();
         let pixels = [(506, 307), (100, 100)];
         let cancel = AtomicBool::new(false);
-        let mut truths = truths(&scene, &pixels, &cancel, &|_| {}).unwrap();
+        let formula = scene_formula(&scene);
+        let mut truths = truths(&scene, formula, &pixels, &cancel, &|_| {}).unwrap();
         assert_eq!(truths[0].n, Some(702));
-        mark_ill_conditioned(&scene, &pixels, &mut truths, &[0, 1], &cancel).unwrap();
+        mark_ill_conditioned(&scene, formula, &pixels, &mut truths, &[0, 1], &cancel).unwrap();
         assert!(truths[0].ill_conditioned);
         assert!(!truths[1].ill_conditioned, "{:?}", truths[1]);
     }

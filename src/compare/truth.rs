@@ -5,9 +5,18 @@
 //! (z_n, and dz_n times the sample spacing) is rounded. It shares nothing with the engines
 //! but the big-float crate; the test suite checks the engines against a second,
 //! independent implementation (astro-float).
+//!
+//! z² + c has its own loop ([`orbit`]). Every other formula ([`orbit_formula`]) steps by
+//! Kalles Fraktaler's own expansions ([`super::kf_maps`], not the engines' composed maps),
+//! in dual numbers that carry the real 2×2 Jacobian J of z_n in the pixel's parameter (c,
+//! or z_0 for a Julia set); the distance estimate's derivative is then
+//! `formula::map::gradient_dz(z_n, J)` (J itself where the map is conformal).
 
 use malachite_float::Float;
 
+use super::kf_maps::{self, Dual};
+use crate::formula::Formula;
+use crate::formula::map::gradient_dz;
 use crate::num::FloatExp;
 use crate::num::bigfloat;
 
@@ -78,4 +87,143 @@ pub fn orbit(
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
     Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false }
+}
+
+/// Iterates the orbit of `point` under `formula` (Mandelbrot form: c = point, z_0 = 0;
+/// Julia form: z_0 = point, c = `julia`); iteration n steps by phase n mod the cycle's
+/// length. z² + c goes through [`orbit`], its own loop, unchanged.
+///
+/// # Panics
+///
+/// When a phase is none of `KINDS`' rows, which [`Formula::parse`] never admits.
+pub fn orbit_formula(
+    point: &[Float; 2],
+    julia: Option<&[Float; 2]>,
+    formula: Formula,
+    max_iter: u32,
+    escape: f64,
+    spacing: &Float,
+    bits: u64,
+) -> Truth {
+    if formula.is_quadratic() {
+        return orbit(point, julia, max_iter, escape, spacing, bits);
+    }
+    // The parameter the derivative is taken in carries the tangents.
+    let (mut z, c) = match julia {
+        Some(c) => (
+            [Dual::variable(point[0].clone(), 0), Dual::variable(point[1].clone(), 1)],
+            [Dual::constant(c[0].clone()), Dual::constant(c[1].clone())],
+        ),
+        None => (
+            [Dual::constant(Float::from(0u32)), Dual::constant(Float::from(0u32))],
+            [Dual::variable(point[0].clone(), 0), Dual::variable(point[1].clone(), 1)],
+        ),
+    };
+    let r2 = escape * escape;
+    let mut near = false;
+    let f = |v: &Float| bigfloat::to_floatexp(v).to_f64();
+    for n in 0..=max_iter {
+        let m2 = f(&z[0].v.square_prec_ref(bits).0) + f(&z[1].v.square_prec_ref(bits).0);
+        if ((m2 / r2).sqrt() - 1.0).abs() < 1e-9 {
+            near = true;
+        }
+        if m2 > r2 {
+            let scaled = |d: &Float| -> f64 {
+                let v: FloatExp = bigfloat::to_floatexp(d) * bigfloat::to_floatexp(spacing);
+                v.to_f64()
+            };
+            let zf = [f(&z[0].v), f(&z[1].v)];
+            // J times the spacing, rows first, then the derivative a distance estimate uses.
+            let j = [[scaled(&z[0].d[0]), scaled(&z[0].d[1])], [scaled(&z[1].d[0]), scaled(&z[1].d[1])]];
+            let dz = gradient_dz(zf, j);
+            return Truth {
+                n: Some(n),
+                z: zf,
+                dz,
+                near_circle: near,
+                ill_conditioned: false,
+                nf_ill_conditioned: false,
+            };
+        }
+        if n == max_iter {
+            break;
+        }
+        let step = kf_maps::kf_step_dual(formula.phase(n), &z, &c, bits);
+        z = step.expect("every phase of a validated formula is a row of KINDS").z;
+    }
+    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::Phase;
+
+    fn f(x: f64) -> Float {
+        Float::from_primitive_float_prec(x, 64).0
+    }
+
+    /// z² + c written as a one-phase formula is [`orbit`] itself.
+    #[test]
+    fn the_quadratic_formula_keeps_its_loop() {
+        let (p, s) = ([f(-0.7453), f(0.1127)], f(1e-6));
+        let a = orbit(&p, None, 5000, 2.0, &s, 128);
+        let b = orbit_formula(&p, None, Formula::default(), 5000, 2.0, &s, 128);
+        assert_eq!(a, b);
+    }
+
+    /// Mandelbrot power 2 as a hybrid of two identical phases (not `is_quadratic`, so it
+    /// takes the dual-number loop through KF's expansion) ends where z² + c's loop does,
+    /// with the same derivative: the map is conformal, so `gradient_dz` of J is dz.
+    #[test]
+    fn kfs_expansion_and_the_quadratic_loop_agree() {
+        let hybrid = Formula::cycle(&[Phase::QUADRATIC, Phase::QUADRATIC]).unwrap();
+        let s = f(1e-3);
+        for (p, julia) in
+            [([f(-0.7453), f(0.1127)], None), ([f(0.3), f(-0.5)], Some([f(-0.8), f(0.156)])), ([f(-1.8), f(0.0)], None)]
+        {
+            let a = orbit(&p, julia.as_ref(), 3000, 1e3, &s, 160);
+            let b = orbit_formula(&p, julia.as_ref(), hybrid, 3000, 1e3, &s, 160);
+            assert_eq!(a.n, b.n, "{p:?}");
+            for k in 0..2 {
+                assert!((a.z[k] - b.z[k]).abs() <= 1e-12 * a.z[0].hypot(a.z[1]), "{a:?} {b:?}");
+                assert!((a.dz[k] - b.dz[k]).abs() <= 1e-12 * a.dz[0].hypot(a.dz[1]), "{a:?} {b:?}");
+            }
+        }
+    }
+
+    /// The Burning Ship's dz against a finite difference of its escaped orbit: the real
+    /// Jacobian J of z_n in c, by central differences, then `gradient_dz`.
+    #[test]
+    fn a_non_conformal_derivative_is_the_gradient_of_the_jacobian() {
+        let formula = Formula::single(Phase { kind: crate::formula::Kind::BurningShip, power: 2 });
+        let bits = 200;
+        let c = [-1.7602, -0.0282];
+        let one = f(1.0);
+        let t = orbit_formula(&[f(c[0]), f(c[1])], None, formula, 1000, 1e10, &one, bits);
+        let n = t.n.expect("escapes");
+        assert!(n >= 8, "escapes after {n} steps: too few to test the chain of Jacobians");
+        // z_n at c moved by h along x and y, iterating KF's expansion directly.
+        let zn = |dx: f64, dy: f64| {
+            let cx = f(c[0]).add_prec(f(dx), bits).0;
+            let cy = f(c[1]).add_prec(f(dy), bits).0;
+            let (mut x, mut y) = (f(0.0), f(0.0));
+            for _ in 0..n {
+                [x, y] = kf_maps::kf_step(formula.phase(0), [&x, &y], [&cx, &cy], bits).unwrap();
+            }
+            [x, y]
+        };
+        let h = 1e-30;
+        let mut j = [[0.0; 2]; 2];
+        for (col, (dx, dy)) in [(h, 0.0), (0.0, h)].into_iter().enumerate() {
+            let (a, b) = (zn(dx, dy), zn(-dx, -dy));
+            for row in 0..2 {
+                let d = a[row].sub_prec_ref_ref(&b[row], bits).0;
+                j[row][col] = bigfloat::to_floatexp(&d).to_f64() / (2.0 * h);
+            }
+        }
+        let want = gradient_dz(t.z, j);
+        let size = want[0].hypot(want[1]);
+        assert!((t.dz[0] - want[0]).abs() <= 1e-6 * size && (t.dz[1] - want[1]).abs() <= 1e-6 * size, "{t:?} {want:?}");
+    }
 }

@@ -11,9 +11,18 @@
 //! and Julia sets with c near the boundary of the Mandelbrot set, centred on a point of the
 //! Julia set found by inverse iteration. The same seed gives the same views, on every
 //! machine: everything is computed in big floats from a fixed pseudo-random sequence.
+//!
+//! Those kinds are z² + c's (its ball periods, Misiurewicz points and inverse iteration).
+//! For any formula, including the non-quadratic families and hybrids, four more kinds come
+//! from boundary descents ([`super::boundary`]): the boundary of the Mandelbrot-form set,
+//! of a Julia set whose c is itself on that boundary, the neighbourhood of a periodic point
+//! found by Newton's method from a descent's end (a minibrot, or a miniship), and the real
+//! axis (centred exactly on it or just off it, where the Burning Ship's folds meet).
 
 use std::fmt::Write as _;
 
+use super::boundary;
+use crate::formula::Formula;
 use crate::locate::{Minibrot, misiurewicz, nucleus, period};
 use crate::num::bigcomplex::BigC;
 use crate::num::{Decimal, FloatExp};
@@ -37,18 +46,46 @@ pub enum ViewKind {
     FloatExpLine,
     /// A Julia set with c near the Mandelbrot set's boundary, centred on the Julia set.
     Julia,
+    /// Any formula: a boundary descent of its Mandelbrot-form set.
+    Boundary,
+    /// Any formula: a boundary descent of its Julia set for a c found by a shallow descent.
+    JuliaBoundary,
+    /// Any formula: the neighbourhood of a periodic point (a minibrot or miniship) that
+    /// Newton's method finds from a descent's end.
+    Mini,
+    /// Any formula: a descent along the real axis of its Mandelbrot form, the view centred
+    /// on the axis or just off it.
+    RealAxis,
 }
 
 impl ViewKind {
     /// Every kind.
-    pub const ALL: [ViewKind; 6] = [
+    pub const ALL: [ViewKind; 10] = [
         ViewKind::Descent,
         ViewKind::Minibrot,
         ViewKind::Misiurewicz,
         ViewKind::EarlyEscape,
         ViewKind::FloatExpLine,
         ViewKind::Julia,
+        ViewKind::Boundary,
+        ViewKind::JuliaBoundary,
+        ViewKind::Mini,
+        ViewKind::RealAxis,
     ];
+
+    /// The kinds found by boundary descents, which work for any formula.
+    pub const ANY_FORMULA: [ViewKind; 4] =
+        [ViewKind::Boundary, ViewKind::JuliaBoundary, ViewKind::Mini, ViewKind::RealAxis];
+
+    /// True for the kinds that work for any formula (the others are z² + c's).
+    pub fn any_formula(self) -> bool {
+        Self::ANY_FORMULA.contains(&self)
+    }
+
+    /// The kinds that can be drawn for `formula`.
+    pub fn for_formula(formula: Formula) -> Vec<ViewKind> {
+        Self::ALL.into_iter().filter(|k| formula.is_quadratic() || k.any_formula()).collect()
+    }
 
     /// A short name for file names and reports.
     pub fn name(self) -> &'static str {
@@ -59,6 +96,10 @@ impl ViewKind {
             ViewKind::EarlyEscape => "early-escape",
             ViewKind::FloatExpLine => "floatexp-line",
             ViewKind::Julia => "julia",
+            ViewKind::Boundary => "boundary",
+            ViewKind::JuliaBoundary => "julia-boundary",
+            ViewKind::Mini => "mini",
+            ViewKind::RealAxis => "real-axis",
         }
     }
 }
@@ -76,6 +117,8 @@ pub struct ViewSpec {
     pub width: u32,
     /// Image size.
     pub height: u32,
+    /// The formula iterated.
+    pub formula: Formula,
 }
 
 /// A generated view: the scene, its text (to write out and reproduce) and how it was made.
@@ -87,6 +130,8 @@ pub struct GeneratedView {
     pub toml: String,
     /// The validated scene.
     pub scene: Scene,
+    /// The formula the view is of (until scenes state one, it travels beside the scene).
+    pub formula: Formula,
 }
 
 /// A small deterministic pseudo-random sequence (SplitMix64).
@@ -225,6 +270,10 @@ fn julia_point(rng: &mut Rng, c: &BigC, bits: u64) -> BigC {
 fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max_iter: u32, spec: &ViewSpec) -> String {
     let [re, im] = center.to_decimals(3);
     let mut t = String::from("version = 1\n");
+    if !spec.formula.is_quadratic() {
+        // TODO(formula): scene.formula: the formula as a scene key once scenes have one.
+        let _ = writeln!(t, "# formula: {}", spec.formula);
+    }
     if let Some([cr, ci]) = julia {
         let _ = writeln!(t, "[formula]\nkind = \"julia\"\nc = [\"{cr}\", \"{ci}\"]");
     }
@@ -237,10 +286,16 @@ fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max
 /// Draws one view of `spec` with draw number `draw` of generator `seed`; None when the
 /// random draw found nothing usable (the caller draws again).
 pub fn generate(seed: u64, draw: u32, spec: &ViewSpec) -> Option<GeneratedView> {
+    if !spec.formula.is_quadratic() && !spec.kind.any_formula() {
+        return None;
+    }
     let mut rng = Rng::new(seed.wrapping_mul(0x1_0000_0001).wrapping_add(draw as u64));
     let tau = std::f64::consts::TAU;
     let depth = spec.log10_zoom;
     let (center, radius, julia, max_iter) = match spec.kind {
+        ViewKind::Boundary | ViewKind::JuliaBoundary | ViewKind::Mini | ViewKind::RealAxis => {
+            any_formula_view(&mut rng, spec)?
+        }
         ViewKind::Misiurewicz | ViewKind::FloatExpLine => {
             let depth = if spec.kind == ViewKind::FloatExpLine {
                 // Spacing 2 radius / height between 1e-320 and 1e-280.
@@ -288,13 +343,64 @@ pub fn generate(seed: u64, draw: u32, spec: &ViewSpec) -> Option<GeneratedView> 
     };
     let max_iter = max_iter.clamp(100, spec.max_iter);
     let toml = scene_text(&center, radius, julia.as_ref(), max_iter, spec);
-    let name = format!("{}-{seed}-{draw}", spec.kind.name());
+    let name = if spec.formula.is_quadratic() {
+        format!("{}-{seed}-{draw}", spec.kind.name())
+    } else {
+        let formula = spec.formula.to_string().replace(['^', ','], "_");
+        format!("{formula}-{}-{seed}-{draw}", spec.kind.name())
+    };
     let file = Scene::parse_file(&name, &toml).ok()?;
     let no_bitmaps = |_: &std::path::Path| {
         Err(std::io::Error::new(std::io::ErrorKind::Unsupported, "generated views have no bitmap layers"))
     };
     let scene = Scene::validate(file, &name, &toml, std::path::Path::new("."), no_bitmaps).ok()?;
-    Some(GeneratedView { name, toml, scene })
+    Some(GeneratedView { name, toml, scene, formula: spec.formula })
+}
+
+/// A view of a kind that works for any formula: (centre, radius, Julia c, iteration limit).
+fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, Option<[Decimal; 2]>, u32)> {
+    let (formula, depth, tau) = (spec.formula, spec.log10_zoom, std::f64::consts::TAU);
+    let whole = || (BigC::zero(64), FloatExp::from(2.5));
+    let limit = |max_n: u32| max_n.saturating_mul(3).saturating_add(1000);
+    Some(match spec.kind {
+        ViewKind::Boundary => {
+            let (c, r) = whole();
+            let f = boundary::descend(rng, formula, None, c, r, depth, spec.max_iter)?;
+            (f.center, f.radius, None, limit(f.max_n))
+        }
+        ViewKind::JuliaBoundary => {
+            // c on the boundary of the Mandelbrot-form set, as the scene states it (20
+            // decimals) and exactly that value in big floats; then the Julia set's boundary.
+            let (c, r) = whole();
+            let c_depth = rng.uniform(1.0, 4.0);
+            let at = boundary::descend(rng, formula, None, c, r, c_depth, 20_000)?;
+            let c = at.center.to_rationals().map(|r| Decimal::from_rational(&r, 20));
+            let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
+            let (z, r) = whole();
+            let f = boundary::descend(rng, formula, Some(&big), z, r, depth, spec.max_iter)?;
+            (f.center, f.radius, Some(c), limit(f.max_n))
+        }
+        ViewKind::Mini => {
+            let (c, r) = whole();
+            let f = boundary::descend(rng, formula, None, c, r, depth, spec.max_iter)?;
+            let near = f.center.with_bits(bits_for(depth + 20.0));
+            let (nucleus, period) = boundary::periodic_point(formula, &near, f.radius, limit(f.max_n))?;
+            let radius = f.radius.mul_f64(rng.uniform(0.3, 3.0));
+            let center = offset(&nucleus, radius.mul_f64(rng.uniform(0.0, 0.5)), rng.uniform(0.0, tau));
+            (center, radius, None, limit(f.max_n).max(period.saturating_mul(50)))
+        }
+        _ => {
+            let f = boundary::descend_real(rng, formula, depth, spec.max_iter)?;
+            // Half the views centred exactly on the axis, half just off it.
+            let center = if rng.next_u64() & 1 == 0 {
+                f.center
+            } else {
+                let up = f.radius.mul_f64(rng.uniform(1e-3, 0.5) * if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 });
+                boundary::shifted(&f.center, [FloatExp::ZERO, up])
+            };
+            (center, f.radius, None, limit(f.max_n))
+        }
+    })
 }
 
 #[cfg(test)]
@@ -304,7 +410,14 @@ mod tests {
     #[test]
     fn the_same_seed_gives_the_same_views() {
         for kind in [ViewKind::Misiurewicz, ViewKind::Julia, ViewKind::Minibrot] {
-            let spec = ViewSpec { kind, log10_zoom: 30.0, max_iter: 100_000, width: 16, height: 12 };
+            let spec = ViewSpec {
+                kind,
+                log10_zoom: 30.0,
+                max_iter: 100_000,
+                width: 16,
+                height: 12,
+                formula: Formula::default(),
+            };
             let a = (0..8).find_map(|d| generate(7, d, &spec)).expect("some draw works");
             let b = (0..8).find_map(|d| generate(7, d, &spec)).expect("some draw works");
             assert_eq!(a.toml, b.toml);
@@ -314,10 +427,56 @@ mod tests {
 
     #[test]
     fn misiurewicz_views_reach_any_depth() {
-        let spec =
-            ViewSpec { kind: ViewKind::Misiurewicz, log10_zoom: 1500.0, max_iter: 1_000_000, width: 8, height: 6 };
+        let spec = ViewSpec {
+            kind: ViewKind::Misiurewicz,
+            log10_zoom: 1500.0,
+            max_iter: 1_000_000,
+            width: 8,
+            height: 6,
+            formula: Formula::default(),
+        };
         let v = (0..8).find_map(|d| generate(3, d, &spec)).expect("some draw works");
         let l = v.scene.log10_spacing();
         assert!((-1502.0..-1498.0).contains(&l), "spacing 1e{l}");
+    }
+
+    #[test]
+    fn any_formula_kinds_give_the_same_views_for_the_same_seed() {
+        let ship = Formula::parse("burning-ship", None).unwrap();
+        for kind in ViewKind::ANY_FORMULA {
+            let spec = ViewSpec { kind, log10_zoom: 7.0, max_iter: 20_000, width: 16, height: 12, formula: ship };
+            let a = (0..8).find_map(|d| generate(3, d, &spec)).unwrap_or_else(|| panic!("no {kind:?} view"));
+            let b = (0..8).find_map(|d| generate(3, d, &spec)).expect("the same draw");
+            assert_eq!(a.toml, b.toml);
+            assert_eq!(a.formula, ship);
+            assert!(a.toml.contains("# formula: burning-ship"), "{}", a.toml);
+            assert!(a.scene.log10_spacing() < -7.0, "{kind:?}: spacing 1e{}", a.scene.log10_spacing());
+        }
+        // z² + c's own kinds are not drawn for other formulas.
+        let spec = ViewSpec {
+            kind: ViewKind::Misiurewicz,
+            log10_zoom: 7.0,
+            max_iter: 1000,
+            width: 8,
+            height: 6,
+            formula: ship,
+        };
+        assert!(generate(3, 0, &spec).is_none());
+    }
+
+    #[test]
+    fn real_axis_views_are_centred_on_or_near_the_axis() {
+        let ship = Formula::parse("burning-ship", None).unwrap();
+        let spec = ViewSpec {
+            kind: ViewKind::RealAxis,
+            log10_zoom: 6.0,
+            max_iter: 20_000,
+            width: 16,
+            height: 12,
+            formula: ship,
+        };
+        let views: Vec<GeneratedView> = (0..12).filter_map(|d| generate(5, d, &spec)).collect();
+        let on_axis = views.iter().filter(|v| v.scene.center[1].is_zero()).count();
+        assert!(on_axis > 0 && on_axis < views.len(), "{on_axis} of {} on the axis", views.len());
     }
 }

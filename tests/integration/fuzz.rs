@@ -14,9 +14,11 @@ use deepfield::simd_level::SimdLevel;
 /// Generates a view of `kind` (the first of a few draws that finds one) and checks it;
 /// returns the configurations checked.
 fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) -> Vec<String> {
-    let spec = ViewSpec { kind, log10_zoom, max_iter, width: 32, height: 24 };
+    let formula = deepfield::formula::Formula::default();
+    let spec = ViewSpec { kind, log10_zoom, max_iter, width: 32, height: 24, formula };
     let view = (0..16).find_map(|d| views::generate(seed, d, &spec)).unwrap_or_else(|| panic!("no {kind:?} view"));
-    let verdict = fuzz::check(&view.scene, 12, &SimdLevel::usable(), BAR, &AtomicBool::new(false)).expect("ran");
+    let verdict =
+        fuzz::check(&view.scene, view.formula, 12, &SimdLevel::usable(), BAR, &AtomicBool::new(false)).expect("ran");
     let names: Vec<&str> = verdict.rows.iter().map(|r| r.engine.as_str()).collect();
     eprintln!("{}: {names:?}", view.name);
     assert!(names.iter().any(|n| n.contains("bla")) && names.iter().any(|n| !n.contains("bla")), "{names:?}");
@@ -51,4 +53,12 @@ fn generated_minibrot_descent_and_early_escape_views() {
 fn generated_views_at_the_f64_floatexp_line_and_julia_sets() {
     fuzz(ViewKind::FloatExpLine, 31, 300.0, 100_000);
     fuzz(ViewKind::Julia, 32, 60.0, 100_000);
+}
+
+/// The boundary-descent kinds that work for any formula, on z² + c (whose engines exist
+/// today): a Julia set whose c is on the boundary, and a view on the real axis.
+#[test]
+fn generated_boundary_descent_views_of_z2_plus_c() {
+    fuzz(ViewKind::JuliaBoundary, 33, 20.0, 100_000);
+    fuzz(ViewKind::RealAxis, 34, 20.0, 100_000);
 }

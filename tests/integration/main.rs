@@ -5,6 +5,7 @@ mod accuracy;
 mod cli;
 mod coloring;
 mod deep;
+mod formula_kf;
 mod fuzz;
 mod golden;
 #[cfg(feature = "gpu")]

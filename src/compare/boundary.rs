@@ -1,0 +1,319 @@
+//! Boundary descents for any formula, for the deep-view fuzzer ([`super::views`]).
+//!
+//! The minibrot and Misiurewicz searches of [`crate::locate`] are z² + c's (ball periods,
+//! complex Newton); a Burning Ship, a Buffalo or a hybrid has neither. What every escape-time
+//! set has is a boundary where escaping and non-escaping points meet, and that can be
+//! followed down by sampling alone: a grid over the view, a cell whose corners disagree
+//! (some escape within the limit, some do not), a new view about a random point of that
+//! cell a few times smaller, again until the zoom asked for. The limit grows with the
+//! escape counts seen (a grid where everything escapes raises it; one where nothing does
+//! zooms back out). The same works for a Julia set (z_0 the point, c fixed) and along the
+//! real axis, which every family's Mandelbrot form maps to itself, where the folds of the
+//! Burning Ship and its relatives meet (|y| is not differentiable at y = 0).
+//!
+//! [`periodic_point`] then finds, near a descent's end, a point whose orbit returns to 0
+//! after p steps (the centre of a minibrot or "miniship") by Newton's method on
+//! z_p(c) = 0 with the real 2×2 Jacobian, where it is invertible.
+//!
+//! The orbits here use the engines' maps (`formula::Stepper`): this only chooses where to
+//! look; the truth the views are checked against is [`super::kf_maps`].
+
+use super::views::Rng;
+use crate::formula::{Cycle, Formula, Stepper};
+use crate::num::FloatExp;
+use crate::num::bigcomplex::BigC;
+
+/// |z|² beyond which the descent counts an orbit escaped (every family's set lies in |c| <= 2).
+const ESCAPE2: f64 = 16.0;
+/// Samples per side of the descent's grid.
+const GRID: usize = 8;
+/// Samples along the real axis in [`descend_real`].
+const LINE: usize = 33;
+/// The first iteration limit of a descent.
+const FIRST_LIMIT: u32 = 200;
+/// Views shallower than this (log10 of the zoom) are sampled in f64.
+const F64_DEPTH: f64 = 9.0;
+
+/// Where a descent ended.
+#[derive(Debug, Clone)]
+pub struct Found {
+    /// The view's centre.
+    pub center: BigC,
+    /// The view's radius.
+    pub radius: FloatExp,
+    /// The largest escape index among the last grid's samples.
+    pub max_n: u32,
+}
+
+/// Bits that place a point exactly at zoom 10^log10_zoom, with a margin.
+fn bits_for(log10_zoom: f64) -> u64 {
+    crate::num::bigfloat::precision_for(-log10_zoom)
+}
+
+/// log10 of 1 / `radius`.
+fn depth(radius: FloatExp) -> f64 {
+    -radius.log2() * std::f64::consts::LOG10_2
+}
+
+/// p + d, at p's precision.
+pub fn shifted(p: &BigC, d: [FloatExp; 2]) -> BigC {
+    let big = |x: FloatExp| BigC::from_f64(x.mantissa(), 0.0, p.bits).ldexp(x.exponent()).re;
+    p.add(&BigC { re: big(d[0]), im: big(d[1]), bits: p.bits })
+}
+
+/// The escape index of `point`'s orbit under `formula` within `limit` (Mandelbrot form:
+/// c = point, z_0 = 0; Julia form: z_0 = point), or None; in f64 where `shallow`.
+pub fn escape_time(formula: Formula, julia: Option<&BigC>, point: &BigC, limit: u32, shallow: bool) -> Option<u32> {
+    let s = Cycle(formula);
+    if shallow {
+        let f = |b: &BigC| b.to_fe().map(FloatExp::to_f64);
+        let p = f(point);
+        let (mut z, c) = match julia {
+            Some(c) => (p, f(c)),
+            None => ([0.0; 2], p),
+        };
+        for n in 0..limit {
+            if z[0] * z[0] + z[1] * z[1] > ESCAPE2 {
+                return Some(n);
+            }
+            let w = s.apply(n, z);
+            z = [w[0] + c[0], w[1] + c[1]];
+        }
+        return None;
+    }
+    let (mut z, c) = match julia {
+        Some(c) => (point.clone(), c.with_bits(point.bits)),
+        None => (BigC::zero(point.bits), point.clone()),
+    };
+    for n in 0..limit {
+        let [x, y] = z.to_fe();
+        if (x * x + y * y).to_f64() > ESCAPE2 {
+            return Some(n);
+        }
+        z = s.apply_big(n, &z).add(&c);
+    }
+    None
+}
+
+/// Follows the boundary of `formula`'s set (Julia set of `julia` where given) down from
+/// the view (`center`, `radius`) to zoom 10^`log10_zoom`, with iteration limits up to
+/// `max_iter`; None when the boundary is lost (a Julia set that is dust, a limit too low).
+pub fn descend(
+    rng: &mut Rng,
+    formula: Formula,
+    julia: Option<&BigC>,
+    center: BigC,
+    radius: FloatExp,
+    log10_zoom: f64,
+    max_iter: u32,
+) -> Option<Found> {
+    let (mut center, mut radius) = (center, radius);
+    let mut limit = FIRST_LIMIT.min(max_iter);
+    let mut misses = 0;
+    for _ in 0..(60.0 + 4.0 * log10_zoom) as usize {
+        let d = depth(radius);
+        let bits = bits_for(d + 10.0).max(center.bits);
+        center = center.with_bits(bits);
+        let step = radius.mul_f64(2.0 / (GRID - 1) as f64);
+        let at = |i: usize, j: usize| [step.mul_f64(i as f64) - radius, step.mul_f64(j as f64) - radius];
+        let mut n = [[None; GRID]; GRID];
+        for (i, row) in n.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = escape_time(formula, julia, &shifted(&center, at(i, j)), limit, d < F64_DEPTH);
+            }
+        }
+        let max_n = n.iter().flatten().flatten().copied().max();
+        if d >= log10_zoom {
+            return Some(Found { center, radius, max_n: max_n.unwrap_or(limit) });
+        }
+        let mut mixed = Vec::new();
+        for i in 0..GRID - 1 {
+            for j in 0..GRID - 1 {
+                let corners = [n[i][j], n[i + 1][j], n[i][j + 1], n[i + 1][j + 1]];
+                if corners.iter().any(Option::is_some) && corners.iter().any(Option::is_none) {
+                    mixed.push((i, j));
+                }
+            }
+        }
+        if mixed.is_empty() {
+            misses += 1;
+            if misses > 8 {
+                return None;
+            }
+            if n.iter().flatten().all(Option::is_some) && limit < max_iter {
+                // Everything escaped: the set's points here need a higher limit.
+                limit = limit.saturating_mul(2).min(max_iter);
+            } else {
+                radius = radius.mul_f64(2.0);
+            }
+            continue;
+        }
+        misses = 0;
+        if let Some(m) = max_n {
+            limit = limit.max(m.saturating_mul(2).saturating_add(100)).min(max_iter);
+        }
+        let (i, j) = mixed[rng.next_u64() as usize % mixed.len()];
+        let [x, y] = at(i, j);
+        let to = [x + step.mul_f64(rng.uniform(0.0, 1.0)), y + step.mul_f64(rng.uniform(0.0, 1.0))];
+        center = shifted(&center, to);
+        radius = step.mul_f64(rng.uniform(0.6, 1.5));
+    }
+    None
+}
+
+/// [`descend`] along the real axis of `formula`'s Mandelbrot form, from the segment
+/// [-2.5, 2.5]: every centre has imaginary part exactly 0.
+pub fn descend_real(rng: &mut Rng, formula: Formula, log10_zoom: f64, max_iter: u32) -> Option<Found> {
+    let mut center = BigC::zero(64);
+    let mut radius = FloatExp::from(2.5);
+    let mut limit = FIRST_LIMIT.min(max_iter);
+    let mut misses = 0;
+    for _ in 0..(60.0 + 4.0 * log10_zoom) as usize {
+        let d = depth(radius);
+        center = center.with_bits(bits_for(d + 10.0).max(center.bits));
+        let step = radius.mul_f64(2.0 / (LINE - 1) as f64);
+        let at = |i: usize| [step.mul_f64(i as f64) - radius, FloatExp::ZERO];
+        let n: Vec<Option<u32>> =
+            (0..LINE).map(|i| escape_time(formula, None, &shifted(&center, at(i)), limit, d < F64_DEPTH)).collect();
+        let max_n = n.iter().flatten().copied().max();
+        if d >= log10_zoom {
+            return Some(Found { center, radius, max_n: max_n.unwrap_or(limit) });
+        }
+        let mixed: Vec<usize> = (0..LINE - 1).filter(|&i| n[i].is_some() != n[i + 1].is_some()).collect();
+        if mixed.is_empty() {
+            misses += 1;
+            if misses > 8 {
+                return None;
+            }
+            if n.iter().all(Option::is_some) && limit < max_iter {
+                limit = limit.saturating_mul(2).min(max_iter);
+            } else {
+                radius = radius.mul_f64(2.0);
+            }
+            continue;
+        }
+        misses = 0;
+        if let Some(m) = max_n {
+            limit = limit.max(m.saturating_mul(2).saturating_add(100)).min(max_iter);
+        }
+        let i = mixed[rng.next_u64() as usize % mixed.len()];
+        center = shifted(&center, [at(i)[0] + step.mul_f64(rng.uniform(0.0, 1.0)), FloatExp::ZERO]);
+        radius = step.mul_f64(rng.uniform(1.0, 4.0));
+    }
+    None
+}
+
+/// A point near `near` whose orbit under `formula` (Mandelbrot form) returns to 0 after p
+/// steps, with p. The candidates for p are the steps at which the orbit of `near` comes
+/// closer to 0 than ever before (before escape or `limit`), tried from the smallest: for
+/// each, Newton's method on z_p(c) = 0 with the real Jacobian of z_p in c, which fails
+/// where the Jacobian is singular, the iterate leaves a few `radius` of `near`, or it does
+/// not settle within 60 steps.
+pub fn periodic_point(formula: Formula, near: &BigC, radius: FloatExp, limit: u32) -> Option<(BigC, u32)> {
+    let s = Cycle(formula);
+    let mut z = BigC::zero(near.bits);
+    let mut closest: Option<FloatExp> = None;
+    let mut candidates = Vec::new();
+    for n in 1..=limit {
+        z = s.apply_big(n - 1, &z).add(near);
+        let [x, y] = z.to_fe();
+        let m = x * x + y * y;
+        if m.to_f64() > ESCAPE2 {
+            break;
+        }
+        if closest.is_none_or(|b| m < b) {
+            closest = Some(m);
+            candidates.push(n);
+        }
+    }
+    candidates.into_iter().take(12).find_map(|p| newton(s, near, radius, p).map(|c| (c, p)))
+}
+
+/// Newton's method for a zero of z_p(c) from `near`, kept within 4 `radius` of it.
+fn newton(s: Cycle, near: &BigC, radius: FloatExp, period: u32) -> Option<BigC> {
+    let bits = near.bits;
+    let mut c = near.clone();
+    let small = radius.mul_f64(1e-10);
+    for _ in 0..60 {
+        let mut z = BigC::zero(bits);
+        // J = j 2^e: the Jacobian of z_n in c, J_(n+1) = Df(z_n) J_n + I.
+        let (mut j, mut e) = ([[0.0f64; 2]; 2], 0i32);
+        for n in 0..period {
+            let df = s.jacobian(n, z.to_fe().map(FloatExp::to_f64));
+            let one = 2f64.powi(-e);
+            j = [
+                [df[0][0] * j[0][0] + df[0][1] * j[1][0] + one, df[0][0] * j[0][1] + df[0][1] * j[1][1]],
+                [df[1][0] * j[0][0] + df[1][1] * j[1][0], df[1][0] * j[0][1] + df[1][1] * j[1][1] + one],
+            ];
+            if j.iter().flatten().any(|v| v.abs() > 2f64.powi(100)) {
+                j = j.map(|r| r.map(|v| v * 2f64.powi(-100)));
+                e += 100;
+            }
+            z = s.apply_big(n, &z).add(&c);
+        }
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        // δ = -J⁻¹ z_p.
+        let [fx, fy] = z.to_fe();
+        let k = -1.0 / det;
+        let dx = (fx.mul_f64(j[1][1]) - fy.mul_f64(j[0][1])).mul_f64(k).ldexp(-e);
+        let dy = (fy.mul_f64(j[0][0]) - fx.mul_f64(j[1][0])).mul_f64(k).ldexp(-e);
+        c = shifted(&c, [dx, dy]);
+        let [ox, oy] = c.sub(near).to_fe();
+        if (ox * ox + oy * oy).sqrt() > radius.mul_f64(4.0) {
+            return None;
+        }
+        if (dx * dx + dy * dy).sqrt() < small {
+            return Some(c);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::{Kind, Phase};
+
+    fn ship() -> Formula {
+        Formula::single(Phase { kind: Kind::BurningShip, power: 2 })
+    }
+
+    #[test]
+    fn a_descent_ends_on_the_boundary() {
+        let mut rng = Rng::new(5);
+        let f = descend(&mut rng, ship(), None, BigC::zero(64), FloatExp::from(2.5), 6.0, 20_000).expect("found");
+        assert!(depth(f.radius) >= 6.0);
+        // Some sample of the final view escapes and some does not (within a generous limit).
+        let limit = 4 * f.max_n + 1000;
+        let step = f.radius.mul_f64(0.25);
+        let ns: Vec<Option<u32>> = (0..81)
+            .map(|k| {
+                let d = [step.mul_f64((k % 9) as f64 - 4.0), step.mul_f64((k / 9) as f64 - 4.0)];
+                escape_time(ship(), None, &shifted(&f.center, d), limit, true)
+            })
+            .collect();
+        assert!(ns.iter().any(Option::is_some) && ns.iter().any(Option::is_none), "{ns:?}");
+    }
+
+    #[test]
+    fn a_real_descent_stays_on_the_axis() {
+        let mut rng = Rng::new(9);
+        let f = descend_real(&mut rng, ship(), 12.0, 20_000).expect("found");
+        assert!(f.center.im.is_zero());
+        assert!(depth(f.radius) >= 12.0);
+    }
+
+    /// The Burning Ship's period-3 miniship on the real axis near c = -1.7549 (the real
+    /// slice is z² + c's: c³ + 2c² + c + 1 = 0 gives -1.75487766624669...).
+    #[test]
+    fn newton_finds_the_period_3_miniship() {
+        let near = BigC::from_f64(-1.755, 1e-4, 128);
+        let (c, p) = periodic_point(ship(), &near, FloatExp::from(0.01), 1000).expect("converges");
+        assert_eq!(p, 3);
+        let [x, y] = c.to_fe().map(FloatExp::to_f64);
+        assert!((x + 1.754_877_666_246_69).abs() < 1e-12 && y.abs() < 1e-12, "{x} {y}");
+    }
+}
