@@ -196,18 +196,13 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
             a = cmul(a, w);
         }
         let a = [a[0] * P as f64, a[1] * P as f64];
-        let (si, sj) = (
-            if IN & FOLD_RE != 0 { sgn(z[0]) } else { 1.0 },
-            if IN & FOLD_IM != 0 { sgn(z[1]) } else { 1.0 },
-        );
+        let (si, sj) =
+            (if IN & FOLD_RE != 0 { sgn(z[0]) } else { 1.0 }, if IN & FOLD_IM != 0 { sgn(z[1]) } else { 1.0 });
         let (so, sp) = if OUT == FOLD_NONE {
             (1.0, 1.0)
         } else {
             let u = power::<P>(w);
-            (
-                if OUT & FOLD_RE != 0 { sgn(u[0]) } else { 1.0 },
-                if OUT & FOLD_IM != 0 { sgn(u[1]) } else { 1.0 },
-            )
+            (if OUT & FOLD_RE != 0 { sgn(u[0]) } else { 1.0 }, if OUT & FOLD_IM != 0 { sgn(u[1]) } else { 1.0 })
         };
         let (sr, sm) = match SIGN {
             SIGN_IM => (1.0, -1.0),
@@ -271,7 +266,10 @@ mod tests {
                 let scale = 1e-13 * (1.0 + want[0].abs().max(want[1].abs()));
                 // z + d is rounded; it is exact for these sizes only to about 1e-16 of |z|.
                 let tol = scale + 1e-15 * (d[0].abs() + d[1].abs() + 1.0) * 40.0;
-                assert!((got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol, "{z:?} {d:?}: {got:?} {want:?}");
+                assert!(
+                    (got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol,
+                    "{z:?} {d:?}: {got:?} {want:?}"
+                );
             }
         }
     }
@@ -285,7 +283,11 @@ mod tests {
                 let m = M::apply([z[0] - h * e[0], z[1] - h * e[1]]);
                 for row in 0..2 {
                     let fd = (p[row] - m[row]) / (2.0 * h);
-                    assert!((fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()), "{z:?} [{row}][{col}] {fd} {}", j[row][col]);
+                    assert!(
+                        (fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()),
+                        "{z:?} [{row}][{col}] {fd} {}",
+                        j[row][col]
+                    );
                 }
             }
         }

@@ -121,7 +121,10 @@ impl Formula {
     pub fn parse(text: &str, power: Option<u32>) -> Result<Formula, FormulaError> {
         let parts: Vec<&str> = text.split(',').map(str::trim).collect();
         if parts.len() > MAX_PHASES {
-            return Err(FormulaError(format!("a hybrid has at most {MAX_PHASES} phases; `{text}` has {}", parts.len())));
+            return Err(FormulaError(format!(
+                "a hybrid has at most {MAX_PHASES} phases; `{text}` has {}",
+                parts.len()
+            )));
         }
         if parts.len() > 1 && power.is_some() {
             return Err(FormulaError(

@@ -18,16 +18,26 @@
 //!
 //! | `.kfr` | scene | notes |
 //! |---|---|---|
-//! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept |
-//! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`) |
+//! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept; absent: 0 |
+//! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`); absent: 1 |
+//! | `FractalType`, `Power` | `[formula] kind`, `power` | through the table of families ([`crate::formula::kind::KINDS`]); see [`super::kfr_formula`] |
+//! | `UseHybridFormula`, `HybridFormula` | `[formula] kind = "a,b^3,..."` | when each group is one family; see [`super::kfr_hybrid`] |
 //! | `Iterations` | `[iteration] max` | optional (KF keeps its current value when absent); 1 ..= 2^32 - 2 |
 //! | `TargetWidth`, `TargetHeight` | `[view] width`, `height` | KF 2.15 output size; these are `.kfs` keys, present when settings and location were saved together (PNG/EXR metadata) |
 //! | `ImageWidth`, `ImageHeight` | `[view] width`, `height` | used when no `Target*` key is given (older KF); otherwise 800 x 600 |
 //!
+//! A file without `Re`, `Im` or `Zoom` (KF's formula presets have none) opens where KF would
+//! open it: KF keeps its current view for a missing key (`OpenString` starts from `GetRe`,
+//! `GetIm`, `GetZoom`), and the view it starts with is 0 + 0i at zoom 1 (`WM_CREATE` in
+//! `fraktal_sft/main.cpp`: `SetPosition(0, 0, 2, 640, 360)`, radius 2; its "Reset" is
+//! `SetPosition("0", "0", "1")`). The generated text says which keys were missing.
+//!
 //! What is checked, because deepfield cannot draw it and silently dropping it would give a
-//! different picture: `FractalType` must be 0 (Mandelbrot) and `Power` 2; `UseHybridFormula`
-//! must be 0; `SeedR`/`SeedI` must be 0 (KF's seed is the starting z_0 of a Mandelbrot-family
-//! orbit, not a Julia parameter).
+//! different picture: the formula must be one of deepfield's families (a `FractalType` KF
+//! 2.15 has but deepfield does not is refused by KF's name, e.g. "FractalType 42
+//! (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws"), at a power the
+//! family comes in; a hybrid must be a cycle of whole families; `SeedR`/`SeedI` must be 0
+//! (KF's seed is the starting z_0 of the orbit, not a Julia parameter).
 //!
 //! The view's rotation and stretch are the scene's own keys, with KF 2.15's meaning
 //! (`field::transform`): `RotateAngle`, `StretchAngle`, `StretchAmount` become `[view]
@@ -37,8 +47,10 @@
 //! back by `Rotate` (rotate = −Rotate, stretch_angle = Rotate, stretch_amount =
 //! log2(360 / Ratio) / 2).
 //!
-//! KF has no Julia mode (its formulas iterate from `SeedR + i SeedI` with `c` the pixel), so a
-//! `.kfr` always converts to a Mandelbrot scene.
+//! KF 2.15 has no Julia mode: no key, formula or hybrid holds a fixed c (every reference and
+//! perturbation loop adds the pixel's c; `SeedR + i SeedI` is only the orbit's z_0, and
+//! `FactorAR`/`FactorAI` the `a` of formulas deepfield refuses). So a `.kfr` never converts to
+//! `[formula] c`: it is always the Mandelbrot-type form of its family.
 //!
 //! Colours come with the location, near enough to open looking as its author saved it: a
 //! `Colors` line becomes one `smooth` layer whose `palette` is the `.kfr` file itself (its
@@ -52,14 +64,29 @@
 //!
 //! What is ignored: the rest of KF's colouring (`Differences`, `MultiColors`, `Slopes*`,
 //! `Texture*`, `Flat`, `GLSL`, ...), smoothing and bailout choices (deepfield's escape radius
-//! is its own), `Period`, `real`/`imag`/`FactorAR`/`FactorAI` (formula parameters;
-//! Fraktaler-3's `.kfr` import ignores them too), `Version`, and any key this module does not
-//! know. A file without `Colors` gets deepfield's default colouring.
+//! is its own; `real`/`imag` are the bailout norm's weights), `Period`, `FactorAR`/`FactorAI`
+//! (used only by formulas deepfield refuses; Fraktaler-3's `.kfr` import ignores them too),
+//! `Version`, and any key this module does not know. A file without `Colors` gets deepfield's default colouring.
 //!
 //! Two differences remain (the first is stated in the generated text): without
 //! `ImagPointsUp: 1` (KF 2.15.4 and later) KF draws the imaginary axis pointing down, so
 //! deepfield's image (axis up) is KF's mirrored top to bottom; and KF's sample grid may sit
 //! half a pixel from deepfield's pixel centres (invisible at any zoom).
+//!
+//! KF turns no formula over by itself. Its one pixel-to-plane map serves every formula
+//! (`CFraktalSFT::GetPixelCoordinates` in `fraktal_sft/fraktal_sft.cpp`, Karl Runmo and
+//! Claude Heiland-Allen, Kalles Fraktaler 2: x = centre + scale (m00 u + m01 v), y = centre +
+//! scale (m10 u + m11 v), with v the row counted downwards from the middle and m the view's
+//! transform, whose only reflection is `ImagPointsUp`'s: `OpenString` sets
+//! `polar2(ImagPointsUp ? -1 : 1, ...)`, whatever the `FractalType`); the formulas add that
+//! c unchanged (`formula/formula.xml`, e.g. Burning Ship: `Xin = abs(2 * Xr * Xi) + Ci`;
+//! nothing in `formula.xsl`, `hybrid.cpp` or the reference code negates `Ci`). So the Burning
+//! Ship's ship stands upright in KF because of the axis convention alone, and the centre a
+//! `.kfr` names is the same point of the plane here. For families symmetric about the real
+//! axis (no fold of the imaginary part) deepfield's mirror image is KF's picture of the
+//! conjugate centre; for the others (Burning Ship, Buffalo, the partial folds of y, and
+//! hybrids using them) no centre gives KF's picture, since deepfield's view turns and
+//! stretches but does not reflect, and the generated text says that it is KF's upside down.
 //!
 //! The lines are read by [`crate::kf_text`] (shared with the palette importer): CRLF or LF
 //! line ends, a leading byte-order mark, blank lines and spaces around keys and values are

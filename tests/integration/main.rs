@@ -11,6 +11,7 @@ mod golden;
 mod gpu;
 mod import;
 mod interior;
+mod kfr_presets;
 mod layout;
 mod locate;
 mod reference;
