@@ -67,6 +67,7 @@ fn every_kf_preset_converts_or_is_refused_by_name() {
             Err(message) => {
                 refused += 1;
                 let name = kf_type_name(kf_type).unwrap_or_else(|| panic!("{}: FractalType {kf_type}", path.display()));
+                eprintln!("{}: {message}", path.file_name().unwrap().to_string_lossy());
                 assert!(message.contains(name), "{}: the refusal names no formula ({name}): {message}", path.display());
             }
         }
