@@ -18,16 +18,26 @@
 //!
 //! | `.kfr` | scene | notes |
 //! |---|---|---|
-//! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept |
-//! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`) |
+//! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept; absent: 0 |
+//! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`); absent: 1 |
+//! | `FractalType`, `Power` | `[formula] kind`, `power` | through the table of families ([`crate::formula::kind::KINDS`]); see [`super::kfr_formula`] |
+//! | `UseHybridFormula`, `HybridFormula` | `[formula] kind = "a,b^3,..."` | when each group is one family; see [`super::kfr_hybrid`] |
 //! | `Iterations` | `[iteration] max` | optional (KF keeps its current value when absent); 1 ..= 2^32 - 2 |
 //! | `TargetWidth`, `TargetHeight` | `[view] width`, `height` | KF 2.15 output size; these are `.kfs` keys, present when settings and location were saved together (PNG/EXR metadata) |
 //! | `ImageWidth`, `ImageHeight` | `[view] width`, `height` | used when no `Target*` key is given (older KF); otherwise 800 x 600 |
 //!
+//! A file without `Re`, `Im` or `Zoom` (KF's formula presets have none) opens where KF would
+//! open it: KF keeps its current view for a missing key (`OpenString` starts from `GetRe`,
+//! `GetIm`, `GetZoom`), and the view it starts with is 0 + 0i at zoom 1 (`WM_CREATE` in
+//! `fraktal_sft/main.cpp`: `SetPosition(0, 0, 2, 640, 360)`, radius 2; its "Reset" is
+//! `SetPosition("0", "0", "1")`). The generated text says which keys were missing.
+//!
 //! What is checked, because deepfield cannot draw it and silently dropping it would give a
-//! different picture: `FractalType` must be 0 (Mandelbrot) and `Power` 2; `UseHybridFormula`
-//! must be 0; `SeedR`/`SeedI` must be 0 (KF's seed is the starting z_0 of a Mandelbrot-family
-//! orbit, not a Julia parameter).
+//! different picture: the formula must be one of deepfield's families (a `FractalType` KF
+//! 2.15 has but deepfield does not is refused by KF's name, e.g. "FractalType 42
+//! (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws"), at a power the
+//! family comes in; a hybrid must be a cycle of whole families; `SeedR`/`SeedI` must be 0
+//! (KF's seed is the starting z_0 of the orbit, not a Julia parameter).
 //!
 //! The view's rotation and stretch are the scene's own keys, with KF 2.15's meaning
 //! (`field::transform`): `RotateAngle`, `StretchAngle`, `StretchAmount` become `[view]
@@ -37,8 +47,10 @@
 //! back by `Rotate` (rotate = −Rotate, stretch_angle = Rotate, stretch_amount =
 //! log2(360 / Ratio) / 2).
 //!
-//! KF has no Julia mode (its formulas iterate from `SeedR + i SeedI` with `c` the pixel), so a
-//! `.kfr` always converts to a Mandelbrot scene.
+//! KF 2.15 has no Julia mode: no key, formula or hybrid holds a fixed c (every reference and
+//! perturbation loop adds the pixel's c; `SeedR + i SeedI` is only the orbit's z_0, and
+//! `FactorAR`/`FactorAI` the `a` of formulas deepfield refuses). So a `.kfr` never converts to
+//! `[formula] c`: it is always the Mandelbrot-type form of its family.
 //!
 //! Colours come with the location, near enough to open looking as its author saved it: a
 //! `Colors` line becomes one `smooth` layer whose `palette` is the `.kfr` file itself (its
@@ -52,20 +64,37 @@
 //!
 //! What is ignored: the rest of KF's colouring (`Differences`, `MultiColors`, `Slopes*`,
 //! `Texture*`, `Flat`, `GLSL`, ...), smoothing and bailout choices (deepfield's escape radius
-//! is its own), `Period`, `real`/`imag`/`FactorAR`/`FactorAI` (formula parameters;
-//! Fraktaler-3's `.kfr` import ignores them too), `Version`, and any key this module does not
-//! know. A file without `Colors` gets deepfield's default colouring.
+//! is its own; `real`/`imag` are the bailout norm's weights), `Period`, `FactorAR`/`FactorAI`
+//! (used only by formulas deepfield refuses; Fraktaler-3's `.kfr` import ignores them too),
+//! `Version`, and any key this module does not know. A file without `Colors` gets deepfield's default colouring.
 //!
 //! Two differences remain (the first is stated in the generated text): without
 //! `ImagPointsUp: 1` (KF 2.15.4 and later) KF draws the imaginary axis pointing down, so
 //! deepfield's image (axis up) is KF's mirrored top to bottom; and KF's sample grid may sit
 //! half a pixel from deepfield's pixel centres (invisible at any zoom).
 //!
+//! KF turns no formula over by itself. Its one pixel-to-plane map serves every formula
+//! (`CFraktalSFT::GetPixelCoordinates` in `fraktal_sft/fraktal_sft.cpp`, Karl Runmo and
+//! Claude Heiland-Allen, Kalles Fraktaler 2: x = centre + scale (m00 u + m01 v), y = centre +
+//! scale (m10 u + m11 v), with v the row counted downwards from the middle and m the view's
+//! transform, whose only reflection is `ImagPointsUp`'s: `OpenString` sets
+//! `polar2(ImagPointsUp ? -1 : 1, ...)`, whatever the `FractalType`); the formulas add that
+//! c unchanged (`formula/formula.xml`, e.g. Burning Ship: `Xin = abs(2 * Xr * Xi) + Ci`;
+//! nothing in `formula.xsl`, `hybrid.cpp` or the reference code negates `Ci`). So the Burning
+//! Ship's ship stands upright in KF because of the axis convention alone, and the centre a
+//! `.kfr` names is the same point of the plane here. For families symmetric about the real
+//! axis (no fold of the imaginary part) deepfield's mirror image is KF's picture of the
+//! conjugate centre; for the others (Burning Ship, Buffalo, the partial folds of y, and
+//! hybrids using them) no centre gives KF's picture, since deepfield's view turns and
+//! stretches but does not reflect, and the generated text says that it is KF's upside down.
+//!
 //! The lines are read by [`crate::kf_text`] (shared with the palette importer): CRLF or LF
 //! line ends, a leading byte-order mark, blank lines and spaces around keys and values are
 //! allowed; a line without a `:` is an error, and so is a key given twice among those this
 //! module reads (KF would silently take the first).
 
+use super::kfr_formula;
+pub use super::kfr_formula::{REFUSED, kf_type_name};
 use crate::kf_text::{Entry, KfText};
 use crate::num::Decimal;
 use crate::scene::{MAX_ITER_LIMIT, MAX_SIDE};
@@ -75,6 +104,8 @@ use crate::source::SourceError;
 const DEFAULT_WIDTH: u64 = 800;
 /// Height used when the file names none.
 const DEFAULT_HEIGHT: u64 = 600;
+/// KF's opening view (`Re`, `Im`, `Zoom`), used for keys a file leaves out.
+const DEFAULT_VIEW: [&str; 3] = ["0", "0", "1"];
 
 /// Keys this module reads (each may appear once).
 const KNOWN: &[&str] = &[
@@ -85,6 +116,7 @@ const KNOWN: &[&str] = &[
     "FractalType",
     "Power",
     "UseHybridFormula",
+    "HybridFormula",
     "SeedR",
     "SeedI",
     "RotateAngle",
@@ -104,7 +136,7 @@ const KNOWN: &[&str] = &[
 ];
 
 /// The parsed lines, with error construction bound to the source.
-struct Kfr<'a> {
+pub(super) struct Kfr<'a> {
     origin: &'a str,
     text: &'a str,
     lines: KfText<'a>,
@@ -119,24 +151,21 @@ impl<'a> Kfr<'a> {
         Ok(Self { origin, text, lines })
     }
 
-    fn get(&self, key: &str) -> Option<&Entry<'a>> {
+    pub(super) fn get(&self, key: &str) -> Option<&Entry<'a>> {
         self.lines.get(key)
     }
 
-    fn error_at(&self, at: usize, message: impl Into<String>) -> SourceError {
+    pub(super) fn error_at(&self, at: usize, message: impl Into<String>) -> SourceError {
         SourceError::at(self.origin, self.text, Some(at..at), message)
     }
 
-    /// A required decimal key.
-    fn decimal(&self, key: &str, what: &str) -> Result<(Decimal, &Entry<'a>), SourceError> {
+    /// A decimal key, or `default` (KF's opening view) when the file has none.
+    fn decimal_or(&self, key: &str, what: &str, default: &str) -> Result<(Decimal, Option<&Entry<'a>>), SourceError> {
         let Some(e) = self.get(key) else {
-            return Err(self.error_at(
-                self.text.len(),
-                format!("missing `{key}:` ({what}); a Kalles Fraktaler location needs `Re`, `Im` and `Zoom` lines"),
-            ));
+            return Ok((Decimal::parse(default).expect("a decimal default"), None));
         };
         let d = Decimal::parse(e.value).map_err(|err| self.error_at(e.value_at, format!("`{key}` ({what}): {err}")))?;
-        Ok((d, e))
+        Ok((d, Some(e)))
     }
 
     /// An optional decimal key that must be zero if given.
@@ -151,7 +180,7 @@ impl<'a> Kfr<'a> {
     }
 
     /// An optional integer key, within `lo ..= hi`.
-    fn integer(&self, key: &str, lo: u64, hi: u64, what: &str) -> Result<Option<u64>, SourceError> {
+    pub(super) fn integer(&self, key: &str, lo: u64, hi: u64, what: &str) -> Result<Option<u64>, SourceError> {
         let Some(e) = self.get(key) else { return Ok(None) };
         let digits = e.value.strip_prefix('+').unwrap_or(e.value);
         if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
@@ -167,16 +196,6 @@ impl<'a> Kfr<'a> {
             }
         }
     }
-
-    /// An optional integer key that must equal `expected` if given.
-    fn must_equal(&self, key: &str, expected: i64, why: &str) -> Result<(), SourceError> {
-        let Some(e) = self.get(key) else { return Ok(()) };
-        match e.value.parse::<i64>() {
-            Ok(v) if v == expected => Ok(()),
-            Ok(_) => Err(self.error_at(e.value_at, format!("`{key}: {}` {why}; expected {expected}", e.value))),
-            Err(_) => Err(self.error_at(e.value_at, format!("`{key}` must be a whole number, found `{}`", e.value))),
-        }
-    }
 }
 
 /// Converts the text of a Kalles Fraktaler `.kfr` location into deepfield scene TOML.
@@ -190,17 +209,23 @@ impl<'a> Kfr<'a> {
 pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
     let kfr = Kfr::parse(origin, text)?;
 
-    let (re, _) = kfr.decimal("Re", "the real part of the view centre")?;
-    let (im, _) = kfr.decimal("Im", "the imaginary part of the view centre")?;
-    let (zoom, zoom_entry) = kfr.decimal("Zoom", "the zoom: the image height spans 4 / Zoom")?;
-    if zoom.is_zero() || zoom.is_negative() {
-        return Err(kfr.error_at(zoom_entry.value_at, format!("`Zoom` must be positive, found {}", zoom_entry.value)));
+    if kfr.lines.entries().is_empty() {
+        return Err(kfr.error_at(0, "not a Kalles Fraktaler location: the file has no `Key: value` lines"));
     }
+    let (re, re_entry) = kfr.decimal_or("Re", "the real part of the view centre", DEFAULT_VIEW[0])?;
+    let (im, im_entry) = kfr.decimal_or("Im", "the imaginary part of the view centre", DEFAULT_VIEW[1])?;
+    let (zoom, zoom_entry) = kfr.decimal_or("Zoom", "the zoom: the image height spans 4 / Zoom", DEFAULT_VIEW[2])?;
+    if let Some(e) = zoom_entry.filter(|_| zoom.is_zero() || zoom.is_negative()) {
+        return Err(kfr.error_at(e.value_at, format!("`Zoom` must be positive, found {}", e.value)));
+    }
+    let missing: Vec<&str> = [("Re", re_entry), ("Im", im_entry), ("Zoom", zoom_entry)]
+        .iter()
+        .filter(|(_, e)| e.is_none())
+        .map(|(k, _)| *k)
+        .collect();
     let max_iter = kfr.integer("Iterations", 1, MAX_ITER_LIMIT, "the maximum iteration count")?;
 
-    kfr.must_equal("FractalType", 0, "is not the Mandelbrot set (deepfield draws only z -> z^2 + c)")?;
-    kfr.must_equal("Power", 2, "is not z^2 + c (deepfield draws only power 2)")?;
-    kfr.must_equal("UseHybridFormula", 0, "turns on a hybrid formula, which deepfield cannot draw")?;
+    let chosen = kfr_formula::formula(&kfr)?;
     let seed_why =
         "starts every orbit at a non-zero z_0 (KF's seed is not a Julia parameter; deepfield's Mandelbrot starts at 0)";
     kfr.must_be_zero("SeedR", seed_why)?;
@@ -226,12 +251,41 @@ pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
             "# The file has no `ImagPointsUp: 1`, so KF draws it with the imaginary axis pointing down;\n\
              # deepfield's points up, so this image is KF's mirrored top to bottom.\n",
         );
+        if !kfr_formula::symmetric(&chosen.formula) {
+            out.push_str(&format!(
+                "# `{}` is not symmetric about the real axis and deepfield's view cannot be reflected,\n\
+                 # so no centre shows KF's picture: this one is KF's upside down.\n",
+                chosen.formula
+            ));
+        }
+    }
+    if !missing.is_empty() {
+        out.push_str(&format!(
+            "# The file has no `{}` (a formula preset): KF's opening view, centre {} + {}i, zoom {}.\n",
+            missing.join("`, `"),
+            DEFAULT_VIEW[0],
+            DEFAULT_VIEW[1],
+            DEFAULT_VIEW[2]
+        ));
+    }
+    for note in &chosen.notes {
+        out.push_str(&format!("# {}\n", note.replace(['\n', '\r'], " ")));
     }
     let layer = colour_layer(&kfr, &name)?;
     if layer.is_none() {
         out.push_str("# The file has no `Colors`: deepfield's default colouring.\n");
     }
-    out.push_str("version = 1\n\n[formula]\nkind = \"mandelbrot\"\n\n[view]\n");
+    out.push_str("version = 1\n\n[formula]\n");
+    match chosen.formula.phases() {
+        [single] => {
+            out.push_str(&format!("kind = \"{}\"\n", single.kind.name()));
+            if single.power != single.kind.default_power() {
+                out.push_str(&format!("power = {}\n", single.power));
+            }
+        }
+        _ => out.push_str(&format!("kind = \"{}\"\n", chosen.formula)),
+    }
+    out.push_str("\n[view]\n");
     // Decimal texts hold only digits, signs, '.', 'e' and 'E': safe inside TOML strings.
     out.push_str(&format!("center = [\"{}\", \"{}\"]\n", re.text(), im.text()));
     out.push_str(&format!("zoom = \"{}\"\n", zoom.text()));
@@ -490,15 +544,107 @@ Version: 2150500\r\n";
         kfr_to_toml("z.kfr", "Re: 0\nIm: 0\nZoom: 1\nSeedR: 0\nSeedI: -0\n").unwrap();
     }
 
+    /// KF's formula presets have no location: KF keeps its view, which is 0 + 0i at zoom 1
+    /// when it starts. Each missing key takes its part of that view.
     #[test]
-    fn missing_key_is_named() {
-        let e = err("Re: -0.75\r\nIm: 0.1\r\nIterations: 100\r\n");
-        assert!(e.message.contains("missing `Zoom:`"), "{e}");
-        assert!(e.position.is_some());
-        let e = err("Zoom: 1\nIm: 0.1\n");
-        assert!(e.message.contains("missing `Re:`"), "{e}");
+    fn missing_location_is_kfs_opening_view() {
+        let out = kfr_to_toml("p.kfr", "Power: 3\r\nFractalType: 1\r\n").unwrap();
+        let t = table(&out);
+        assert_eq!(t["view"]["center"][0].as_str(), Some("0"));
+        assert_eq!(t["view"]["center"][1].as_str(), Some("0"));
+        assert_eq!(t["view"]["zoom"].as_str(), Some("1"));
+        assert!(out.contains("no `Re`, `Im`, `Zoom` (a formula preset)"), "{out}");
+        let t = table(&kfr_to_toml("p.kfr", "Re: -0.75\r\nIm: 0.1\r\nIterations: 100\r\n").unwrap());
+        assert_eq!(t["view"]["center"][0].as_str(), Some("-0.75"));
+        assert_eq!(t["view"]["zoom"].as_str(), Some("1"));
         let e = err("");
-        assert!(e.message.contains("missing `Re:`"), "{e}");
+        assert!(e.message.contains("no `Key: value` lines"), "{e}");
+    }
+
+    fn formula_of(text: &str) -> (String, Option<i64>) {
+        let t = table(&kfr_to_toml("f.kfr", text).unwrap_or_else(|e| panic!("{text}: {e}")));
+        (t["formula"]["kind"].as_str().unwrap().to_string(), t["formula"].get("power").and_then(|p| p.as_integer()))
+    }
+
+    /// Every family of the table at every power it comes in, from `FractalType` and `Power`.
+    #[test]
+    fn fractal_type_and_power_map_through_the_table() {
+        for k in crate::formula::kind::KINDS {
+            for p in k.min_power..=k.max_power {
+                let (kind, power) =
+                    formula_of(&format!("Re: 0\nIm: 0\nZoom: 1\nPower: {p}\nFractalType: {}\n", k.kf_type));
+                assert_eq!(kind, k.name);
+                assert_eq!(power, (p != k.min_power).then_some(p as i64), "{}^{p}", k.name);
+                let f = crate::formula::Formula::parse(&kind, power.map(|p| p as u32)).unwrap();
+                assert_eq!(f.phases(), [crate::formula::Phase { kind: k.kind, power: p }]);
+            }
+        }
+        // No keys: KF's type 0 at power 2, written as before (no `power`).
+        assert_eq!(formula_of("Re: 0\nIm: 0\nZoom: 1\n"), ("mandelbrot".into(), None));
+    }
+
+    #[test]
+    fn refused_types_and_powers_are_named() {
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 42\n");
+        assert_eq!(e.message, "FractalType 42 (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((5, 14)));
+        for (t, name) in
+            [(14, "Cubic Quasi Perpendicular"), (23, "4th False Quasi Perpendicular"), (71, "z^2 exp(2 a / z) + c")]
+        {
+            let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nFractalType: {t}\n"));
+            assert!(e.message.contains(name), "{t}: {e}");
+        }
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nFractalType: 99\n");
+        assert!(e.message.contains("FractalType 99 is not one of Kalles Fraktaler 2.15's formulas"), "{e}");
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 7\nFractalType: 1\n");
+        assert!(e.message.contains("Burning Ship (FractalType 1) at power 7") && e.message.contains("2 to 5"), "{e}");
+        assert_eq!(e.position.map(|p| p.line), Some(4), "points at `Power`");
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 11\n");
+        assert!(e.message.contains("powers 2 to 10"), "{e}");
+    }
+
+    #[test]
+    fn hybrid_formulas_map_to_phases() {
+        let base = "Re: 0\nIm: 0\nZoom: 1\nPower: 2\nFractalType: 0\nUseHybridFormula: 1\n";
+        let none = "0,0,0,0,0,0,0";
+        let (kind, power) =
+            formula_of(&format!("{base}HybridFormula: 0/1|1,1,0,0,2,1,0;{none};0/1|0,0,0,0,3,1,0;{none};0\n"));
+        assert_eq!((kind.as_str(), power), ("burning-ship,mandelbrot^3", None));
+        let (kind, power) = formula_of(&format!("{base}HybridFormula: 0/1|1,1,0,0,4,1,0;{none};0\n"));
+        assert_eq!((kind.as_str(), power), ("burning-ship", Some(4)), "one phase is a single family");
+        // An operator, pointed at where it is; the FractalType's name comes with it.
+        let e = err(&format!("{base}FractalType: 54\nHybridFormula: 0/1|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2\n")
+            .replace("FractalType: 0\n", ""));
+        assert!(e.message.contains("combines two operators") && e.message.contains("Mothbrot 2nd 1x1"), "{e}");
+        assert_eq!(e.position.map(|p| (p.line, p.column)), Some((7, 20)));
+        // KF draws FractalType when the hybrid is missing or fails its own check.
+        let (kind, _) =
+            formula_of(&format!("{base}HybridFormula: 0/0|1,1,0,0,2,1,0;{none};0\n").replace("Type: 0", "Type: 1"));
+        assert_eq!(kind, "burning-ship");
+        let out = kfr_to_toml("h.kfr", base).unwrap();
+        assert!(out.contains("gives none"), "{out}");
+        // Off means off, whatever the hybrid says.
+        let off = format!("{base}HybridFormula: 0/1|1,1,0,0,2,1,0;{none};0\n")
+            .replace("UseHybridFormula: 1", "UseHybridFormula: 0");
+        assert_eq!(formula_of(&off).0, "mandelbrot");
+    }
+
+    /// KF turns no formula's picture over: every family is drawn with the same pixel-to-plane
+    /// map (`CFraktalSFT::GetPixelCoordinates`), so a Burning Ship location keeps its centre
+    /// and, without `ImagPointsUp: 1`, its text says the ship shows upside down here.
+    #[test]
+    fn burning_ship_keeps_its_centre_and_says_how_it_is_drawn() {
+        let text = "Re: -1.7626\r\nIm: -0.0281\r\nZoom: 50\r\nPower: 2\r\nFractalType: 1\r\n";
+        let out = kfr_to_toml("bs.kfr", text).unwrap();
+        let t = table(&out);
+        assert_eq!(t["formula"]["kind"].as_str(), Some("burning-ship"));
+        assert_eq!(t["view"]["center"][1].as_str(), Some("-0.0281"), "the same point of the plane");
+        assert!(out.contains("mirrored top to bottom") && out.contains("`burning-ship` is not symmetric"), "{out}");
+        let up = kfr_to_toml("bs.kfr", &format!("{text}ImagPointsUp: 1\r\n")).unwrap();
+        assert!(!up.contains("mirrored") && !up.contains("symmetric"), "{up}");
+        // A family symmetric about the real axis gets only the mirror note.
+        let celtic = kfr_to_toml("c.kfr", &text.replace("Type: 1", "Type: 3")).unwrap();
+        assert!(celtic.contains("mirrored") && !celtic.contains("symmetric"), "{celtic}");
     }
 
     #[test]
@@ -530,19 +676,20 @@ Version: 2150500\r\n";
     }
 
     #[test]
-    fn unsupported_formulas_are_refused() {
+    fn unsupported_keys_are_refused() {
         let base = "Re: 0\nIm: 0\nZoom: 1\n";
         for (line, needle) in [
-            ("FractalType: 1", "Mandelbrot"),
-            ("Power: 3", "power 2"),
-            ("UseHybridFormula: 1", "hybrid"),
+            ("FractalType: 42", "TheRedshiftRider"),
+            ("Power: 11", "powers 2 to 10"),
+            ("FractalType: x", "whole number"),
+            ("UseHybridFormula: 1\nHybridFormula: 0/1|0,0,0,0,2,3,0;0,0,0,0,0,0,0;0", "multiplies by 3"),
             ("ImagPointsUp: 2", "ImagPointsUp"),
             ("StretchAmount: 21", "limit"),
             ("Ratio: -3", "positive"),
             ("RotateAngle: 1e7", "range"),
         ] {
             let e = err(&format!("{base}{line}\n"));
-            assert_eq!(e.position.map(|p| p.line), Some(4), "{line}");
+            assert_eq!(e.position.map(|p| p.line), Some(3 + line.lines().count()), "{line}");
             assert!(e.message.contains(needle), "{line}: {e}");
         }
     }

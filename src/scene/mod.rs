@@ -11,6 +11,8 @@ mod build;
 mod context;
 mod inputs;
 pub mod kfr;
+mod kfr_formula;
+mod kfr_hybrid;
 mod layer;
 pub mod presets;
 pub mod raw;

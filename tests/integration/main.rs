@@ -12,6 +12,7 @@ mod golden;
 mod gpu;
 mod import;
 mod interior;
+mod kfr_presets;
 mod layout;
 mod locate;
 mod reference;
