@@ -64,8 +64,8 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 b.set_position(n);
             }
         };
-        let mut truths = compare::truths(&scene, compare::scene_formula(&scene), &pixels, &cancel, &progress)
-            .map_err(|_| Failure::Cancelled)?;
+        let mut truths =
+            compare::truths(&scene, scene.formula, &pixels, &cancel, &progress).map_err(|_| Failure::Cancelled)?;
         if let Some(b) = &bar {
             b.set_length(variants.len() as u64);
             b.set_position(0);
@@ -89,7 +89,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         if let Some(b) = &bar {
             b.set_message(format!("conditioning of {} disagreeing pixels", suspects.len()));
         }
-        compare::mark_ill_conditioned(&scene, compare::scene_formula(&scene), &pixels, &mut truths, &suspects, &cancel)
+        compare::mark_ill_conditioned(&scene, scene.formula, &pixels, &mut truths, &suspects, &cancel)
             .map_err(|_| Failure::Cancelled)?;
         let rows = variants
             .iter()

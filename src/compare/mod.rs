@@ -141,7 +141,8 @@ pub const LOOSE_BLA_TOLERANCE: f64 = 1e-6;
 pub fn variants(scene: &Scene) -> Vec<Variant> {
     let mut out = Vec::new();
     let ulps64 = scene.ulps_per_sample();
-    if ulps64 * 2f64.powi(-29) >= DIRECT_MIN_ULPS {
+    // The f32 kernel iterates z² + c only.
+    if ulps64 * 2f64.powi(-29) >= DIRECT_MIN_ULPS && scene.formula.is_quadratic() {
         out.push(Variant { name: "f32".into(), kind: VariantKind::F32, dense_orbit: None });
     }
     if ulps64 >= DIRECT_MIN_ULPS {
@@ -195,12 +196,6 @@ pub fn sample_pixels(scene: &Scene, count: u32) -> Vec<(u32, u32)> {
         }
     }
     out
-}
-
-/// The formula `scene` iterates, for the truth.
-pub fn scene_formula(_scene: &Scene) -> Formula {
-    // TODO(formula): scene.formula
-    Formula::default()
 }
 
 /// The sample grid in big floats, at the truth's precision.
@@ -589,7 +584,7 @@ mod tests {
         let scene = Scene::validate(file, "julia-deep-e40", text, &dir, crate::io::load_bitmap).unwrap();
         let pixels = [(506, 307), (100, 100)];
         let cancel = AtomicBool::new(false);
-        let formula = scene_formula(&scene);
+        let formula = scene.formula;
         let mut truths = truths(&scene, formula, &pixels, &cancel, &|_| {}).unwrap();
         assert_eq!(truths[0].n, Some(702));
         mark_ill_conditioned(&scene, formula, &pixels, &mut truths, &[0, 1], &cancel).unwrap();

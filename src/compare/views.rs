@@ -270,12 +270,13 @@ fn julia_point(rng: &mut Rng, c: &BigC, bits: u64) -> BigC {
 fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max_iter: u32, spec: &ViewSpec) -> String {
     let [re, im] = center.to_decimals(3);
     let mut t = String::from("version = 1\n");
-    if !spec.formula.is_quadratic() {
-        // TODO(formula): scene.formula: the formula as a scene key once scenes have one.
-        let _ = writeln!(t, "# formula: {}", spec.formula);
+    let kind =
+        if spec.formula.is_quadratic() && julia.is_some() { "julia".to_string() } else { spec.formula.to_string() };
+    if !spec.formula.is_quadratic() || julia.is_some() {
+        let _ = writeln!(t, "[formula]\nkind = \"{kind}\"");
     }
     if let Some([cr, ci]) = julia {
-        let _ = writeln!(t, "[formula]\nkind = \"julia\"\nc = [\"{cr}\", \"{ci}\"]");
+        let _ = writeln!(t, "c = [\"{cr}\", \"{ci}\"]");
     }
     let radius = crate::num::scientific(radius.log2() * std::f64::consts::LOG10_2, 9);
     let _ = writeln!(t, "[view]\ncenter = [\"{re}\", \"{im}\"]\nradius = \"{radius}\"");

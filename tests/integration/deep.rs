@@ -238,15 +238,8 @@ fn auto_leaves_direct_f64_past_zoom_1e5() {
     let spiral = super::util::scene(&std::fs::read_to_string(path).expect("shipped scene"));
     assert_eq!(deepfield::render::engine::plan(&spiral).expect("an engine").name, "perturb-f64");
     let levels = deepfield::simd_level::SimdLevel::usable();
-    let verdict = fuzz::check(
-        &spiral,
-        deepfield::compare::scene_formula(&spiral),
-        24,
-        &levels,
-        fuzz::BAR,
-        &AtomicBool::new(false),
-    )
-    .expect("checked");
+    let verdict =
+        fuzz::check(&spiral, spiral.formula, 24, &levels, fuzz::BAR, &AtomicBool::new(false)).expect("checked");
     let names: Vec<&str> = verdict.rows.iter().map(|r| r.engine.as_str()).collect();
     assert!(names.iter().all(|n| n.starts_with("perturb")), "{names:?}");
     assert!(verdict.failures.is_empty(), "{}", verdict.failures.join("\n"));
