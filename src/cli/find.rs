@@ -18,6 +18,12 @@ const ITERATIONS_PER_PERIOD: u64 = 64;
 /// Runs `deepfield find`.
 pub fn run(args: FindArgs) -> Result<(), Failure> {
     let scene = super::scene::load(&args.scene)?;
+    if !scene.formula.is_quadratic() {
+        return Err(Failure::Input(anyhow!(
+            "find searches z^2 + c's parameter plane (nuclei by Newton's method on its quadratic orbit, Misiurewicz points); this scene's formula is {}",
+            scene.formula
+        )));
+    }
     if !matches!(scene.family, FamilySpec::Mandelbrot) {
         return Err(Failure::Input(anyhow!(
             "find searches the Mandelbrot set's parameter plane; this scene is a Julia set"
