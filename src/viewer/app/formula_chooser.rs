@@ -44,6 +44,7 @@ impl FormulaChooser {
             let mut kind = single.map(|p| p.kind);
             egui::ComboBox::new("formula-family", "")
                 .selected_text(shown)
+                .width(125.0)
                 .show_ui(ui, |ui| {
                     for info in &KINDS {
                         let r = ui.selectable_value(&mut kind, Some(info.kind), info.name).on_hover_text(hover(info));
@@ -62,23 +63,30 @@ impl FormulaChooser {
                         |p| hover(p.kind.info()),
                     ),
                 );
+            // The powers the family comes in (one: nothing to choose).
+            if let Some(p) = single {
+                let info = p.kind.info();
+                let label = ui.label("power");
+                ui.add_enabled_ui(info.min_power < info.max_power, |ui| {
+                    egui::ComboBox::new("formula-power", "")
+                        .selected_text(p.power.to_string())
+                        .width(36.0)
+                        .show_ui(ui, |ui| {
+                            for power in info.min_power..=info.max_power {
+                                if ui.selectable_label(power == p.power, power.to_string()).clicked()
+                                    && power != p.power
+                                {
+                                    chosen = Some(Formula::single(Phase { kind: p.kind, power }));
+                                }
+                            }
+                        })
+                        .response
+                        .labelled_by(label.id)
+                })
+                .response
+                .on_disabled_hover_text(format!("{} comes in power {} only", info.name, info.min_power));
+            }
         });
-        if let Some(p) = single {
-            let info = p.kind.info();
-            ui.horizontal(|ui| {
-                ui.label("power");
-                if info.min_power == info.max_power {
-                    ui.label(format!("{} (the only one)", info.min_power));
-                    return;
-                }
-                for power in info.min_power..=info.max_power {
-                    let r = ui.selectable_label(power == p.power, power.to_string());
-                    if r.clicked() && power != p.power {
-                        chosen = Some(Formula::single(Phase { kind: p.kind, power }));
-                    }
-                }
-            });
-        }
         let r = ui
             .horizontal(|ui| {
                 let label = ui.label("formula");

@@ -119,17 +119,17 @@ impl ViewerApp {
         let c = self.doc.julia_c();
         let mut julia = !self.doc.is_mandelbrot();
         ui.horizontal(|ui| {
-            let m = ui.radio_value(&mut julia, false, "Mandelbrot form").on_hover_text("c is the pixel, z starts at 0");
-            let j = ui.radio_value(&mut julia, true, "Julia form").on_hover_text("c is fixed, z starts at the pixel");
+            let m = ui.radio_value(&mut julia, false, "Mandelbrot").on_hover_text("c is the pixel, z starts at 0");
+            let j = ui.radio_value(&mut julia, true, "Julia").on_hover_text("c is fixed, z starts at the pixel");
             if m.changed() || j.changed() {
                 let c = c.clone().unwrap_or_else(|| ["-0.8".into(), "0.156".into()]);
                 self.doc.set_julia(julia.then_some(c));
                 self.render.invalidate();
             }
+            if ui.button("Reset view").on_hover_text("the whole set of this formula in this form").clicked() {
+                self.go(self.default_view());
+            }
         });
-        if ui.button("Reset view").on_hover_text("the whole set of this formula in this form").clicked() {
-            self.go(self.default_view());
-        }
         if let Some(mut v) = self.doc.julia_c() {
             let field = |ui: &mut egui::Ui, name: &str, text: &mut String| {
                 let label = ui.label(name);
