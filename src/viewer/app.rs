@@ -14,8 +14,14 @@
 //! Split by concern: this file holds the app and its cycle (poll, request, draw) and the
 //! saved session; the state lives in one struct per concern, each in its own file with
 //! private fields (`document`, `navigation`, `render_state`, `julia_preview`,
-//! `difference_view`, `screenshot`); `panels` draws the toolbar, status bar, controls and
-//! files in and out; `input` the keys and Newton zooming; `canvas` the image area.
+//! `difference_view`, `screenshot`, `formula_chooser`); `panels` draws the toolbar, status
+//! bar, controls and files in and out; `input` the keys and Newton zooming; `canvas` the
+//! image area.
+//!
+//! The formula (any family of [`crate::formula::kind::KINDS`] or a hybrid) is chosen in the
+//! side panel and named in the window title and status bar; the Julia preview and pick show
+//! the Julia form of the formula shown. The GPU modes draw z² + c only: with another formula
+//! the image is the CPU render.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -26,11 +32,13 @@ use super::export::{Export, ExportRequest};
 use super::nav::Nav;
 use super::palette_editor::PaletteEditor;
 use super::worker::Worker;
+use crate::formula::Formula;
 use crate::orbit::saved::SavedReferences;
 use crate::palette::{self, Palette};
 use crate::scene::{Scene, SceneFile};
 use difference_view::DifferenceView;
 use document::Document;
+use formula_chooser::FormulaChooser;
 use input::NewtonState;
 use julia_preview::JuliaPreview;
 use navigation::Navigation;
@@ -40,6 +48,7 @@ use screenshot::Screenshot;
 mod canvas;
 mod difference_view;
 mod document;
+mod formula_chooser;
 mod input;
 mod julia_preview;
 mod navigation;
@@ -122,6 +131,9 @@ pub struct ViewerApp {
     screenshot: Screenshot,
     newton: NewtonState,
     editor: PaletteEditor,
+    chooser: FormulaChooser,
+    /// The window title last set.
+    title: String,
     /// How the image is shown.
     mode: ViewMode,
     /// Where "Save scene" writes.
@@ -173,6 +185,8 @@ impl ViewerApp {
             screenshot: Screenshot::new(options.screenshot),
             newton: NewtonState::default(),
             editor: PaletteEditor::default(),
+            chooser: FormulaChooser::default(),
+            title: String::new(),
             mode: ViewMode::Cpu,
             scene_path: saved.as_ref().map_or_else(|| "scene.toml".into(), |s| s.scene_path.clone()),
             error: None,
@@ -197,9 +211,42 @@ impl ViewerApp {
         self.mode
     }
 
-    /// Shows the image as `mode` says.
+    /// Shows the image as `mode` says (the GPU modes only for z² + c: with another formula
+    /// the image stays the CPU render).
     pub fn set_mode(&mut self, mode: ViewMode) {
-        self.mode = mode;
+        self.mode = if self.doc.formula().is_quadratic() { mode } else { ViewMode::Cpu };
+    }
+
+    /// The formula shown.
+    pub fn formula(&self) -> Formula {
+        self.doc.formula()
+    }
+
+    /// The formula and its form, as the window title names them: `burning-ship^3 (Julia
+    /// form)`.
+    pub fn formula_title(&self) -> String {
+        formula_chooser::formula_title(&self.doc.formula(), !self.doc.is_mandelbrot())
+    }
+
+    /// Makes the scene iterate `formula` in the form (Mandelbrot or Julia) it has, at the
+    /// same view, and renders it; a formula the scene refuses changes nothing and says why.
+    pub fn set_formula(&mut self, formula: Formula) -> Result<(), String> {
+        if formula == self.doc.formula() {
+            return Ok(());
+        }
+        self.doc.set_formula(formula).map_err(|e| e.message)?;
+        if !formula.is_quadratic() {
+            self.mode = ViewMode::Cpu;
+        }
+        self.render.invalidate();
+        Ok(())
+    }
+
+    /// The whole set of the formula shown, in its form ([`Nav::default_for`]), with the
+    /// view's rotation and stretch.
+    pub fn default_view(&self) -> Nav {
+        let transform = self.view.nav().transform;
+        Nav { transform, ..Nav::default_for(&self.doc.formula(), !self.doc.is_mandelbrot()) }
     }
 
     /// The image area (points), as last laid out.
@@ -239,7 +286,8 @@ impl ViewerApp {
         self.render.invalidate();
     }
 
-    /// Opens the Julia set of `c` (decimal strings) as the main view.
+    /// Opens the Julia set of `c` (decimal strings), the Julia form of the formula shown, as
+    /// the main view.
     pub fn open_julia(&mut self, c: [String; 2]) {
         self.doc.set_julia(Some(c));
         let transform = self.view.nav().transform;
@@ -333,12 +381,21 @@ impl eframe::App for ViewerApp {
         self.poll_newton(&ctx);
         self.dropped_files(&ctx);
         self.keys(&ctx);
+        // The GPU modes draw z² + c only (a scene opened or chosen with another formula).
+        if !self.doc.formula().is_quadratic() {
+            self.mode = ViewMode::Cpu;
+        }
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
         egui::Panel::left("controls").resizable(true).default_size(280.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
         });
         egui::CentralPanel::default().show(ui, |ui| self.image_area(ui));
+        let title = format!("deepfield — {}", self.formula_title());
+        if title != self.title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
         self.update_render();
         self.julia.request(&self.doc);
         self.export.poll();

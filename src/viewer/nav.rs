@@ -12,6 +12,7 @@ use malachite_base::rounding_modes::RoundingMode;
 use malachite_q::Rational;
 
 use crate::field::Transform;
+use crate::formula::Formula;
 use crate::num::{Decimal, DecimalError};
 use crate::orbit::Scale;
 use crate::scene::Scene;
@@ -34,6 +35,17 @@ impl Nav {
     /// The whole Mandelbrot set.
     pub fn home() -> Self {
         Self { center: ["-0.75".into(), "0".into()], log10_zoom: 1.6f64.log10(), transform: Transform::IDENTITY }
+    }
+
+    /// The whole set of `formula` in its Mandelbrot form (`julia` false) or Julia form: z² + c's
+    /// Mandelbrot set as [`Nav::home`] shows it, any other set centred on 0 at zoom 1 (the
+    /// image height spans -2..2, as Kalles Fraktaler's default view).
+    pub fn default_for(formula: &Formula, julia: bool) -> Self {
+        if formula.is_quadratic() && !julia {
+            Self::home()
+        } else {
+            Self { center: ["0".into(), "0".into()], log10_zoom: 0.0, transform: Transform::IDENTITY }
+        }
     }
 
     /// The view of a validated scene: its centre, zoom, rotation and stretch. A scene that
@@ -285,6 +297,16 @@ mod tests {
         // A 200 x 100 box in an 800 x 600 image: limited by width, 4x.
         assert!((z.log10_zoom - n.log10_zoom - 4f64.log10()).abs() < 1e-12);
         assert_eq!(z.center, n.center);
+    }
+
+    #[test]
+    fn default_views_show_the_whole_set_of_each_formula() {
+        let burning = Formula::parse("burning-ship", Some(3)).unwrap();
+        assert_eq!(Nav::default_for(&Formula::default(), false), Nav::home());
+        for (f, julia) in [(Formula::default(), true), (burning, false), (burning, true)] {
+            let n = Nav::default_for(&f, julia);
+            assert_eq!((n.center, n.log10_zoom), (["0".to_string(), "0".to_string()], 0.0), "{f} {julia}");
+        }
     }
 
     #[test]

@@ -13,6 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::field::{ChannelSet, Planes};
+use crate::formula::Formula;
 use crate::num::{Decimal, FloatExp};
 use crate::orbit::Perturbation;
 use crate::orbit::saved::SavedReferences;
@@ -234,6 +235,7 @@ const DEEP_REACH: f64 = 3.0;
 #[derive(Debug, Clone, PartialEq)]
 struct DeepKey {
     family: FamilySpec,
+    formula: Formula,
     max_iter: u32,
     escape_radius: f64,
     bla: Option<f64>,
@@ -244,6 +246,7 @@ impl DeepKey {
     fn of(scene: &Scene) -> Self {
         DeepKey {
             family: scene.family.clone(),
+            formula: scene.formula,
             max_iter: scene.max_iter,
             escape_radius: scene.escape_radius,
             bla: scene.bla,

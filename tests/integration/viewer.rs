@@ -568,3 +568,68 @@ fn a_bad_layer_value_is_shown_under_its_control() {
     let after = h.state().counters();
     assert_eq!((after.renders, after.recolours), (before.renders, before.recolours));
 }
+
+/// The formula chooser: a family and a power chosen in the side panel render that formula at
+/// the same view; the Julia pick there opens that family's Julia form, and the Mandelbrot
+/// form again keeps it; a formula typed that the parser refuses is said under the field and
+/// changes nothing.
+#[test]
+fn the_formula_chooser_sets_the_family_power_and_julia_form() {
+    let dir = scratch("viewer-formula");
+    let scene = "version = 1\n[view]\ncenter = [\"-0.5\", \"-0.5\"]\nzoom = \"1\"\n[iteration]\nmax = 100\n";
+    let mut h = harness(&dir, scene);
+    let nav = h.state().nav().clone();
+    let before = h.state().counters();
+    h.get_by_label("family").click();
+    h.run_steps(2);
+    h.get_by_label("burning-ship").click();
+    settle(&mut h);
+    assert_eq!(h.state().formula().to_string(), "burning-ship");
+    assert_eq!(h.state().nav(), &nav, "the view stays");
+    assert!(h.state().counters().renders > before.renders, "the new formula renders");
+    h.get_by_label("power").click();
+    h.run_steps(2);
+    h.get_by_label("3").click();
+    settle(&mut h);
+    assert_eq!(h.state().formula_title(), "burning-ship^3");
+    assert_eq!(h.state().nav(), &nav);
+    assert_eq!(h.state().scene_file().formula.kind.get_ref(), "burning-ship^3");
+    // The GPU modes draw z² + c only.
+    h.state_mut().set_mode(ViewMode::GpuF32);
+    assert_eq!(h.state().mode(), ViewMode::Cpu);
+
+    // The Julia preview and pick show burning-ship^3's Julia form.
+    let r = h.state().image_rect();
+    let at = r.center() + Vec2::new(-40.0, 20.0);
+    h.hover_at(at);
+    h.run_steps(2);
+    assert!(h.state().counters().julia_previews >= 1, "hovering previews the Julia set");
+    ctrl_click(&mut h, at);
+    settle(&mut h);
+    assert!(h.state().julia_c().is_some(), "a Julia scene now");
+    assert_eq!(h.state().formula_title(), "burning-ship^3 (Julia form)");
+    h.get_by_label("Mandelbrot").click();
+    settle(&mut h);
+    assert_eq!(h.state().julia_c(), None);
+    assert_eq!(h.state().formula_title(), "burning-ship^3");
+
+    // A power no phase comes in: refused by the field, nothing changes.
+    let renders = h.state().counters().renders;
+    h.get_by_label("formula").focus();
+    h.run_steps(1);
+    h.get_by_label("formula").type_text(",mandelbrot^33");
+    h.key_press(egui::Key::Enter);
+    settle(&mut h);
+    assert_eq!(h.state().formula_title(), "burning-ship^3");
+    assert!(h.query_by_label_contains("not 33").is_some(), "the error shows under the field");
+    assert_eq!(h.state().counters().renders, renders, "nothing renders from a refused formula");
+    // One digit less: a hybrid.
+    h.get_by_label("formula").focus();
+    h.run_steps(1);
+    h.key_press(egui::Key::Backspace);
+    h.key_press(egui::Key::Enter);
+    settle(&mut h);
+    assert_eq!(h.state().formula_title(), "burning-ship^3,mandelbrot^3");
+    assert!(h.query_by_label_contains("not 33").is_none(), "the error is gone");
+    assert!(h.state().counters().renders > renders);
+}

@@ -68,7 +68,7 @@ impl ViewerApp {
             self.open_julia([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]);
         }
         // Julia preview inset.
-        if let Some((tex, c)) = self.julia.shown()
+        if let Some((tex, c, formula)) = self.julia.shown()
             && self.doc.is_mandelbrot()
         {
             let inset = Rect::from_min_size(rect.right_bottom() - Vec2::new(210.0, 160.0), Vec2::new(200.0, 150.0));
@@ -77,7 +77,7 @@ impl ViewerApp {
             painter.text(
                 inset.left_top() + Vec2::new(4.0, 2.0),
                 egui::Align2::LEFT_TOP,
-                format!("Julia c = {:.5} {:+.5}i (ctrl-click)", c[0], c[1]),
+                format!("{formula} Julia c = {:.5} {:+.5}i (ctrl-click)", c[0], c[1]),
                 egui::FontId::proportional(11.0),
                 Color32::WHITE,
             );
@@ -155,8 +155,8 @@ impl ViewerApp {
     /// The paint callback's parameters for drawing the part `rect` of the image area `full`.
     pub(super) fn gpu_params(&self, full: Rect, rect: Rect, ppp: f32) -> Option<crate::viewer::paint::PaintParams> {
         let scene = self.render.scene()?;
-        // The paint shader draws unrotated, unstretched views only.
-        if !scene.transform.is_identity() {
+        // The paint shader draws z² + c in unrotated, unstretched views only.
+        if !scene.transform.is_identity() || !scene.formula.is_quadratic() {
             return None;
         }
         let (nav, h) = (self.view.nav(), self.view.height());

@@ -1,8 +1,10 @@
-//! The scene being explored: the scene file as edited (formula, iteration limit, layers),
-//! where it came from, the palette editor's palettes, and the last valid typed [`Scene`].
+//! The scene being explored: the scene file as edited (formula and its Mandelbrot or Julia
+//! form, iteration limit, layers), where it came from, the palette editor's palettes, and the
+//! last valid typed [`Scene`].
 //!
 //! Every edit goes through [`Scene::from_file`], the typed path: no TOML text is written or
-//! read. An edit the scene refuses (a Julia parameter that is not a number, a colour that is
+//! read; the formula and its form are what the typed setters [`Scene::with_formula`] and
+//! [`Scene::with_julia`] make of them. An edit the scene refuses (a Julia parameter that is not a number, a colour that is
 //! not "#rrggbb") leaves the last valid scene in place and keeps the error, whose key path
 //! says which control to show it next to.
 
@@ -11,9 +13,11 @@ use std::path::{Path, PathBuf};
 
 use toml::Spanned;
 
+use crate::formula::Formula;
+use crate::num::Decimal;
 use crate::palette::Palette;
-use crate::scene::raw::{LayerRaw, SceneFile, cli};
-use crate::scene::{Scene, uses_palette};
+use crate::scene::raw::{FormulaRaw, LayerRaw, SceneFile, cli};
+use crate::scene::{EngineChoice, Scene, uses_palette};
 use crate::source::SourceError;
 
 /// The scene file as edited and its last valid form.
@@ -83,22 +87,63 @@ impl Document {
         }
     }
 
-    /// True for a Mandelbrot scene (as edited).
+    /// The formula shown (the last valid scene's).
+    pub(super) fn formula(&self) -> Formula {
+        self.valid.formula
+    }
+
+    /// True for the Mandelbrot form of the formula (as edited): no Julia parameter.
     pub(super) fn is_mandelbrot(&self) -> bool {
-        self.file.formula.kind.get_ref() == "mandelbrot"
+        self.file.formula.c.is_none()
     }
 
-    /// The Julia parameter as edited, for a Julia scene.
+    /// The Julia parameter as edited, for the Julia form of the formula.
     pub(super) fn julia_c(&self) -> Option<[String; 2]> {
-        (self.file.formula.kind.get_ref() == "julia")
-            .then(|| self.file.formula.c.as_ref().map(|c| c.get_ref().clone()))?
+        self.file.formula.c.as_ref().map(|c| c.get_ref().clone())
     }
 
-    /// Makes the scene a Julia set of `c` (None: the Mandelbrot set).
+    /// Makes the scene the Julia form of its formula at `c` (None: the Mandelbrot form).
     pub(super) fn set_julia(&mut self, c: Option<[String; 2]>) {
-        self.file.formula.kind = cli(if c.is_some() { "julia" } else { "mandelbrot" }.into());
-        self.file.formula.c = c.map(cli);
+        self.file.formula = self.formula_form(c);
         self.revalidate();
+    }
+
+    /// Makes the scene iterate `formula`, in the form (Mandelbrot or Julia) it has, through
+    /// [`Scene::with_formula`]; a formula it refuses leaves the scene as it is. The GPU
+    /// engines draw z² + c only, so a scene that asked for one renders on the CPU ("auto")
+    /// with any other formula.
+    pub(super) fn set_formula(&mut self, formula: Formula) -> Result<(), SourceError> {
+        let scene = self.valid.clone().with_formula(formula)?;
+        self.file.formula.kind = scene.file.formula.kind;
+        self.file.formula.power = scene.file.formula.power;
+        if !formula.is_quadratic() && matches!(self.valid.engine, EngineChoice::Gpu | EngineChoice::GpuDf) {
+            self.file.render.engine = cli("auto".into());
+        }
+        self.revalidate();
+        Ok(())
+    }
+
+    /// The scene file's `[formula]` for the Julia form at `c` (None: the Mandelbrot form) of
+    /// the formula shown, as [`Scene::with_julia`] writes it; `c` is kept as typed, and text
+    /// that is not a number is left for validation to point at (`formula.c`).
+    fn formula_form(&self, c: Option<[String; 2]>) -> FormulaRaw {
+        let typed = match &c {
+            None => Some(None),
+            Some([re, im]) => Decimal::parse(re).and_then(|re| Ok(Some([re, Decimal::parse(im)?]))).ok(),
+        };
+        let mut raw = match typed.and_then(|c| self.valid.clone().with_julia(c).ok()) {
+            Some(scene) => scene.file.formula,
+            None => {
+                let mut raw = self.file.formula.clone();
+                if self.valid.formula.is_quadratic() {
+                    raw.kind = cli(if c.is_some() { "julia" } else { "mandelbrot" }.into());
+                    raw.power = None;
+                }
+                raw
+            }
+        };
+        raw.c = c.map(cli);
+        raw
     }
 
     /// The iteration limit as edited.
@@ -160,12 +205,12 @@ impl Document {
         changed
     }
 
-    /// A Julia preview of `c` as a scene built in code: this scene's iteration limit (500 at
-    /// most) and colouring, over the whole Julia set at 200 x 150 pixels.
+    /// A Julia preview of `c` as a scene built in code: the Julia form of this scene's
+    /// formula, its iteration limit (500 at most) and colouring, over the whole Julia set at
+    /// 200 x 150 pixels.
     pub(super) fn julia_preview(&self, c: [f64; 2]) -> Result<Scene, SourceError> {
         let mut file = self.file.clone();
-        file.formula.kind = cli("julia".into());
-        file.formula.c = Some(cli([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]));
+        file.formula = self.formula_form(Some([format!("{:.17e}", c[0]), format!("{:.17e}", c[1])]));
         file.view = Default::default();
         file.view.center = cli(["0".into(), "0".into()]);
         file.view.zoom = Some(cli("1.3".into()));
@@ -206,5 +251,81 @@ impl Document {
         file.view.zoom = Some(cli(zoom));
         file.view.radius = None;
         file
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::FamilySpec;
+
+    fn doc(text: &str) -> Document {
+        Document::from_text("test".into(), text, PathBuf::from(".")).expect("a valid scene")
+    }
+
+    fn formula(text: &str) -> Formula {
+        Formula::parse(text, None).expect("a formula")
+    }
+
+    const VIEW: &str = "version = 1\n[view]\ncenter = [\"-0.5\", \"0.25\"]\nzoom = \"10\"\n[iteration]\nmax = 300\n";
+
+    /// A family and power chosen: the scene iterates it, in its form, with the rest kept.
+    #[test]
+    fn a_formula_chosen_keeps_the_form_view_and_limit() {
+        let mut d = doc(VIEW);
+        d.set_formula(formula("burning-ship^3")).unwrap();
+        let s = d.scene();
+        assert_eq!(s.formula, formula("burning-ship^3"));
+        assert!(d.is_mandelbrot() && matches!(s.family, FamilySpec::Mandelbrot));
+        assert_eq!([s.center[0].text(), s.center[1].text()], ["-0.5", "0.25"]);
+        assert_eq!((d.max_iter(), d.error().is_none()), (300, true));
+        // A hybrid, then back to z² + c: the names z² + c's scenes have always had.
+        d.set_formula(formula("burning-ship,mandelbrot^3")).unwrap();
+        assert_eq!(d.file().formula.kind.get_ref(), "burning-ship,mandelbrot^3");
+        d.set_formula(Formula::default()).unwrap();
+        assert_eq!(d.file().formula.kind.get_ref(), "mandelbrot");
+        assert!(d.scene().formula.is_quadratic());
+    }
+
+    /// The Julia pick and preview on a burning-ship scene are burning-ship Julia scenes;
+    /// the Mandelbrot form again keeps the formula.
+    #[test]
+    fn julia_forms_keep_the_formula() {
+        let ship = formula("burning-ship");
+        let mut d = doc("version = 1\n[formula]\nkind = \"burning-ship\"\n");
+        let preview = d.julia_preview([-0.5, 0.25]).expect("a preview");
+        assert_eq!(preview.formula, ship);
+        assert!(matches!(preview.family, FamilySpec::Julia { .. }));
+        d.set_julia(Some(["-0.5".into(), "0.25".into()]));
+        let s = d.scene();
+        assert_eq!(s.formula, ship);
+        assert_eq!(s.julia_c().map(|c| [c[0].text().to_string(), c[1].text().to_string()]), d.julia_c());
+        assert_eq!(d.julia_c(), Some(["-0.5".to_string(), "0.25".to_string()]));
+        // Text that is not a number is kept for its field, with the error at its key.
+        d.set_julia(Some(["-0.5x".into(), "0.25".into()]));
+        assert!(d.error_at("formula.c").is_some());
+        assert_eq!(d.scene().formula, ship);
+        d.set_julia(None);
+        assert!(d.is_mandelbrot() && d.error().is_none());
+        assert_eq!(d.scene().formula, ship);
+        assert!(matches!(d.scene().family, FamilySpec::Mandelbrot));
+        // z² + c's Julia form is still written `julia`, and its Mandelbrot form `mandelbrot`.
+        let mut d = doc(VIEW);
+        d.set_julia(Some(["-0.8".into(), "0.156".into()]));
+        assert_eq!(d.file().formula.kind.get_ref(), "julia");
+        d.set_formula(ship).unwrap();
+        assert_eq!(d.file().formula.kind.get_ref(), "burning-ship");
+        assert!(matches!(d.scene().family, FamilySpec::Julia { .. }));
+        d.set_julia(None);
+        assert_eq!(d.scene().formula, ship);
+    }
+
+    /// A scene that asked for a GPU engine renders another formula on the CPU.
+    #[test]
+    fn gpu_engines_give_way_for_other_formulas() {
+        let mut d = doc("version = 1\n[render]\nengine = \"gpu\"\n");
+        d.set_formula(formula("celtic^4")).unwrap();
+        assert_eq!(d.scene().engine, EngineChoice::Auto);
+        assert_eq!(d.scene().formula, formula("celtic^4"));
     }
 }

@@ -34,8 +34,8 @@ impl NewtonState {
 impl ViewerApp {
     /// Starts a Newton zoom search from pixel `at` (from the image centre, y down).
     pub(super) fn start_newton(&mut self, target: crate::viewer::newton::Target, at: [f64; 2]) {
-        if !self.doc.is_mandelbrot() {
-            self.newton.note = Some("Newton zoom searches the Mandelbrot set's parameter plane".into());
+        if !self.doc.is_mandelbrot() || !self.doc.formula().is_quadratic() {
+            self.newton.note = Some("Newton zoom searches the Mandelbrot set's parameter plane (z² + c)".into());
             return;
         }
         let (tx, rx) = std::sync::mpsc::channel();
@@ -127,7 +127,7 @@ impl ViewerApp {
             self.go(n);
         }
         if home {
-            self.go(Nav::home());
+            self.go(self.default_view());
         }
         if back {
             self.back();

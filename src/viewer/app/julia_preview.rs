@@ -1,21 +1,23 @@
-//! The Julia preview: while the pointer moves over a Mandelbrot view, the Julia set of the
-//! point under it, rendered small on a worker of its own and shown in an inset.
+//! The Julia preview: while the pointer moves over the Mandelbrot form of a formula, the
+//! Julia set of that formula at the point under it (its Julia form), rendered small on a
+//! worker of its own and shown in an inset.
 
 use eframe::egui::{self, ColorImage, TextureHandle};
 
 use super::document::Document;
+use crate::formula::Formula;
 use crate::viewer::nav::Nav;
 use crate::viewer::worker::{Job, Report, Worker};
 
 /// The preview's worker, what is wanted and what is shown.
 pub(super) struct JuliaPreview {
     worker: Worker,
-    /// The texture and the parameter it shows.
-    shown: Option<(TextureHandle, [f64; 2])>,
+    /// The texture, the parameter and the formula it shows.
+    shown: Option<(TextureHandle, [f64; 2], Formula)>,
     /// The parameter under the pointer this frame.
     wanted: Option<[f64; 2]>,
-    /// The parameter last rendered.
-    asked: Option<[f64; 2]>,
+    /// The parameter and formula last rendered.
+    asked: Option<([f64; 2], Formula)>,
     previews: u64,
 }
 
@@ -30,15 +32,16 @@ impl JuliaPreview {
         self.wanted = Some(c);
     }
 
-    /// Starts a preview of the parameter wanted, if it is new.
+    /// Starts a preview of the parameter wanted, if it (or the formula) is new.
     pub(super) fn request(&mut self, doc: &Document) {
         let Some(c) = self.wanted.take() else { return };
-        if self.asked == Some(c) {
+        let asked = (c, doc.formula());
+        if self.asked == Some(asked) {
             return;
         }
         // A scene the preview cannot build (the scene as edited is not valid) shows none.
         if let Ok(scene) = doc.julia_preview(c) {
-            self.asked = Some(c);
+            self.asked = Some(asked);
             self.worker.submit(Job { scene, nav: Nav::home(), passes: vec![1] });
         }
     }
@@ -48,14 +51,15 @@ impl JuliaPreview {
         for r in self.worker.poll() {
             if let Report::Pass(p) = r {
                 let image = ColorImage::from_rgb([p.width as usize, p.height as usize], &p.rgb8);
-                let c = self.asked.unwrap_or_default();
+                let (c, f) = self.asked.unwrap_or_default();
                 match &mut self.shown {
-                    Some((tex, at)) => {
+                    Some((tex, at, formula)) => {
                         tex.set(image, egui::TextureOptions::LINEAR);
-                        *at = c;
+                        (*at, *formula) = (c, f);
                     }
                     None => {
-                        self.shown = Some((ctx.load_texture("deepfield-julia", image, egui::TextureOptions::LINEAR), c))
+                        let tex = ctx.load_texture("deepfield-julia", image, egui::TextureOptions::LINEAR);
+                        self.shown = Some((tex, c, f));
                     }
                 }
                 self.previews += 1;
@@ -63,8 +67,8 @@ impl JuliaPreview {
         }
     }
 
-    /// The preview shown and its parameter.
-    pub(super) fn shown(&self) -> Option<&(TextureHandle, [f64; 2])> {
+    /// The preview shown, its parameter and its formula.
+    pub(super) fn shown(&self) -> Option<&(TextureHandle, [f64; 2], Formula)> {
         self.shown.as_ref()
     }
 

@@ -17,7 +17,7 @@ impl ViewerApp {
                 self.forward();
             }
             if ui.button("Home").on_hover_text("Home: the whole set").clicked() {
-                self.go(Nav::home());
+                self.go(self.default_view());
             }
             ui.separator();
             let minibrot = ui
@@ -40,6 +40,8 @@ impl ViewerApp {
             }
             ui.separator();
             ui.label("Show:");
+            // The GPU shaders draw z² + c only.
+            let gpu = self.doc.formula().is_quadratic();
             for (m, name) in [
                 (ViewMode::Cpu, "CPU"),
                 (ViewMode::GpuF32, "GPU f32"),
@@ -47,7 +49,9 @@ impl ViewerApp {
                 (ViewMode::SideBySide, "CPU | GPU"),
                 (ViewMode::Difference, "Difference"),
             ] {
-                ui.selectable_value(&mut self.mode, m, name);
+                ui.add_enabled_ui(gpu || m == ViewMode::Cpu, |ui| ui.selectable_value(&mut self.mode, m, name))
+                    .response
+                    .on_disabled_hover_text("the GPU shaders draw z² + c only");
             }
         });
     }
@@ -55,6 +59,8 @@ impl ViewerApp {
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             let short = |t: &String| if t.len() > 24 { format!("{}…", &t[..24]) } else { t.clone() };
+            ui.label(self.formula_title());
+            ui.separator();
             let nav = self.view.nav();
             ui.label(format!("centre {} {:+}i", short(&nav.center[0]), short(&nav.center[1]).trim_start_matches('+')));
             ui.separator();
@@ -105,15 +111,23 @@ impl ViewerApp {
 
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Formula");
+        if let Some(f) = self.chooser.show(ui, self.doc.formula())
+            && let Err(e) = self.set_formula(f)
+        {
+            self.chooser.refused(e);
+        }
         let c = self.doc.julia_c();
         let mut julia = !self.doc.is_mandelbrot();
         ui.horizontal(|ui| {
-            let m = ui.radio_value(&mut julia, false, "Mandelbrot").changed();
-            let j = ui.radio_value(&mut julia, true, "Julia").changed();
-            if m || j {
+            let m = ui.radio_value(&mut julia, false, "Mandelbrot").on_hover_text("c is the pixel, z starts at 0");
+            let j = ui.radio_value(&mut julia, true, "Julia").on_hover_text("c is fixed, z starts at the pixel");
+            if m.changed() || j.changed() {
                 let c = c.clone().unwrap_or_else(|| ["-0.8".into(), "0.156".into()]);
                 self.doc.set_julia(julia.then_some(c));
                 self.render.invalidate();
+            }
+            if ui.button("Reset view").on_hover_text("the whole set of this formula in this form").clicked() {
+                self.go(self.default_view());
             }
         });
         if let Some(mut v) = self.doc.julia_c() {

@@ -79,7 +79,7 @@ impl RenderState {
             return;
         }
         if let Some((strips, old)) = &mut self.planes
-            && old.planes_serve(&scene)
+            && planes_serve(old, &scene)
             && let Some(shown) = self.image.as_mut().filter(|i| i.nav == *nav)
             // Planes whose traps do not serve the new layers are computed again.
             && let Ok(rgb8) = render::recolor_rgb8(&scene.stack, strips, old.aa)
@@ -208,7 +208,30 @@ impl RenderState {
     }
 }
 
-/// True when `a` and `b` draw the same picture: the same render inputs, layers and traps.
+/// True when `a` and `b` draw the same picture: the same formula, render inputs, layers and
+/// traps.
 fn same_picture(a: &Scene, b: &Scene) -> bool {
-    a.render_inputs() == b.render_inputs() && a.stack == b.stack && a.traps == b.traps
+    a.formula == b.formula && a.render_inputs() == b.render_inputs() && a.stack == b.stack && a.traps == b.traps
+}
+
+/// Whether the planes `old` computed serve `new` ([`Scene::planes_serve`]), the formula
+/// included: [`Scene::render_inputs`] leaves the formula out, and planes of one formula never
+/// colour another's picture.
+fn planes_serve(old: &Scene, new: &Scene) -> bool {
+    old.formula == new.formula && old.planes_serve(new)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Another formula is another picture, whose planes the last ones do not serve.
+    #[test]
+    fn another_formula_is_another_picture() {
+        let file = Scene::parse_file("test", "version = 1\n").unwrap();
+        let a = Scene::from_file(file, "test", std::path::Path::new("."), crate::io::load_bitmap).unwrap();
+        let b = a.clone().with_formula(crate::formula::Formula::parse("buffalo", None).unwrap()).unwrap();
+        assert!(same_picture(&a, &a.clone()) && planes_serve(&a, &a.clone()));
+        assert!(!same_picture(&a, &b) && !planes_serve(&a, &b));
+    }
 }
