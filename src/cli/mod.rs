@@ -129,8 +129,8 @@ pub fn main() -> ExitCode {
         args::Command::Sheet(s) => sheet::run(*s),
         args::Command::Palettes(p) => palettes::run(p),
         args::Command::Formulas => {
-            print!("{}", formulas_table());
-            Ok(())
+            use std::io::Write as _;
+            std::io::stdout().lock().write_all(formulas_table().as_bytes()).map_err(|e| Failure::Runtime(e.into()))
         }
         args::Command::View(v) => view::run(v),
         args::Command::Find(f) => find::run(*f),

@@ -232,7 +232,7 @@ fn run<M: Map, const L: usize, const DE: bool>(
             s.n[k] = s.n[k].wrapping_add(1);
         }
         steps += 1;
-        if steps % CANCEL_EVERY == 0 && cancel.load(Ordering::Relaxed) {
+        if steps.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
             return Err(Cancelled);
         }
     }

@@ -13,8 +13,10 @@ use crate::orbit::interior::Detection;
 /// read and the traps they run ([`crate::compose::Stack::needs`], [`Scene::traps`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderInputs<'a> {
-    /// The map.
+    /// Mandelbrot or Julia form.
     pub family: &'a FamilySpec,
+    /// The map.
+    pub formula: crate::formula::Formula,
     /// The view's centre.
     pub center: &'a [Decimal; 2],
     /// The view's scale as written.
@@ -44,6 +46,7 @@ impl Scene {
     pub fn render_inputs(&self) -> RenderInputs<'_> {
         RenderInputs {
             family: &self.family,
+            formula: self.formula,
             center: &self.center,
             scale: &self.scale,
             transform: self.transform,

@@ -208,17 +208,16 @@ impl RenderState {
     }
 }
 
-/// True when `a` and `b` draw the same picture: the same formula, render inputs, layers and
-/// traps.
+/// True when `a` and `b` draw the same picture: the same render inputs (the formula among
+/// them), layers and traps.
 fn same_picture(a: &Scene, b: &Scene) -> bool {
-    a.formula == b.formula && a.render_inputs() == b.render_inputs() && a.stack == b.stack && a.traps == b.traps
+    a.render_inputs() == b.render_inputs() && a.stack == b.stack && a.traps == b.traps
 }
 
-/// Whether the planes `old` computed serve `new` ([`Scene::planes_serve`]), the formula
-/// included: [`Scene::render_inputs`] leaves the formula out, and planes of one formula never
-/// colour another's picture.
+/// Whether the planes `old` computed serve `new` ([`Scene::planes_serve`]: planes of one
+/// formula never colour another's picture).
 fn planes_serve(old: &Scene, new: &Scene) -> bool {
-    old.formula == new.formula && old.planes_serve(new)
+    old.planes_serve(new)
 }
 
 #[cfg(test)]
