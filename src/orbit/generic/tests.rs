@@ -519,3 +519,46 @@ fn a_raised_flag_stops_the_batch() {
     assert!(out.iter().all(|o| o.n == 7));
     assert!(prepare(&view.spec(None, false), view.formula, &AtomicBool::new(true), None).is_err());
 }
+
+/// Iterations per second of [`Engine::orbits`] on one thread, at a preperiodic point of
+/// the Burning Ship 1e-100 deep (f64 deltas) and 1e-330 deep (FloatExp), 256 × 256
+/// samples, with and without BLA.
+#[test]
+#[ignore = "a measurement: cargo test --release --lib --no-default-features generic::tests::speed -- --ignored --nocapture"]
+fn speed_of_burning_ship_past_1e100() {
+    let side = 256;
+    let offs: Vec<[f64; 2]> = (0..side * side)
+        .map(|k| [(k % side) as f64 - side as f64 / 2.0, (k / side) as f64 - side as f64 / 2.0])
+        .collect();
+    for (name, digits) in [("burning-ship", 100), ("burning-ship", 330), ("burning-ship,mandelbrot^3", 100)] {
+        let mut view = preperiodic_view(name, None, digits, 100_000);
+        view.radius = view.radius.mul_f64(1.0);
+        for bla in [None, Some(DEFAULT_BLA)] {
+            let spec = DeepSpec {
+                spacing: view.radius.mul_f64(2.0 / side as f64),
+                max_offset: side as f64 / 2.0 * 2f64.sqrt(),
+                ..view.spec(bla, false)
+            };
+            let started = std::time::Instant::now();
+            let e = prepare(&spec, view.formula, &NEVER, None).expect("prepared");
+            let prep = started.elapsed().as_secs_f64();
+            let mut out = vec![Orbit::interior(); offs.len()];
+            let mut c = Counters::default();
+            let started = std::time::Instant::now();
+            e.orbits(&offs, &mut out, &mut c, &NEVER);
+            let t = started.elapsed().as_secs_f64();
+            eprintln!(
+                "{name} 1e-{digits} bla {bla:?}: reference {} its, prepare {prep:.2} s; {} samples in {t:.2} s: \
+                 {:.1} M iterations/s ({} single steps, {:.1} ns each; {} BLA steps over {} its; {} rebases)",
+                e.reference_len(),
+                offs.len(),
+                c.iterations as f64 / t / 1e6,
+                c.steps,
+                t * 1e9 / c.steps.max(1) as f64,
+                c.bla_steps,
+                c.bla_iterations,
+                c.rebases,
+            );
+        }
+    }
+}
