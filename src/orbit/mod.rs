@@ -38,11 +38,19 @@
 //! | | `interior/probe.rs` | the Newton test as the loop runs it at the end of a turn |
 //! | | `interior/disks.rs` | disks of parameters certified interior whole |
 //! | files | `saved.rs` | reference files: orbits computed once, read by every unit and frame |
+//! | generic | `generic/mod.rs` | [`generic::Engine`]: the deep engine for every formula but z² + c, generic over its stepper |
+//! | | `generic/reference.rs` | its reference orbits: the centre's and one orbit of 0 per phase of a hybrid |
+//! | | `generic/perturb.rs` | its loop: single steps, rebasing, BLA steps, f64 and FloatExp deltas |
+//! | | `generic/wide.rs` | the step from a reference value below f64's range, in FloatExp |
+//! | | `generic/der.rs` | the real Jacobian times the spacing, with its own exponent |
+//! | | `generic/bla.rs` | BLA with real 2×2 matrices, radii from the nonlinear terms and the fold lines |
+//! | | `generic/tests.rs` | the generic engine against direct big-float iteration |
 //!
 //! The big-float helpers the engine shares with `locate` and `compare` are numbers
 //! ([`crate::num::bigfloat`], [`crate::num::bigcomplex`]).
 
 pub mod bla;
+pub mod generic;
 pub mod interior;
 pub mod perturb;
 pub mod reference;

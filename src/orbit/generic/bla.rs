@@ -1,0 +1,263 @@
+//! Bilinear approximation (BLA) for every formula: steps that skip runs of iterations,
+//! δ -> A δ + B δc with real 2×2 matrices A and B, merged in a binary tree over the
+//! reference's indices (Zhuoran's BLA, as Claude Heiland-Allen's "Deep zoom theory and
+//! practice (again)" writes it for formulas with folds).
+//!
+//! One perturbed step at reference index m is δ' = f_m(Z_m + δ) - f_m(Z_m) + δc. Its
+//! linear part is A = Jf_m(Z_m) (the real Jacobian: a fold flips the sign of a row or a
+//! column of the power's conformal derivative p W^(p-1)) and B = I for the Mandelbrot form
+//! (δc enters every step), B = 0 for a Julia set. The step is valid for |δ| below a radius
+//! that respects:
+//!
+//! 1. the nonlinear terms: |f(Z + δ) - f(Z) - A δ| <= Σ_(k>=2) C(p,k) |Z|^(p-k) |δ|^k, and
+//!    |A δ| = p |Z|^(p-1) |δ| exactly (folds and negations are reflections, so A is p W^(p-1)
+//!    times orthogonal matrices), so the dropped terms stay below ε of the linear one for
+//!    |δ| < ε |Z| / (p - 1) (the quadratic term is (p-1)/2 |δ|/|Z| of it; half of that
+//!    allowance is left for the higher ones);
+//! 2. the fold lines: a fold of x before the power is linear only while X + δx keeps the
+//!    sign of X, so |δ| < |X| (likewise y); a fold of Re U after the power (U = W^p) needs
+//!    |δU| < |Re U|, and |δU| <= (|Z| + |δ|)^p - |Z|^p, so |δ| < |Z| ((1 + |Re U|/|Z|^p)^(1/p) - 1);
+//! 3. escape: |δ| <= R - |Z|, so that no escape is skipped (the loop tests a sample at the
+//!    index it looks a step up from).
+//!
+//! Two consecutive steps x then y merge into A = A_y A_x, B = A_y B_x + B_y, valid for
+//! |δ| < min(r_x, (r_y - ‖B_x‖ |δc|max) / ‖A_x‖), ‖·‖ the operator norm (the largest
+//! singular value, exact for 2×2 matrices: a Frobenius norm would lose up to √2 per level of
+//! the tree). Level k of the tree holds steps of 2^k iterations starting at
+//! origin + i 2^k; the loop climbs from a step of 2 iterations while the next level's
+//! radius still holds the sample (radii never grow with the level at one start index).
+//! Orbits of 0 start the tree at index 1 (from Z_0 = 0 nothing is linear: A = 0 and the
+//! radius is 0), which is where every rebased sample goes on from.
+//!
+//! Hybrids need no more: each reference orbit has its own tree, and a reference's index
+//! fixes the phase of each step it covers (orbit k steps index j with phase k + j), which
+//! is the sample's phase while it follows that orbit. Steps from wide values (see
+//! [`super::reference`]) get radius 0: their f64 value may have lost a sign a fold reads.
+//!
+//! Tables are built with FloatExp entries (products over long runs leave f64's range at
+//! depth) and kept twice: in f64 for the f64 phase of the loop (entries f64 cannot hold made
+//! unusable) and in FloatExp for deltas below f64's range.
+
+use rayon::prelude::*;
+
+use super::der::{MatFe, to_fe};
+use super::reference::Track;
+use crate::formula::map::{FOLD_IM, FOLD_RE};
+use crate::formula::{Formula, Stepper};
+use crate::num::{FloatExp, Real};
+
+/// The tree covers at most this many indices from its origin: it takes about 220 bytes per
+/// index (f64 and FloatExp), 0.9 GB here.
+const TREE_END: u32 = 1 << 22;
+
+/// Fold radii are kept this much inside the fold lines (the linear steps' own error is
+/// far smaller).
+const SAFE: f64 = 0.999;
+
+/// A step over 2^k iterations: δ -> A δ + B δc for |δ|^2 < r2.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Step<T> {
+    /// Multiplier of the delta.
+    pub(super) a: [[T; 2]; 2],
+    /// Multiplier of the sample's offset δc.
+    pub(super) b: [[T; 2]; 2],
+    /// Squared validity radius (negative: never valid).
+    pub(super) r2: T,
+}
+
+/// The tree of one reference orbit in number type T.
+#[derive(Debug, Clone)]
+pub(super) struct Table<T> {
+    origin: u32,
+    /// levels[k] holds steps of 2^(k+1) iterations.
+    levels: Vec<Vec<Step<T>>>,
+    /// The largest squared radius (of the shortest steps): a sample above it looks nothing
+    /// up.
+    max_r2: T,
+}
+
+/// A step while the tree is built: matrices and radius in FloatExp.
+#[derive(Debug, Clone, Copy)]
+struct Wide {
+    a: MatFe,
+    b: MatFe,
+    r: FloatExp,
+}
+
+/// What the tables of a view are built for.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Build {
+    /// The tolerance ε.
+    pub(super) eps: f64,
+    /// The largest |δc| (plane units); zero for Julia sets.
+    pub(super) dc_max: FloatExp,
+    /// The escape radius.
+    pub(super) escape_radius: f64,
+    /// Mandelbrot form (B = I) or Julia (B = 0).
+    pub(super) mandelbrot: bool,
+    /// Also keep the FloatExp tables.
+    pub(super) floatexp: bool,
+}
+
+impl<T: Real> Table<T> {
+    /// The longest step from index `m` whose radius holds |δ|^2 = `d2`, no longer than
+    /// `left` iterations; with its length.
+    #[inline(always)]
+    pub(super) fn lookup(&self, m: u32, d2: T, left: u32) -> Option<(&Step<T>, u32)> {
+        if d2.partial_cmp(&self.max_r2) != Some(std::cmp::Ordering::Less) || m < self.origin {
+            return None;
+        }
+        let i = m - self.origin;
+        let mut best = None;
+        for (k, level) in self.levels.iter().enumerate() {
+            let len = 2u32 << k;
+            if i & (len - 1) != 0 || len > left {
+                break;
+            }
+            match level.get((i >> (k + 1)) as usize) {
+                Some(s) if d2 < s.r2 => best = Some((s, len)),
+                _ => break,
+            }
+        }
+        best
+    }
+
+    /// Steps stored, over all levels.
+    pub(super) fn len(&self) -> usize {
+        self.levels.iter().map(Vec::len).sum()
+    }
+
+    /// Levels of the tree.
+    pub(super) fn depth(&self) -> usize {
+        self.levels.len()
+    }
+}
+
+/// The operator norm (largest singular value) of a FloatExp matrix.
+fn norm(a: &MatFe) -> FloatExp {
+    let e = a.iter().flatten().filter(|x| !x.is_zero()).map(|x| x.exponent()).max();
+    let Some(e) = e else { return FloatExp::ZERO };
+    let m = a.map(|row| row.map(|x| x.ldexp(-e).to_f64()));
+    let f2 = m.iter().flatten().map(|x| x * x).sum::<f64>();
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let s2 = 0.5 * (f2 + (f2 * f2 - 4.0 * det * det).max(0.0).sqrt());
+    FloatExp::new(s2.sqrt(), e)
+}
+
+fn mul(a: &MatFe, b: &MatFe) -> MatFe {
+    let e = |i: usize, j: usize| a[i][0] * b[0][j] + a[i][1] * b[1][j];
+    [[e(0, 0), e(0, 1)], [e(1, 0), e(1, 1)]]
+}
+
+fn add(a: &MatFe, b: &MatFe) -> MatFe {
+    [[a[0][0] + b[0][0], a[0][1] + b[0][1]], [a[1][0] + b[1][0], a[1][1] + b[1][1]]]
+}
+
+/// x then y.
+fn merge(x: &Wide, y: &Wide, dc_max: FloatExp) -> Wide {
+    let na = norm(&x.a);
+    let r = if na.is_zero() {
+        x.r
+    } else {
+        let reach = y.r - norm(&x.b) * dc_max;
+        if reach > FloatExp::ZERO { x.r.min(reach / na) } else { FloatExp::ZERO }
+    };
+    Wide { a: mul(&y.a, &x.a), b: add(&mul(&y.a, &x.b), &y.b), r }
+}
+
+/// The radius of the single step from Z = `z` with the map of iteration `n`.
+fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2], how: &Build) -> f64 {
+    let (fin, p, fout, _) = {
+        let ph = formula.phase(n);
+        ph.kind.shape(ph.power)
+    };
+    let az = z[0].hypot(z[1]);
+    let mut r = how.eps * az / (p - 1) as f64;
+    if fin & FOLD_RE != 0 {
+        r = r.min(z[0].abs() * SAFE);
+    }
+    if fin & FOLD_IM != 0 {
+        r = r.min(z[1].abs() * SAFE);
+    }
+    if fout != 0 {
+        // |Re U| and |Im U| are those of f(Z): a fold or a negation keeps magnitudes.
+        let u = stepper.apply(n, z);
+        let zp = az.powi(p as i32);
+        for (bit, part) in [(FOLD_RE, u[0]), (FOLD_IM, u[1])] {
+            if fout & bit != 0 {
+                let q = part.abs() / zp;
+                let t = if q.is_finite() { (q.ln_1p() / p as f64).exp_m1() } else { 0.0 };
+                r = r.min(az * t * SAFE);
+            }
+        }
+    }
+    r.min((how.escape_radius - az).max(0.0)).max(0.0)
+}
+
+/// The f64 and (with `how.floatexp`) FloatExp tables of one reference orbit, starting at
+/// `origin`.
+pub(super) fn build<S: Stepper>(
+    stepper: &S,
+    formula: &Formula,
+    track: &Track,
+    origin: u32,
+    how: &Build,
+) -> (Table<f64>, Option<Table<FloatExp>>) {
+    let zero = FloatExp::ZERO;
+    let one = FloatExp::ONE;
+    let end = track.last().min(origin.saturating_add(TREE_END));
+    let b = if how.mandelbrot { [[one, zero], [zero, one]] } else { [[zero; 2]; 2] };
+    // Single steps from origin .. end (each lands at most at `end`).
+    let mut level: Vec<Wide> = (origin..end)
+        .into_par_iter()
+        .map(|j| {
+            let z = track.z[j as usize];
+            let n = track.phase.wrapping_add(j);
+            let wide = track.is_wide(j);
+            let r = if wide { 0.0 } else { single_radius(stepper, formula, n, z, how) };
+            Wide { a: to_fe(&stepper.jacobian(n, z)), b, r: FloatExp::from(r) }
+        })
+        .collect();
+    let mut f64_levels = Vec::new();
+    let mut fe_levels = Vec::new();
+    while level.len() >= 2 {
+        level = level.par_chunks_exact(2).map(|p| merge(&p[0], &p[1], how.dc_max)).collect();
+        f64_levels.push(level.par_iter().map(to_f64_step).collect::<Vec<_>>());
+        if how.floatexp {
+            fe_levels.push(level.par_iter().map(|w| Step { a: w.a, b: w.b, r2: w.r * w.r }).collect::<Vec<_>>());
+        }
+    }
+    let max64 = f64_levels.first().map_or(-1.0, |l: &Vec<Step<f64>>| l.iter().map(|s| s.r2).fold(-1.0, f64::max));
+    let maxfe = fe_levels
+        .first()
+        .map_or(-FloatExp::ONE, |l: &Vec<Step<FloatExp>>| l.iter().map(|s| s.r2).fold(-FloatExp::ONE, FloatExp::max));
+    let t64 = Table { origin, levels: f64_levels, max_r2: max64 };
+    let tfe = how.floatexp.then_some(Table { origin, levels: fe_levels, max_r2: maxfe });
+    (t64, tfe)
+}
+
+/// A step's f64 form: unusable (negative radius) where an entry leaves f64's range.
+fn to_f64_step(w: &Wide) -> Step<f64> {
+    let a = w.a.map(|row| row.map(FloatExp::to_f64));
+    let b = w.b.map(|row| row.map(FloatExp::to_f64));
+    let finite = a.iter().chain(&b).flatten().all(|x| x.is_finite());
+    let r = w.r.to_f64();
+    Step { a, b, r2: if finite && r > 0.0 { r * r } else { -1.0 } }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_operator_norm_of_a_rotation_and_of_a_shear() {
+        let m = |a: [[f64; 2]; 2]| a.map(|r| r.map(FloatExp::from));
+        // 3 + 4i as a matrix: norm 5.
+        assert!((norm(&m([[3.0, -4.0], [4.0, 3.0]])).to_f64() - 5.0).abs() < 1e-14);
+        // A reflection of it: still 5.
+        assert!((norm(&m([[3.0, 4.0], [4.0, -3.0]])).to_f64() - 5.0).abs() < 1e-14);
+        // [[1, 1], [0, 1]]: the golden ratio.
+        let phi = (1.0 + 5f64.sqrt()) / 2.0;
+        assert!((norm(&m([[1.0, 1.0], [0.0, 1.0]])).to_f64() - phi).abs() < 1e-14);
+    }
+}

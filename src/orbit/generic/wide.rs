@@ -1,0 +1,126 @@
+//! The perturbed step from a reference value f64 cannot stand for (a *wide* value, see
+//! [`super::reference`]): f(Z + δ) - f(Z) with Z in FloatExp.
+//!
+//! [`crate::formula::map::Map::delta`] takes Z in f64, which is exact for almost every
+//! reference value. Where a part of Z is nonzero below f64's range (a reference just off
+//! the Burning Ship's real axis at depth: Im Z ~ 1e-400), its rounding to 0 loses the sign
+//! that a fold's `diffabs` decides on, and where |Z| is so small that its powers underflow
+//! the binomial expansion loses its linear term. This step is the same composition (fold,
+//! power, fold, negation, as in `formula::map`) read from the phase's shape at run time and
+//! evaluated wholly in FloatExp: it runs only at the few wide indices of an orbit, where
+//! interpreting the shape costs nothing that matters.
+
+use crate::formula::Phase;
+use crate::formula::map::{FOLD_IM, FOLD_RE, SIGN_IM, SIGN_RE, binomial};
+use crate::num::FloatExp;
+use crate::num::real::{cadd, cmul};
+
+/// |X + d| - |X| without cancellation (Claude Heiland-Allen's `diffabs`), X in FloatExp.
+fn diffabs(x: FloatExp, d: FloatExp) -> FloatExp {
+    let zero = FloatExp::ZERO;
+    let s = x + d;
+    if x >= zero {
+        if s >= zero { d } else { -(d + x.ldexp(1)) }
+    } else if s > zero {
+        d + x.ldexp(1)
+    } else {
+        -d
+    }
+}
+
+/// Folds the parts `fold` names.
+fn fold(fold: u8, z: [FloatExp; 2]) -> [FloatExp; 2] {
+    [if fold & FOLD_RE != 0 { z[0].abs() } else { z[0] }, if fold & FOLD_IM != 0 { z[1].abs() } else { z[1] }]
+}
+
+/// The folded delta of the parts `fold` names, against the unfolded value `z`.
+fn fold_delta(fold: u8, z: [FloatExp; 2], d: [FloatExp; 2]) -> [FloatExp; 2] {
+    [
+        if fold & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
+        if fold & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
+    ]
+}
+
+/// f(Z + d) - f(Z) for the map of `phase`, wholly in FloatExp; `u`: U = W^p from the big
+/// floats where the reference has it (its signs decide a fold after the power), else
+/// computed here.
+pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d: [FloatExp; 2]) -> [FloatExp; 2] {
+    let (fin, p, fout, sign) = phase.kind.shape(phase.power);
+    let dw = fold_delta(fin, z, d);
+    let w = fold(fin, z);
+    // Powers W^0 .. W^p.
+    let mut pw = vec![[FloatExp::ONE, FloatExp::ZERO]];
+    for k in 1..=p as usize {
+        pw.push(cmul(pw[k - 1], w));
+    }
+    // (W + dw)^p - W^p by Horner's rule over the binomial expansion.
+    let mut t = [FloatExp::ONE, FloatExp::ZERO];
+    for k in (1..p).rev() {
+        let c = binomial(p, k);
+        let a = pw[(p - k) as usize];
+        t = cadd(cmul(t, dw), [a[0].mul_f64(c), a[1].mul_f64(c)]);
+    }
+    let du = cmul(t, dw);
+    let du = fold_delta(fout, u.unwrap_or(pw[p as usize]), du);
+    match sign {
+        SIGN_IM => [du[0], -du[1]],
+        SIGN_RE => [-du[0], du[1]],
+        _ => du,
+    }
+}
+
+/// An f64 value with the signs of `v`'s parts (a part below f64's range becomes the least
+/// normal f64 of its sign): what a Jacobian at `v` needs, whose folds read only signs where
+/// a part is that small.
+pub(super) fn signed_f64(v: [FloatExp; 2]) -> [f64; 2] {
+    v.map(|x| {
+        let f = x.to_f64();
+        if f == 0.0 && !x.is_zero() { f64::MIN_POSITIVE.copysign(x.mantissa()) } else { f }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::Formula;
+    use crate::num::bigcomplex::BigC;
+
+    /// Against the difference of two big-float steps, at a value with a part far below
+    /// f64's range, for families with folds before and after the power.
+    #[test]
+    fn the_wide_step_is_the_difference_of_two_big_float_steps() {
+        let bits = 4000;
+        for name in ["burning-ship", "buffalo^3", "celtic^4", "perpendicular-buffalo", "mandelbar^3", "mandelbrot^5"] {
+            let phase = Formula::parse(name, None).unwrap().phases()[0];
+            for (z, d) in [
+                (
+                    [FloatExp::from(-1.25), FloatExp::exp10(-400.0)],
+                    [FloatExp::exp10(-420.0), FloatExp::exp10(-399.0).mul_f64(-3.0)],
+                ),
+                (
+                    [FloatExp::exp10(-500.0), FloatExp::from(0.75)],
+                    [FloatExp::exp10(-480.0).mul_f64(-1.0), FloatExp::exp10(-490.0)],
+                ),
+                (
+                    [FloatExp::exp10(-300.0), FloatExp::exp10(-301.0).mul_f64(-2.0)],
+                    [FloatExp::exp10(-302.0), FloatExp::exp10(-300.0)],
+                ),
+            ] {
+                let got = delta(phase, z, None, d);
+                let big = |v: [FloatExp; 2]| {
+                    let f = |x: FloatExp| {
+                        malachite_float::Float::from_primitive_float_prec(x.mantissa(), bits).0 << x.exponent()
+                    };
+                    BigC { re: f(v[0]), im: f(v[1]), bits }
+                };
+                let step = |v: &BigC| crate::with_map!(phase, M => <M as crate::formula::map::Map>::apply_big(v), unreachable!());
+                let want = step(&big(z).add(&big(d))).sub(&step(&big(z))).to_fe();
+                let scale = want[0].abs().max(want[1].abs());
+                for k in 0..2 {
+                    let err = (got[k] - want[k]).abs();
+                    assert!(err <= scale.mul_f64(1e-12), "{name} {z:?} {d:?}: {got:?} != {want:?}");
+                }
+            }
+        }
+    }
+}
