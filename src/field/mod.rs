@@ -86,6 +86,8 @@ pub struct FieldParams {
     pub grid: SampleGrid,
     /// The deep engine's shared data; None runs the direct kernels.
     pub deep: Option<Arc<Perturbation>>,
+    /// The deep engine of a formula other than z² + c ([`crate::orbit::generic`]).
+    pub deep_generic: Option<Arc<crate::orbit::generic::Engine>>,
     /// Run the direct f32 kernel instead of f64 (comparisons only; traps are not computed).
     pub single: bool,
 }
@@ -101,7 +103,7 @@ impl FieldParams {
             derivative: needs.de,
             simd: SimdLevel::detect(),
         };
-        Self { orbit, needs, grid, deep: None, single: false }
+        Self { orbit, needs, grid, deep: None, deep_generic: None, single: false }
     }
 }
 
@@ -159,7 +161,11 @@ fn compute_plane_strip(
     let count = width * rows.len();
     let mut planes = Planes::new(width, rows.len(), &params.needs);
     if let Some(deep) = &params.deep {
-        let counters = deep_strip(deep, params, rows, &mut planes, cancel)?;
+        let counters = deep_strip(Deep::Quadratic(deep), params, rows, &mut planes, cancel)?;
+        return Ok(Strip { planes, iterations: counters.iterations, counters });
+    }
+    if let Some(deep) = &params.deep_generic {
+        let counters = deep_strip(Deep::Generic(deep), params, rows, &mut planes, cancel)?;
         return Ok(Strip { planes, iterations: counters.iterations, counters });
     }
     let mut points = Vec::with_capacity(count);
@@ -345,8 +351,38 @@ fn deep_chunk_rows(width: usize, height: usize) -> usize {
 /// Computes sample rows `rows` with the perturbation engine (many samples at once, or one
 /// at a time when traps observe z = Z + δ). The derivative it returns is already scaled by
 /// the spacing.
+/// The deep engine a strip runs: z² + c's, or the generic one of every other formula.
+#[derive(Clone, Copy)]
+enum Deep<'a> {
+    Quadratic(&'a Perturbation),
+    Generic(&'a crate::orbit::generic::Engine),
+}
+
+impl Deep<'_> {
+    fn orbits(self, offsets: &[[f64; 2]], out: &mut [Orbit], c: &mut Counters, simd: SimdLevel, cancel: &AtomicBool) {
+        match self {
+            Deep::Quadratic(d) => d.orbits(offsets, out, c, simd, cancel),
+            Deep::Generic(d) => d.orbits(offsets, out, c, cancel),
+        }
+    }
+
+    fn orbit(
+        self,
+        offset: [f64; 2],
+        traps: &[Trap],
+        states: &mut [TrapState],
+        c: &mut Counters,
+        cancel: &AtomicBool,
+    ) -> Orbit {
+        match self {
+            Deep::Quadratic(d) => d.orbit(offset, traps, states, c, cancel),
+            Deep::Generic(d) => d.orbit(offset, traps, states, c, cancel),
+        }
+    }
+}
+
 fn deep_strip(
-    deep: &Perturbation,
+    deep: Deep<'_>,
     params: &FieldParams,
     rows: std::ops::Range<u32>,
     planes: &mut Planes,

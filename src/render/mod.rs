@@ -50,6 +50,11 @@ pub enum RenderError {
     /// A reference file was given to a view that needs none.
     #[error("the scene runs the {0} engine, which uses no reference orbit; leave out the reference file")]
     NoReferenceNeeded(&'static str),
+    /// A reference file was given to a formula whose references it cannot hold.
+    #[error(
+        "reference files hold z^2 + c's reference orbits; this scene's formula is {0}: leave out the reference file"
+    )]
+    NoReferenceFile(String),
     /// The requested rows are not the image's.
     #[error("rows {start}..{end} are not within the image's {height} rows")]
     Rows {
@@ -392,6 +397,15 @@ pub fn prepare_field(
             saved.serves(&spec)?;
             spec.references = Some(saved.refs.clone());
         }
+        if !scene.formula.is_quadratic() {
+            if options.references.is_some() {
+                return Err(RenderError::NoReferenceFile(scene.formula.to_string()));
+            }
+            let report = |done, total| progress(Progress::Reference { done, total });
+            let engine = orbit::generic::prepare(&spec, scene.formula, cancel, Some(&report))?;
+            params.deep_generic = Some(Arc::new(engine));
+            return Ok((params, start.elapsed().as_secs_f64()));
+        }
         let shared = options.deep.as_ref().filter(|d| d.built_for(&spec));
         if let Some(q) = shared.and_then(|d| d.with_spacing(spec.spacing, params.grid.max_offset())) {
             params.deep = Some(Arc::new(q));
@@ -580,6 +594,36 @@ pub fn render<P: Send>(
     let its = iterations.load(Ordering::Relaxed);
     let pixels = scene.width as u64 * scene.height as u64;
     let c = counters.into_inner().unwrap_or_else(|e| e.into_inner());
+    let generic = params.deep_generic.as_ref().map(|d| DeepStats {
+        reference_bits: d.bits(),
+        reference_iterations: d.reference_len(),
+        reference_dense: d.reference_len(),
+        reference_escaped: d.reference_escaped(),
+        reference_period: None,
+        reference_cycle: None,
+        reference_seconds,
+        orbit_seconds: d.orbit_seconds(),
+        tables_seconds: d.tables_seconds(),
+        reference_bytes: 0,
+        bla_bytes: 0,
+        aligned_steps: 0,
+        aligned_stages: 0,
+        block_steps: 0,
+        block_length: 0,
+        blocks_from: 0,
+        blocks_seconds: 0.0,
+        steps: c.steps,
+        floatexp_steps: c.floatexp_steps,
+        bla_steps: c.bla_steps,
+        bla_iterations: c.bla_iterations,
+        tail_bla_steps: c.tail_steps,
+        rebases: c.rebases,
+        interior_detection: orbit::interior::Decision::Off,
+        interior_threshold: None,
+        interior_samples: 0,
+        interior_newton_samples: 0,
+        interior_disk_samples: 0,
+    });
     let deep = params.deep.as_ref().map(|d| {
         let (reference_bytes, bla_bytes) = d.bytes();
         let blocks = || d.primary_table().into_iter().flat_map(|t| t.built().into_iter().flatten().flatten());
@@ -614,6 +658,7 @@ pub fn render<P: Send>(
             interior_disk_samples: c.disks,
         }
     });
+    let deep = deep.or(generic);
     let precision = match plan.kind {
         EngineKind::Direct => "f64 (53-bit mantissa)".to_string(),
         EngineKind::Perturb { numbers: orbit::Numbers::F64, .. } => {
