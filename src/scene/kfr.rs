@@ -20,8 +20,8 @@
 //! |---|---|---|
 //! | `Re`, `Im` | `[view] center` | the decimal text is copied verbatim, every digit kept; absent: 0 |
 //! | `Zoom` | `[view] zoom` | same convention: the image height spans `4 / Zoom` (KF: half-height `2 / Zoom`); absent: 1 |
-//! | `FractalType`, `Power` | `[formula] kind`, `power` | through the table of families ([`crate::formula::kind::KINDS`]); see [`super::kfr_formula`] |
-//! | `UseHybridFormula`, `HybridFormula` | `[formula] kind = "a,b^3,..."` | when each group is one family; see [`super::kfr_hybrid`] |
+//! | `FractalType`, `Power` | `[formula] kind`, `power` | through the table of families ([`crate::formula::kind::KINDS`]); see `scene::kfr_formula` |
+//! | `UseHybridFormula`, `HybridFormula` | `[formula] kind = "a,b^3,..."` | when each group is one family; see `scene::kfr_hybrid` |
 //! | `Iterations` | `[iteration] max` | optional (KF keeps its current value when absent); 1 ..= 2^32 - 2 |
 //! | `TargetWidth`, `TargetHeight` | `[view] width`, `height` | KF 2.15 output size; these are `.kfs` keys, present when settings and location were saved together (PNG/EXR metadata) |
 //! | `ImageWidth`, `ImageHeight` | `[view] width`, `height` | used when no `Target*` key is given (older KF); otherwise 800 x 600 |

@@ -107,7 +107,7 @@ pub struct Scene {
     pub base_dir: PathBuf,
     /// Whether the pixel is the map's parameter (Mandelbrot form) or its start (Julia form).
     pub family: FamilySpec,
-    /// The map: a family at a power, or a hybrid ([`Formula::default`] is z² + c).
+    /// The map: a family at a power, or a hybrid ([`crate::formula::Formula::default`] is z² + c).
     pub formula: crate::formula::Formula,
     /// View centre.
     pub center: [Decimal; 2],

@@ -10,7 +10,7 @@
 //! of them, generic over [`Stepper`]: [`prepare`] turns the runtime [`Formula`] into its
 //! compiled stepper ([`crate::with_stepper!`]) once per call, and each loop is compiled
 //! per family, so no formula is interpreted in the hot loop (only the rare steps from
-//! reference values below f64's range read the phase's shape, [`wide`]).
+//! reference values below f64's range read the phase's shape, `wide.rs`).
 //!
 //! | file | holds |
 //! |---|---|
