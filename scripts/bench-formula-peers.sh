@@ -41,7 +41,8 @@ fi
 here=$(cd "$(dirname "$0")/.." && pwd)
 source "$here/scripts/common.sh"
 peer_setup "$here" "${5:-}"
-scenes=$(cd "$here/scenes" && ls bench-burning-ship-e*.toml bench-mandelbar-e*.toml bench-mandelbrot3-e*.toml | sed 's/\.toml$//')
+scenes=$(cd "$here/scenes" && ls bench-burning-ship-e*.toml bench-mandelbar-e*.toml bench-mandelbrot3-e*.toml 2> /dev/null | sed 's/\.toml$//' || true)
+[ -n "$scenes" ] || { echo "no bench-burning-ship/mandelbar/mandelbrot3 scenes in $here/scenes" >&2; exit 2; }
 for scene in $scenes; do
     # Writes $scene.fr.toml, $scene.fr.args (fractall-rust's flags) and $scene.f3.toml.
     python3 - "$here/scenes/$scene.toml" "$out/$scene" << 'EOF'
