@@ -14,6 +14,12 @@ use super::args::ReferenceArgs;
 pub fn run(args: ReferenceArgs) -> Result<(), Failure> {
     let cancel = super::terminal::install_ctrlc();
     let scene = super::scene::load(&args.scene)?;
+    if !scene.formula.is_quadratic() {
+        return Err(Failure::Input(anyhow!(
+            "reference files hold z^2 + c's reference orbits; this scene's formula is {} (its renders compute their own)",
+            scene.formula
+        )));
+    }
     let plan = super::engine_plan(&scene)?;
     let simd = super::simd_level(args.simd.as_deref())?;
     let options = Options { simd, dense_orbit: args.dense_orbit, ..Options::default() };

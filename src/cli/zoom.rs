@@ -95,8 +95,12 @@ pub fn run(args: ZoomArgs) -> Result<(), Failure> {
     // The finest frame's reference orbits, shared by every frame that perturbs.
     let plan = super::engine_plan(finest)?;
     let options = Options { simd, ..Options::default() };
+    // (Reference files hold z² + c's orbits; every frame of another formula that perturbs
+    // computes its own references.)
+    let quadratic = finest.formula.is_quadratic();
     let references = match (&args.reference, render::deep_spec(finest, &plan, &options).1) {
         (Some(path), _) => Some(Arc::new(super::reference::read(path)?)),
+        (None, Some(_)) if !quadratic => None,
         (None, Some(spec)) => {
             let refs = deepfield::orbit::references(&spec, &|_, _| {}, &cancel).map_err(|_| Failure::Cancelled)?;
             Some(Arc::new(SavedReferences { key: key_of(&spec), refs: Arc::new(refs) }))

@@ -450,7 +450,7 @@ mod tests {
             let b = (0..8).find_map(|d| generate(3, d, &spec)).expect("the same draw");
             assert_eq!(a.toml, b.toml);
             assert_eq!(a.formula, ship);
-            assert!(a.toml.contains("# formula: burning-ship"), "{}", a.toml);
+            assert!(a.toml.contains("[formula]\nkind = \"burning-ship\""), "{}", a.toml);
             assert!(a.scene.log10_spacing() < -7.0, "{kind:?}: spacing 1e{}", a.scene.log10_spacing());
         }
         // z² + c's own kinds are not drawn for other formulas.

@@ -388,7 +388,7 @@ fn compare_at_depth_lists_the_engines_that_can_address_it() {
 
 #[test]
 fn other_bad_values_are_located() {
-    rejects("bad-kind", Some("version = 1\n[formula]\nkind = \"burning-ship\"\n"), &[], "scene.toml:3:8");
+    rejects("bad-kind", Some("version = 1\n[formula]\nkind = \"mandelbrat\"\n"), &[], "scene.toml:3:8");
     rejects("julia-no-c", Some("version = 1\n[formula]\nkind = \"julia\"\n"), &[], "needs its parameter");
     rejects(
         "bad-layer-key",
@@ -687,4 +687,31 @@ fn find_prints_the_minibrot_or_misiurewicz_point_of_a_view_as_a_scene() {
     let o = deepfield(&["find", "--center=0.5,0.5", "--zoom", "1e6", "--max-period", "40"], &dir);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("no minibrot of period up to 40"), "{}", stderr(&o));
+}
+
+/// Formula families: bad names and powers are located errors; engines and files built for
+/// z² + c alone refuse the others by name, with nothing written.
+#[test]
+fn formula_families_are_checked_and_refused_where_they_do_not_apply() {
+    rejects("bad-family", Some("version = 1\n[formula]\nkind = \"burning-boat\"\n"), &[], "scene.toml:3:8");
+    rejects("bad-power", Some("version = 1\n[formula]\nkind = \"buffalo\"\npower = 9\n"), &[], "scene.toml:4:9");
+    rejects("bad-power-flag", None, &["--formula", "celtic", "--power", "7"], "powers 2 to 5, not 7");
+    rejects("gpu-family", None, &["--formula", "burning-ship", "--engine", "gpu"], "z^2 + c only, not burning-ship");
+    rejects(
+        "interior-family",
+        Some("version = 1\n[formula]\nkind = \"mandelbar\"\n[render]\ninterior_detection = true\n"),
+        &[],
+        "z^2 + c only, not mandelbar",
+    );
+    let dir = scratch("cli-reference-family");
+    let o = deepfield(&["reference", "--formula", "burning-ship", "--zoom", "1e20", "-o", "ref.dfr"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("formula is burning-ship"), "{}", stderr(&o));
+    assert!(outputs(&dir).is_empty(), "left {:?}", outputs(&dir));
+    let o = deepfield(&["formulas"], &dir);
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0));
+    for k in deepfield::formula::kind::KINDS {
+        assert!(table.lines().any(|l| l.split_whitespace().next() == Some(k.name)), "{} not listed", k.name);
+    }
 }
