@@ -5,7 +5,7 @@
 //! set has is a boundary where escaping and non-escaping points meet, and that can be
 //! followed down by sampling alone: a grid over the view, a cell whose corners disagree
 //! (some escape within the limit, some do not), a new view about a random point of that
-//! cell a few times smaller, again until the zoom asked for. The limit grows with the
+//! cell a few times smaller, again until the target zoom. The limit grows with the
 //! escape counts seen (a grid where everything escapes raises it; one where nothing does
 //! zooms back out). The same works for a Julia set (z_0 the point, c fixed) and along the
 //! real axis, which every family's Mandelbrot form maps to itself, where the folds of the

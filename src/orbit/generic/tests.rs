@@ -522,7 +522,9 @@ fn a_raised_flag_stops_the_batch() {
 
 /// Iterations per second of [`Engine::orbits`] on one thread, at a preperiodic point of
 /// the Burning Ship 1e-100 deep (f64 deltas) and 1e-330 deep (FloatExp), 256 × 256
-/// samples, with and without BLA.
+/// samples, with and without BLA. Ignored in the suite because it measures speed and
+/// asserts nothing about it (tests never assert on wall-clock time); its figures are in
+/// docs/performance.md, run by hand as the reason says.
 #[test]
 #[ignore = "a measurement: cargo test --release --lib --no-default-features generic::tests::speed -- --ignored --nocapture"]
 fn speed_of_burning_ship_past_1e100() {

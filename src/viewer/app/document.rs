@@ -110,7 +110,7 @@ impl Document {
 
     /// Makes the scene iterate `formula`, in the form (Mandelbrot or Julia) it has, through
     /// [`Scene::with_formula`]; a formula it refuses leaves the scene as it is. The GPU
-    /// engines draw z² + c only, so a scene that asked for one renders on the CPU ("auto")
+    /// engines draw z² + c only, so a scene set to one renders on the CPU ("auto")
     /// with any other formula.
     pub(super) fn set_formula(&mut self, formula: Formula) -> Result<(), SourceError> {
         let scene = self.valid.clone().with_formula(formula)?;
@@ -320,7 +320,7 @@ mod tests {
         assert_eq!(d.scene().formula, ship);
     }
 
-    /// A scene that asked for a GPU engine renders another formula on the CPU.
+    /// A scene set to a GPU engine renders another formula on the CPU.
     #[test]
     fn gpu_engines_give_way_for_other_formulas() {
         let mut d = doc("version = 1\n[render]\nengine = \"gpu\"\n");
