@@ -12,11 +12,12 @@
 //! |---|---|---|
 //! | | `mod.rs` | [`DeepSpec`] (what the engine needs of a scene), [`Scale`], [`prepare`] |
 //! | reference | `reference/mod.rs` | [`Reference`]: one orbit in big floats, stored densely as f64 pairs with `FloatExp` for tiny values |
-//! | | `reference/fixed.rs` | the step z² + c in fixed point on machine words, optionally shared by two threads |
+//! | | `reference/fixed.rs` | the step z² + c in fixed point on machine words, optionally shared by a team of threads |
+//! | | `reference/team.rs` | which thread of a team computes which part of a step's three squares |
 //! | | `reference/comba.rs` | the high half of a square by columns on 64-bit limbs (narrow precisions) |
 //! | | `reference/square.rs` | the same in vector lanes on 26-bit digits (wide precisions) |
 //! | | `reference/cycle.rs` | Brent's cycle detection, which stops an orbit where it repeats itself exactly |
-//! | | `reference/handover.rs` | where the two threads of a shared step meet, and when sharing stops |
+//! | | `reference/handover.rs` | where the threads of a shared step meet, and when sharing stops |
 //! | | `reference/packed.rs` | a long orbit's tail, predictively coded in about a byte per iteration |
 //! | | `reference/mpfr.rs` | the step in MPFR (the `mpfr` feature), for comparison |
 //! | BLA | `bla/mod.rs` | [`BlaTable`]: second-order steps merged in a tree, their validity radii |

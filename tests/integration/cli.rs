@@ -409,6 +409,11 @@ fn same_bytes_whatever_the_thread_count() {
     // The perturbation engine too (reference, BLA, samples in the vector lanes or the scalar loop).
     let deep = "version = 1\n[view]\ncenter = [\"-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925\", \"1.3717805209060941414572912854135e-211\"]\nzoom = \"1e120\"\nwidth = 61\nheight = 37\n[iteration]\nmax = 5000\n";
     same_bytes("cli-determinism-deep", &format!("{deep}{layers}"));
+    // A view deep enough (about 1900 bits) that its reference's steps are shared by a team
+    // of threads, and its tables are built on every thread.
+    let e533 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bench-e533.toml")).unwrap();
+    let small = e533.replace("width = 800", "width = 41").replace("height = 600", "height = 23");
+    same_bytes("cli-determinism-team", &small.replace("max = 120000", "max = 20000"));
 }
 
 /// Every instruction set this CPU has (`--simd`, scalar included) renders the same PNG

@@ -208,3 +208,29 @@ fn a_delta_tested_at_a_dip_steps_on_where_an_untested_one_may_not() {
     let err = rel_err(e.apply(z, dc), iterate(&r, m, len, z, dc));
     assert!(err <= 100.0 * eps, "over {len} iterations from the dip at {m}: relative error {err}");
 }
+
+/// The tables are built level by level on every thread of the pool (each merge a pure
+/// function of its two inputs): built on one thread and on four they are the same bits, in
+/// both number types (the 1e50 benchmark's centre, at that view's precision).
+#[test]
+fn tables_built_on_any_number_of_threads_are_the_same_bits() {
+    let c = [
+        "-0.04947002906310409375169222672735363011874571248822487931810494023264219477268690",
+        "-0.67478757584467536401139205313059765633477070682240348069799979479099419834548451",
+    ]
+    .map(|t| crate::num::bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), 300));
+    let z0 = [Float::from(0.0), Float::from(0.0)];
+    let r =
+        Reference::compute(&z0, &c, 30_000, 1e10, 300, Default::default(), &|_| {}, &AtomicBool::new(false)).unwrap();
+    assert!(r.last() > 10_000, "{} iterations", r.last());
+    let dc = FloatExp::from(1e-49);
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let t = BlaTable::build(&r, 1, true, 1e-14, dc, 1e10);
+            (format!("{t:?}"), format!("{:?}", t.to_f64()))
+        })
+    };
+    let one = on(1);
+    assert!(one == on(4), "tables built on 1 and 4 threads differ");
+}

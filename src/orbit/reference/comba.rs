@@ -18,8 +18,8 @@
 //! Only the columns from n - 3 up are computed (a short product): the products of the
 //! columns below add less than n units of limb n - 2 of the square, so limbs n - 1 and up
 //! are exact to one unit of limb n - 1 (tested against malachite's exact square). The
-//! columns can be split between two threads: the lower part's carry is added into the upper
-//! part's limbs afterwards, which gives exactly the bits of one pass.
+//! columns can be split between threads: each part's carry is added into the limbs above
+//! it afterwards, which gives exactly the bits of one pass.
 
 use std::ops::Range;
 
@@ -163,27 +163,21 @@ pub fn add_carry(n: usize, at: usize, carry: [u64; 2], out: &mut [u64]) {
     }
 }
 
-/// Per cent of a square's products that the lower part of a shared square takes. Each
-/// thread also squares one real whole, finishes the step and prepares the next; the caller's
-/// thread, which takes the lower part, also stores the orbit (`cargo bench --bench
-/// reference`, 2 threads, on the e1086 benchmark's 60 limbs).
-pub const LOWER_SHARE: usize = 45;
-
-/// Where the columns of an n-limb square split between two threads: [`LOWER_SHARE`] per
-/// cent of the products below, and at or above column n - 2 so that the carry lands in
-/// `out`.
-pub fn split(n: usize) -> usize {
+/// Where the columns of an n-limb square may be cut between threads ([`super::team`]): every
+/// column from n - 2 on (so that a carry lands in `out`), with the products before it,
+/// from the first column (none before it) to the end (all of them).
+pub fn cuts(n: usize) -> Vec<(usize, usize)> {
     let cost = |k: usize| k.div_ceil(2).saturating_sub(k.saturating_sub(n - 1)) + 1;
-    let cols = first_column(n)..end_column(n);
-    let total: usize = cols.clone().map(cost).sum();
+    let (first, end) = (first_column(n), end_column(n));
+    let mut out = vec![(first, 0)];
     let mut sum = 0;
-    for k in cols {
-        if 100 * sum >= LOWER_SHARE * total {
-            return k.max(n - 2);
-        }
+    for k in first..end {
         sum += cost(k);
+        if k + 1 >= n - 2 {
+            out.push((k + 1, sum));
+        }
     }
-    end_column(n)
+    out
 }
 
 /// Limbs n - 2 .. 2n - 2 of a^2 (n + 1 of them) into `out`, for a magnitude `a` of n >= 2

@@ -1,6 +1,6 @@
 //! The reference orbit's step z -> z^2 + c in fixed point on machine words: no allocation per
 //! step, squarings that compute only the high half of their products, and the three
-//! squarings of a step shared between two threads where the precision makes it pay.
+//! squarings of a step shared among a team of threads where the precision makes it pay.
 //!
 //! A reference orbit never leaves a small disc: it stops once |z| passes the escape radius R,
 //! so every value it squares is below R and every value it stores below R^2 + |c|. Fixed
@@ -18,14 +18,15 @@
 //! Up to [`comba::MAX_LIMBS`] limbs the squares run on 64-bit limbs column by column
 //! ([`comba`]); beyond, on 26-bit digits in vector lanes ([`square`]), which overtake it
 //! there. The choice depends on the limb count only, so every instruction set gives the
-//! same bits. With a helper thread, each thread keeps its own copy of the orbit: the
-//! caller's thread squares x and the lower part of (x + y)^2 (columns, or rows of digits),
-//! the helper squares y and the upper part, each publishes what it computed and takes the
-//! other's, and both join the parts exactly and finish the same step: the same bits as one
-//! thread, with one hand-over each way per step, made at the same moment (a request and an
-//! answer would put two cross-core latencies, ~0.2 µs each on a 2-core machine, in every step).
-//! Where the machine is busier than its cores, the helper is often descheduled and every
-//! step would wait for it: there the caller steps alone for stretches ([`super::handover`]).
+//! same bits. With helper threads (a team, [`super::team`]), each thread keeps its own copy
+//! of the orbit and computes its pieces of the three squares (columns, or rows of digits:
+//! with two threads, the caller squares x and the lower part of (x + y)^2, the helper y and
+//! the upper part), each publishes what it computed and takes everyone else's, and all join
+//! the pieces exactly and finish the same step: the same bits as one thread, with one
+//! hand-over each way per step, made at the same moment (a request and an answer would put
+//! two cross-core latencies, ~0.2 µs each on a 2-core machine, in every step). Where the
+//! machine is busier than its cores, a helper is often descheduled and every step would
+//! wait for it: there the caller steps alone for stretches ([`super::handover`]).
 //! `cargo bench --bench reference` compares this with malachite-float (and MPFR through
 //! rug with the `mpfr` feature) at 1000, 2000, 4000 and 16000 bits. Below the widths where
 //! sharing a step pays, a helper thread instead steps the orbit ahead in batches while the
@@ -43,6 +44,7 @@ use super::comba;
 use super::cycle::Brent;
 use super::handover::{self, Contention, Shared, StopOnDrop};
 use super::square::{self, Layout};
+use super::team::{self, Piece};
 use crate::num::FloatExp;
 use crate::simd_level::SimdLevel;
 
@@ -53,6 +55,12 @@ pub const MAX_MAGNITUDE: f64 = (1u64 << 30) as f64;
 /// Limb count from which two threads share a step (below, handing the work over costs more
 /// than it saves; `cargo bench --bench reference`).
 pub const THREADED_LIMBS: usize = 24;
+
+/// Most threads that share one orbit's steps. Each step hands every thread's pieces to every
+/// other, so the hand-over grows with the team while each share shrinks; on the 2-core
+/// machines here only a team of two could be timed, and this bound is a guess at where more
+/// threads stop paying at the depths measured (docs/performance.md models it).
+pub const MAX_TEAM: usize = 8;
 
 /// Values per batch a pipelined orbit's helper hands over ([`FixedOrbit::for_each_value`]),
 /// and batches it may run ahead.
@@ -76,13 +84,13 @@ pub struct FixedOrbit {
     w: Work,
 }
 
-/// How an n-limb square is computed, and where a square shared by two threads splits.
+/// How an n-limb square is computed.
 #[derive(Debug, Clone, Copy)]
 enum Kernel {
-    /// 64-bit limbs, column by column ([`comba`]); columns from `mid` on are the helper's.
-    Limbs { n: usize, mid: usize },
-    /// 26-bit digits in vector lanes ([`square`]); rows from `mid` on are the helper's.
-    Digits { layout: Layout, mid: usize },
+    /// 64-bit limbs, column by column ([`comba`]).
+    Limbs { n: usize },
+    /// 26-bit digits in vector lanes ([`square`]).
+    Digits { layout: Layout },
 }
 
 /// A squaring's scratch: the digits and column sums of a square in progress.
@@ -96,39 +104,47 @@ impl Kernel {
     /// The kernel for n-limb magnitudes, or None beyond [`square::MAX_DIGITS`].
     fn new(n: usize) -> Option<Kernel> {
         if (2..=comba::MAX_LIMBS).contains(&n) {
-            return Some(Kernel::Limbs { n, mid: comba::split(n) });
+            return Some(Kernel::Limbs { n });
         }
-        let layout = Layout::new(n)?;
-        Some(Kernel::Digits { layout, mid: layout.split() })
+        Some(Kernel::Digits { layout: Layout::new(n)? })
     }
 
     fn scratch(self) -> Scratch {
         let (digits, acc) = match self {
             Kernel::Limbs { .. } => (Vec::new(), Vec::new()),
-            Kernel::Digits { layout, .. } => (vec![0; layout.digit_len()], vec![0; layout.columns()]),
+            Kernel::Digits { layout } => (vec![0; layout.digit_len()], vec![0; layout.columns()]),
         };
         Scratch { digits, acc }
     }
 
-    /// Words of a part of a shared square ([`Kernel::part`]).
-    fn part_len(self) -> usize {
+    /// Where a square may be cut between threads, with the products before each cut
+    /// ([`team::plan`]): columns, or starts of blocks of rows.
+    fn cuts(self) -> Vec<(usize, usize)> {
         match self {
-            // n + 1 limbs, and room for the lower part's carry after its last limb.
-            Kernel::Limbs { n, .. } => n + 3,
-            Kernel::Digits { layout, .. } => layout.columns(),
+            Kernel::Limbs { n } => comba::cuts(n),
+            Kernel::Digits { layout } => layout.cuts(),
         }
     }
 
-    /// The words of a part that hold something (the rest is the other part's): what a
-    /// shared step hands over.
-    fn part_words(self, upper: bool) -> Range<usize> {
+    /// Words of a piece of a square ([`Kernel::piece`]).
+    fn piece_len(self) -> usize {
         match self {
-            // The lower columns' limbs end at `from`, and their carry follows them.
-            Kernel::Limbs { n, mid } => {
-                let from = comba::limb_of_column(n, mid);
-                if upper { from..n + 1 } else { 0..from + 2 }
+            // n + 1 limbs, and room for a carry after the last.
+            Kernel::Limbs { n } => n + 3,
+            Kernel::Digits { layout } => layout.columns(),
+        }
+    }
+
+    /// The words of a piece over `range` that hold something: what a shared step hands
+    /// over.
+    fn piece_words(self, range: &Range<usize>) -> Range<usize> {
+        match self {
+            // The columns' limbs, and the carry out of the last after them.
+            Kernel::Limbs { n } => {
+                let from = comba::limb_of_column(n, range.start.max(n - 2));
+                from..comba::limb_of_column(n, range.end) + 2
             }
-            Kernel::Digits { layout, .. } => 0..layout.columns(),
+            Kernel::Digits { layout } => 0..layout.columns(),
         }
     }
 
@@ -136,48 +152,60 @@ impl Kernel {
     fn square(self, a: &[u64], w: &mut Scratch, out: &mut [u64], simd: SimdLevel) {
         match self {
             Kernel::Limbs { .. } => comba::square(a, out),
-            Kernel::Digits { layout, .. } => square::square(layout, a, &mut w.digits, &mut w.acc, out, simd),
+            Kernel::Digits { layout } => square::square(layout, a, &mut w.digits, &mut w.acc, out, simd),
         }
     }
 
-    /// One part of a square of `a` shared by two threads, into `part` ([`Kernel::part_len`]
-    /// words): the lower part (`upper` false) is the columns below the split, their limbs
-    /// and the carry out of them, or the column sums of the rows below the split; the upper
-    /// part the columns or rows from the split on.
-    fn part(self, upper: bool, a: &[u64], w: &mut Scratch, part: &mut [u64], simd: SimdLevel) {
+    /// One piece of a square of `a` shared between threads, into `piece` ([`Kernel::piece_len`]
+    /// words): the limbs of the columns in `range` and the carry out of them (after their
+    /// limbs), or the column sums of the blocks of rows starting in `range`.
+    fn piece(self, range: Range<usize>, a: &[u64], w: &mut Scratch, piece: &mut [u64], simd: SimdLevel) {
         match self {
-            Kernel::Limbs { n, mid } => {
-                if upper {
-                    comba::columns(a, mid..comba::end_column(n), part);
-                } else {
-                    let carry = comba::columns(a, comba::first_column(n)..mid, part);
-                    let from = comba::limb_of_column(n, mid);
-                    part[from..from + 2].copy_from_slice(&carry);
+            Kernel::Limbs { n } => {
+                let end = range.end;
+                let carry = comba::columns(a, range, piece);
+                let at = comba::limb_of_column(n, end);
+                piece[at..at + 2].copy_from_slice(&carry);
+            }
+            Kernel::Digits { layout } => {
+                square::digits(a, &mut w.digits);
+                piece.fill(0);
+                square::rows(layout, &w.digits, range, piece, simd);
+            }
+        }
+    }
+
+    /// Joins the pieces of a shared square of `a` (every range of its cuts once, in order)
+    /// into `out`: the square, exactly as [`Kernel::square`] gives it.
+    fn join<'p>(
+        self,
+        pieces: impl Iterator<Item = (&'p Range<usize>, &'p [u64])> + Clone,
+        a: &[u64],
+        w: &mut Scratch,
+        out: &mut [u64],
+    ) {
+        match self {
+            Kernel::Limbs { n } => {
+                // Every piece's limbs first, then the carries, each into the limbs above it.
+                for (range, piece) in pieces.clone() {
+                    let words = self.piece_words(range);
+                    let limbs = words.start..words.end - 2;
+                    out[limbs.clone()].copy_from_slice(&piece[limbs]);
+                }
+                for (range, piece) in pieces {
+                    let at = comba::limb_of_column(n, range.end);
+                    if range.end < comba::end_column(n) {
+                        comba::add_carry(n, range.end, [piece[at], piece[at + 1]], out);
+                    }
                 }
             }
-            Kernel::Digits { layout, mid } => {
+            Kernel::Digits { layout } => {
                 square::digits(a, &mut w.digits);
-                part.fill(0);
-                let rows = if upper { mid..layout.m } else { 0..mid };
-                square::rows(layout, &w.digits, rows, part, simd);
-            }
-        }
-    }
-
-    /// Joins the two parts of a shared square of `a` into `out`: the square, exactly as
-    /// [`Kernel::square`] gives it.
-    fn join(self, lower: &[u64], upper: &[u64], a: &[u64], w: &mut Scratch, out: &mut [u64]) {
-        match self {
-            Kernel::Limbs { n, mid } => {
-                let from = comba::limb_of_column(n, mid);
-                out[..from].copy_from_slice(&lower[..from]);
-                out[from..].copy_from_slice(&upper[from..n + 1]);
-                comba::add_carry(n, mid, [lower[from], lower[from + 1]], out);
-            }
-            Kernel::Digits { layout, .. } => {
-                square::digits(a, &mut w.digits);
-                for ((v, &l), &u) in w.acc.iter_mut().zip(lower).zip(upper) {
-                    *v = l + u;
+                w.acc.fill(0);
+                for (_, piece) in pieces {
+                    for (v, &p) in w.acc.iter_mut().zip(piece) {
+                        *v += p;
+                    }
                 }
                 square::finish(layout, &w.digits, &mut w.acc);
                 square::pack(layout, &w.acc, out);
@@ -198,23 +226,12 @@ struct Work {
     y2: Vec<u64>,
     s2: Vec<u64>,
     scratch: Scratch,
-    /// The lower and upper parts of (x + y)^2, when a step is shared.
-    parts: [Vec<u64>; 2],
 }
 
 impl Work {
     fn new(n: usize, kernel: Kernel) -> Work {
         let v = |k: usize| vec![0; k];
-        Work {
-            ax: v(n),
-            ay: v(n),
-            asum: v(n),
-            x2: v(n + 1),
-            y2: v(n + 1),
-            s2: v(n + 1),
-            scratch: kernel.scratch(),
-            parts: [v(kernel.part_len()), v(kernel.part_len())],
-        }
+        Work { ax: v(n), ay: v(n), asum: v(n), x2: v(n + 1), y2: v(n + 1), s2: v(n + 1), scratch: kernel.scratch() }
     }
 }
 
@@ -336,15 +353,30 @@ impl FixedOrbit {
         self.finish();
     }
 
-    /// Runs `body` with a stepper that shares each step with a helper thread where the orbit
-    /// is wide enough for that to pay ([`THREADED_LIMBS`]) and `share` allows it, else steps
-    /// on this thread alone. The results are the same bits either way.
+    /// Runs `body` with a stepper that shares each step with helper threads where the orbit
+    /// is wide enough for that to pay ([`THREADED_LIMBS`]) and `share` allows it (a team of
+    /// [`FixedOrbit::team_size`] threads), else steps on this thread alone. The results are
+    /// the same bits either way.
     pub fn with_stepper<R>(&mut self, share: bool, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        if share && self.n >= THREADED_LIMBS && two_threads() {
-            self.with_helper(body)
+        let team = self.team_size();
+        if share && self.n >= THREADED_LIMBS && team >= 2 {
+            self.with_team(team, Policy::Adaptive(Contention::default()), body)
         } else {
             body(&mut Stepper { orbit: self, sharing: None })
         }
+    }
+
+    /// Threads that share this orbit's steps: the threads free (the caller's thread pool,
+    /// a render's `--threads`, and the machine's cores), at most [`MAX_TEAM`], and at most
+    /// as many as leave each thread as many products of a step as two threads have at
+    /// [`THREADED_LIMBS`] limbs (where sharing starts to pay).
+    pub fn team_size(&self) -> usize {
+        let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
+        let free = cores.min(rayon::current_num_threads()).min(MAX_TEAM);
+        let products = |k: Kernel| k.cuts().last().map_or(0, |c| c.1);
+        let least = Kernel::new(THREADED_LIMBS).map_or(1, products) * team::SQUARES / 2;
+        let most = products(self.kernel) * team::SQUARES / least.max(1);
+        free.min(most.max(1))
     }
 
     /// Hands Z_0, Z_1, ... to `keep` in order until it returns true (or an error);
@@ -448,93 +480,131 @@ impl FixedOrbit {
     /// Runs `body` with a stepper that shares each step with a helper thread, except while
     /// the machine is too busy for that to pay ([`super::handover`]).
     pub fn with_helper<R>(&mut self, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        self.with_helper_as(Policy::Adaptive(Contention::default()), body)
+        self.with_team(2, Policy::Adaptive(Contention::default()), body)
     }
 
-    /// [`FixedOrbit::with_helper`] with the caller's rule for when to step alone.
-    fn with_helper_as<R>(&mut self, policy: Policy, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        // A box holds a thread's whole square (n + 1 words) and its part of (x + y)^2.
-        let shared = Shared::new(self.n + 1 + self.kernel.part_len());
-        let mut twin = self.clone();
+    /// Runs `body` with a stepper that shares each step among `threads` threads: this one
+    /// and `threads - 1` helpers, each with its own copy of the orbit and its share of the
+    /// squares ([`team::plan`]); `policy` says when the caller steps alone.
+    fn with_team<R>(&mut self, threads: usize, policy: Policy, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
+        let k = self.kernel;
+        let plan = team::plan(&k.cuts(), threads);
+        let words = plan.iter().map(|ps| ps.iter().map(|p| k.piece_words(&p.range).len()).sum()).max().unwrap_or(0);
+        let shared = Shared::new(threads, words);
+        let twins: Vec<FixedOrbit> = (1..threads).map(|_| self.clone()).collect();
+        let (plan, shared) = (&plan, &shared);
         std::thread::scope(|s| {
-            s.spawn(|| {
-                let (mut epoch, mut seq) = (0, 0);
-                loop {
-                    seq += 1;
-                    if twin.shared_step(&shared, Role::Helper, epoch, seq).is_none() {
-                        // The caller paused or stopped: sleep until it resumes, from its value.
-                        let Some(e) = shared.rejoin(epoch, |r| {
-                            twin.x.copy_from_slice(&r.x);
-                            twin.y.copy_from_slice(&r.y);
-                            seq = r.seq;
-                        }) else {
-                            return;
-                        };
-                        epoch = e;
+            for (t, mut twin) in twins.into_iter().enumerate() {
+                s.spawn(move || {
+                    let mut seat = Seat::new(t + 1, plan, k);
+                    let (mut epoch, mut seq) = (0, 0);
+                    loop {
+                        seq += 1;
+                        if twin.shared_step(shared, &mut seat, epoch, seq).is_none() {
+                            // The caller paused or stopped: sleep until it resumes, from its value.
+                            let Some(e) = shared.rejoin(epoch, |r| {
+                                twin.x.copy_from_slice(&r.x);
+                                twin.y.copy_from_slice(&r.y);
+                                seq = r.seq;
+                            }) else {
+                                return;
+                            };
+                            epoch = e;
+                        }
                     }
-                }
-            });
-            let _stop = StopOnDrop(&shared);
-            let sharing = Sharing { shared: &shared, seq: 0, epoch: 0, alone: 0, policy };
+                });
+            }
+            let _stop = StopOnDrop(shared);
+            let seat = Seat::new(0, plan, k);
+            let sharing = Sharing { shared, seat, seq: 0, epoch: 0, alone: 0, policy };
             body(&mut Stepper { orbit: self, sharing: Some(sharing) })
         })
     }
 
-    /// Step `seq` (from 1) shared with the other thread, which runs the same step on its own
-    /// copy of the orbit: this thread squares its real (x for the caller, y for the helper)
-    /// and its part of (x + y)^2, publishes them, takes the other's, and both finish the step
-    /// from the same squares, so the two copies stay the same bits. One hand-over each way
-    /// per step, both at once: no thread waits for a request before it starts. Returns
-    /// whether the wait for the other was slow ([`super::handover::wait`]); None for a helper
-    /// whose caller has paused or stopped meanwhile (`epoch` is no longer the caller's).
-    fn shared_step(&mut self, sh: &Shared, role: Role, epoch: u64, seq: u64) -> Option<bool> {
+    /// Step `seq` (from 1) shared with the team, every thread running the same step on its
+    /// own copy of the orbit: this thread computes its pieces of the squares ([`Seat`]),
+    /// publishes them, takes everyone else's, and every thread finishes the step from the
+    /// same squares, so the copies stay the same bits. One hand-over each way per step, all
+    /// at once: no thread waits for a request before it starts. Returns whether the wait for
+    /// the others was slow ([`super::handover::wait`]); None for a helper whose caller has
+    /// paused or stopped meanwhile (`epoch` is no longer the caller's).
+    fn shared_step(&mut self, sh: &Shared, seat: &mut Seat<'_>, epoch: u64, seq: u64) -> Option<bool> {
         self.inputs();
         let (k, simd, w) = (self.kernel, self.simd, &mut self.w);
-        let (me, other) = (role as usize, 1 - role as usize);
-        let (own, own_square, other_square) = match role {
-            Role::Caller => (&w.ax, &mut w.x2, &mut w.y2),
-            Role::Helper => (&w.ay, &mut w.y2, &mut w.x2),
-        };
-        k.square(own, &mut w.scratch, own_square, simd);
-        let [lower, upper] = &mut w.parts;
-        let (own_part, other_part) = match role {
-            Role::Caller => (lower, upper),
-            Role::Helper => (upper, lower),
-        };
-        k.part(role == Role::Helper, &w.asum, &mut w.scratch, own_part, simd);
-        // Each side's words alternate between two boxes by the step's parity: a box is
-        // written again two steps later, after its reader has answered the step between.
+        let me = seat.me;
+        let magnitudes = [&w.ax, &w.asum, &w.ay];
+        // Each thread's words alternate between two boxes by the step's parity: a box is
+        // written again two steps later, after all its readers have answered the step between.
         let slot = (seq % 2) as usize;
-        let (mine, theirs) = (k.part_words(role == Role::Helper), k.part_words(role == Role::Caller));
-        for (b, &v) in sh.boxes[me][slot].iter().zip(own_square.iter().chain(&own_part[mine])) {
-            b.store(v, Ordering::Relaxed);
+        let mut at = 0;
+        for (p, piece) in seat.plan[me].iter().zip(&mut seat.pieces[me]) {
+            k.piece(p.range.clone(), magnitudes[p.square], &mut w.scratch, piece, simd);
+            let words = &piece[k.piece_words(&p.range)];
+            for (b, &v) in sh.boxes[me][slot][at..].iter().zip(words) {
+                b.store(v, Ordering::Relaxed);
+            }
+            at += words.len();
         }
         sh.publish(me, epoch, seq);
-        let helper = role == Role::Helper;
-        let slow = handover::wait(|| sh.has(other, epoch, seq) || (helper && sh.left(epoch)));
-        if !sh.has(other, epoch, seq) || (helper && sh.left(epoch)) {
+        let helper = me != 0;
+        let slow = handover::wait(|| sh.others_have(me, epoch, seq) || (helper && sh.left(epoch)));
+        if !sh.others_have(me, epoch, seq) || (helper && sh.left(epoch)) {
             return None;
         }
-        for (v, b) in other_square.iter_mut().chain(&mut other_part[theirs]).zip(sh.boxes[other][slot].iter()) {
-            *v = b.load(Ordering::Relaxed);
+        for (t, (plan, pieces)) in seat.plan.iter().zip(&mut seat.pieces).enumerate().filter(|(t, _)| *t != me) {
+            let mut at = 0;
+            for (p, piece) in plan.iter().zip(pieces) {
+                let words = k.piece_words(&p.range);
+                let len = words.len();
+                for (v, b) in piece[words].iter_mut().zip(&sh.boxes[t][slot][at..at + len]) {
+                    *v = b.load(Ordering::Relaxed);
+                }
+                at += len;
+            }
         }
-        let [lower, upper] = &w.parts;
-        k.join(lower, upper, &w.asum, &mut w.scratch, &mut w.s2);
+        let outs = [&mut w.x2, &mut w.s2, &mut w.y2];
+        for (q, out) in outs.into_iter().enumerate() {
+            let pieces = seat
+                .plan
+                .iter()
+                .flatten()
+                .zip(seat.pieces.iter().flatten())
+                .filter(move |(p, _)| p.square == q)
+                .map(|(p, piece)| (&p.range, piece.as_slice()));
+            k.join(pieces, magnitudes[q], &mut w.scratch, out);
+        }
         self.finish();
         Some(slow)
     }
 }
 
-/// Steps a [`FixedOrbit`], on one thread or two.
+/// One thread's place in a team: its index (0 the caller), the team's plan, and a buffer
+/// for every piece of every thread (its own computed, the others' taken from their boxes).
+struct Seat<'p> {
+    me: usize,
+    plan: &'p [Vec<Piece>],
+    pieces: Vec<Vec<Vec<u64>>>,
+}
+
+impl<'p> Seat<'p> {
+    fn new(me: usize, plan: &'p [Vec<Piece>], k: Kernel) -> Seat<'p> {
+        let pieces = plan.iter().map(|ps| ps.iter().map(|_| vec![0; k.piece_len()]).collect()).collect();
+        Seat { me, plan, pieces }
+    }
+}
+
+/// Steps a [`FixedOrbit`], on one thread or a team.
 pub struct Stepper<'a> {
     orbit: &'a mut FixedOrbit,
     /// Where a helper thread shares the steps.
     sharing: Option<Sharing<'a>>,
 }
 
-/// The caller's side of steps shared with a helper thread.
+/// The caller's side of steps shared with a team.
 struct Sharing<'a> {
     shared: &'a Shared,
+    /// The caller's place in the team.
+    seat: Seat<'a>,
     /// Steps taken.
     seq: u64,
     /// The sharing's epoch ([`super::handover`]).
@@ -588,22 +658,13 @@ impl Stepper<'_> {
             }
             return;
         }
-        let slow = self.orbit.shared_step(sh.shared, Role::Caller, sh.epoch, sh.seq);
+        let slow = self.orbit.shared_step(sh.shared, &mut sh.seat, sh.epoch, sh.seq);
         debug_assert!(slow.is_some(), "only the caller pauses or stops the helper");
         if let Some(alone) = sh.policy.after(slow.unwrap_or(false)) {
             sh.epoch = sh.shared.pause();
             sh.alone = alone.max(1);
         }
     }
-}
-
-/// The two threads of a shared step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Role {
-    /// The caller's thread: squares x and the lower part of (x + y)^2, and stores the orbit.
-    Caller = 0,
-    /// The helper: squares y and the upper part.
-    Helper = 1,
 }
 
 /// v in fixed point with n limbs (round to nearest), or None beyond [`MAX_MAGNITUDE`].
@@ -753,28 +814,32 @@ mod tests {
                 assert_eq!(against_big_floats(e1086, bits, steps, 0, simd), mine, "{bits} bits, {simd}");
             }
             let c = e1086.map(|t| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), bits));
-            let mut threaded =
+            let fresh = || {
                 FixedOrbit::new(&[big(0.0, bits), big(0.0, bits)], &c, bits, 65536.0, SimdLevel::detect())
-                    .expect("in range");
-            threaded.with_helper(|s| {
-                for (k, want) in mine.iter().enumerate() {
-                    s.step();
-                    assert_eq!(s.get().map(FloatExp::to_f64), *want, "{bits} bits: shared step {k}");
+                    .expect("in range")
+            };
+            // Teams of two to five threads (on a 2-core machine more than two take turns, so
+            // they run fewer steps): every value the same bits as one thread's, sharing all
+            // the time or paused and resumed (as on a busy machine) in rhythms that put every
+            // step parity at a switch; and the last state the same words.
+            for threads in 2..=5 {
+                let count = if threads == 2 { mine.len() } else { mine.len().min(300) };
+                let mut alone = fresh();
+                (0..count).for_each(|_| alone.step());
+                let rhythms: &[(u32, u32)] = if threads == 2 { &[(1, 1), (3, 2), (7, 5)] } else { &[(3, 2)] };
+                let policies = std::iter::once(Policy::Adaptive(Contention::default()))
+                    .chain(rhythms.iter().map(|&(shared, alone)| Policy::Rhythm { shared, alone, count: 0 }));
+                for policy in policies {
+                    let mut orbit = fresh();
+                    orbit.with_team(threads, policy, |s| {
+                        for (k, want) in mine.iter().take(count).enumerate() {
+                            s.step();
+                            let what = format!("{bits} bits: step {k} of {threads} threads, {policy:?}");
+                            assert_eq!(s.get().map(FloatExp::to_f64), *want, "{what}");
+                        }
+                    });
+                    assert!(orbit.x == alone.x && orbit.y == alone.y, "{bits} bits, {threads} threads: last state");
                 }
-            });
-            // Sharing paused and resumed (as on a busy machine), in rhythms that put every
-            // step parity at a switch: the same bits.
-            for (shared, alone) in [(1, 1), (3, 2), (7, 5)] {
-                let mut orbit =
-                    FixedOrbit::new(&[big(0.0, bits), big(0.0, bits)], &c, bits, 65536.0, SimdLevel::detect())
-                        .expect("in range");
-                orbit.with_helper_as(Policy::Rhythm { shared, alone, count: 0 }, |s| {
-                    for (k, want) in mine.iter().enumerate() {
-                        s.step();
-                        let what = format!("{bits} bits: step {k}, {shared} shared and {alone} alone");
-                        assert_eq!(s.get().map(FloatExp::to_f64), *want, "{what}");
-                    }
-                });
             }
         }
     }

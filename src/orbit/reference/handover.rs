@@ -1,22 +1,22 @@
-//! The meeting point of the two threads that share each step of a wide reference orbit
-//! ([`super::fixed`]), and the caller's rule for when to stop sharing because the machine is
-//! busy.
+//! The meeting point of the threads that share each step of a wide reference orbit (a
+//! team: the caller and its helpers, [`super::fixed`], [`super::team`]), and the caller's
+//! rule for when to stop sharing because the machine is busy.
 //!
-//! Each thread publishes its half of a step in a box and waits for the other's. When both
-//! have a core the other answers within a microsecond or two, so the wait spins; but where
-//! the machine is busier than its cores (another render, a compiler, a fuzzer), the partner
+//! Each thread publishes its part of a step in a box and waits for everyone else's. When all
+//! have a core the others answer within a microsecond or two, so the wait spins; but where
+//! the machine is busier than its cores (another render, a compiler, a fuzzer), a partner
 //! is often descheduled, and every step then waits for it to be scheduled again: the e1086
 //! benchmark's orbit took 17–22 s shared against 1.7 s on one thread beside Fraktaler-3
 //! rendering on both cores of a 2-core machine. So the caller watches its waits
 //! ([`Contention`]): when a few steps in a short window had to give up the core before the
-//! helper answered, it sends the helper to sleep and steps alone for a while (four times
+//! helpers answered, it sends them to sleep and steps alone for a while (four times
 //! longer each time sharing fails again, shorter again after clean stretches of sharing),
-//! then wakes it with its current value ([`Resync`]). The steps are the same bits on one thread or two, so neither the switch
+//! then wakes them with its current value ([`Resync`]). The steps are the same bits on one thread or two, so neither the switch
 //! nor its timing changes the orbit.
 //!
 //! Every switch starts a new epoch. A step's publication carries the epoch with the step
-//! number ([`Shared::publish`]), so neither thread ever takes the other's work from an
-//! earlier epoch: a helper that slept through a pause and a resume finds the epoch moved on,
+//! number ([`Shared::publish`]), so no thread ever takes another's work from an earlier
+//! epoch: a helper that slept through a pause and a resume finds the epoch moved on,
 //! drops what it was doing and takes the caller's value from the latest [`Resync`].
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -58,8 +58,8 @@ pub fn wait(ready: impl Fn() -> bool) -> bool {
     spins > SPINS
 }
 
-/// A value alone on its cache lines (the two threads' step counters would otherwise share
-/// one, and every store to either would take it from the reader of the other).
+/// A value alone on its cache lines (the threads' step counters would otherwise share one,
+/// and every store to any would take it from the readers of the others).
 #[repr(align(128))]
 struct Line<T>(T);
 
@@ -76,13 +76,13 @@ pub struct Resync {
     pub y: Vec<u64>,
 }
 
-/// What the two threads share: each publishes its words of a step in one of two boxes (by
-/// the step's parity: a box is written again two steps later, after its reader has answered
-/// the step between), and the epoch and number of the last step it published.
+/// What a team's threads share: each publishes its words of a step in one of two boxes (by
+/// the step's parity: a box is written again two steps later, after all its readers have
+/// answered the step between), and the epoch and number of the last step it published.
 pub struct Shared {
-    /// By thread (0 the caller, 1 the helper), then by the step's parity.
-    pub boxes: [[Vec<AtomicU64>; 2]; 2],
-    done: [Line<AtomicU64>; 2],
+    /// By thread (0 the caller, then the helpers), then by the step's parity.
+    pub boxes: Vec<[Vec<AtomicU64>; 2]>,
+    done: Vec<Line<AtomicU64>>,
     /// The caller's epoch.
     epoch: AtomicU64,
     stop: AtomicBool,
@@ -91,12 +91,12 @@ pub struct Shared {
 }
 
 impl Shared {
-    /// Boxes of `words` words each.
-    pub fn new(words: usize) -> Shared {
+    /// For a team of `threads` threads, boxes of `words` words each.
+    pub fn new(threads: usize, words: usize) -> Shared {
         let boxes = || (0..words).map(|_| AtomicU64::new(0)).collect();
         Shared {
-            boxes: [[boxes(), boxes()], [boxes(), boxes()]],
-            done: [Line(AtomicU64::new(0)), Line(AtomicU64::new(0))],
+            boxes: (0..threads).map(|_| [boxes(), boxes()]).collect(),
+            done: (0..threads).map(|_| Line(AtomicU64::new(0))).collect(),
             epoch: AtomicU64::new(0),
             stop: AtomicBool::new(false),
             resync: Mutex::new(Resync::default()),
@@ -115,19 +115,24 @@ impl Shared {
         v >> SEQ_BITS == epoch && v & ((1 << SEQ_BITS) - 1) >= seq
     }
 
+    /// Whether every thread but `me` has published step `seq` of `epoch`.
+    pub fn others_have(&self, me: usize, epoch: u64, seq: u64) -> bool {
+        (0..self.done.len()).all(|who| who == me || self.has(who, epoch, seq))
+    }
+
     /// Whether a helper of `epoch` should leave its step: the caller has stopped, or paused
     /// or resumed since.
     pub fn left(&self, epoch: u64) -> bool {
         self.stop.load(Ordering::Acquire) || self.epoch.load(Ordering::Acquire) != epoch
     }
 
-    /// The caller stops sharing for now: a new epoch, in which the helper has no part.
+    /// The caller stops sharing for now: a new epoch, in which the helpers have no part.
     pub fn pause(&self) -> u64 {
         self.epoch.fetch_add(1, Ordering::AcqRel) + 1
     }
 
     /// The caller shares again from its value `(x, y)` after `seq` steps: a new epoch, which
-    /// the helper joins with that value. Returns the epoch.
+    /// the helpers join with that value. Returns the epoch.
     pub fn resume(&self, seq: u64, x: &[u64], y: &[u64]) -> u64 {
         let mut r = self.resync.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let epoch = self.epoch.fetch_add(1, Ordering::AcqRel) + 1;
@@ -158,7 +163,7 @@ impl Shared {
         }
     }
 
-    /// Stops the helper for good, waking it if it sleeps.
+    /// Stops the helpers for good, waking those that sleep.
     pub fn stop(&self) {
         let r = self.resync.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.stop.store(true, Ordering::Release);
@@ -167,8 +172,8 @@ impl Shared {
     }
 }
 
-/// Stops the helper when dropped (however the caller's work ends, a panic too: the scope
-/// would otherwise wait for a helper waiting for a step that never comes).
+/// Stops the helpers when dropped (however the caller's work ends, a panic too: the scope
+/// would otherwise wait for helpers waiting for a step that never comes).
 pub struct StopOnDrop<'a>(pub &'a Shared);
 
 impl Drop for StopOnDrop<'_> {
@@ -262,9 +267,15 @@ mod tests {
 
     #[test]
     fn publications_count_only_in_their_own_epoch() {
-        let sh = Shared::new(1);
+        let sh = Shared::new(3, 1);
         sh.publish(1, 0, 5);
         assert!(sh.has(1, 0, 5) && sh.has(1, 0, 3) && !sh.has(1, 0, 6));
+        // Thread 0 waits for both helpers, each helper for the other and the caller.
+        assert!(!sh.others_have(0, 0, 5));
+        sh.publish(2, 0, 5);
+        assert!(sh.others_have(0, 0, 5) && !sh.others_have(1, 0, 5));
+        sh.publish(0, 0, 5);
+        assert!(sh.others_have(1, 0, 5) && sh.others_have(2, 0, 4));
         // A helper's late publication from an earlier epoch never answers the caller.
         let e = sh.pause();
         assert!(sh.left(0) && !sh.left(e));

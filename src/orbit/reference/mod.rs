@@ -19,6 +19,7 @@ pub mod handover;
 pub mod mpfr;
 pub mod packed;
 pub mod square;
+pub mod team;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

@@ -83,18 +83,20 @@ impl Layout {
             .sum()
     }
 
-    /// Where the rows split between two threads (a block boundary): about half the products
-    /// on each side.
-    pub fn split(&self) -> usize {
-        let total: usize = self.blocks().map(|i| self.block_cost(i)).sum();
+    /// Where the rows may be cut between threads ([`super::team`]): every block's start,
+    /// with the products before it, and the end (m, all of them).
+    pub fn cuts(&self) -> Vec<(usize, usize)> {
         let mut sum = 0;
-        for i in self.blocks() {
-            if 2 * sum >= total {
-                return i;
-            }
-            sum += self.block_cost(i);
-        }
-        self.m
+        let mut out: Vec<(usize, usize)> = self
+            .blocks()
+            .map(|i| {
+                let at = (i, sum);
+                sum += self.block_cost(i);
+                at
+            })
+            .collect();
+        out.push((self.m, sum));
+        out
     }
 }
 
@@ -118,7 +120,7 @@ pub fn digits(a: &[u64], d: &mut [u32]) {
 
 /// Adds the off-diagonal products d_i d_j (i < j, column i + j >= k0) of the rows in the
 /// blocks starting in `rows` into the column sums `acc` (acc[k - k0]), with instruction set
-/// `simd`. `rows` is a range of block starts (0 ..= `split()` ..= m).
+/// `simd`. `rows` is a range of block starts (or m, [`Layout::cuts`]).
 pub fn rows(layout: Layout, d: &[u32], rows: Range<usize>, acc: &mut [u64], simd: SimdLevel) {
     simd.arch().dispatch(Rows { layout, d, rows, acc });
 }
@@ -245,7 +247,7 @@ mod tests {
 
     /// Against malachite's exact square: every kept limb but the lowest agrees (the
     /// dropped columns are worth less than 2^-16 of it), with every instruction set, and
-    /// two halves of the rows give the same sums as one pass.
+    /// rows cut in three give the same sums as one pass.
     #[test]
     fn high_limbs_of_the_square_are_exact() {
         for n in [2usize, 3, 5, 17, 59, 61, 130] {
@@ -263,20 +265,22 @@ mod tests {
                 let diff = out[1].abs_diff(exact[n - 1]);
                 assert!(diff <= 1, "{n} limbs, {simd}: lowest kept limb off by {diff}");
                 assert_eq!(*first.get_or_insert(out.clone()), out, "{n} limbs: {simd} differs");
-                // Two halves of the rows.
-                let mid = layout.split();
-                assert!(mid > 0 && mid < layout.m, "{n} limbs: split at {mid} of {}", layout.m);
+                // The rows cut in three at block starts, their column sums added.
+                let cuts = layout.cuts();
+                let (a1, a2) = (cuts[cuts.len() / 3].0, cuts[2 * cuts.len() / 3].0);
+                assert!(a1 <= a2 && a2 <= layout.m, "{n} limbs: cut at {a1}, {a2} of {}", layout.m);
                 let mut lo = vec![0; layout.columns()];
-                let mut hi = vec![0; layout.columns()];
-                rows(layout, &d, 0..mid, &mut lo, simd);
-                rows(layout, &d, mid..layout.m, &mut hi, simd);
-                for (l, h) in lo.iter_mut().zip(&hi) {
-                    *l += h;
+                for range in [0..a1, a1..a2, a2..layout.m] {
+                    let mut part = vec![0; layout.columns()];
+                    rows(layout, &d, range, &mut part, simd);
+                    for (l, p) in lo.iter_mut().zip(&part) {
+                        *l += p;
+                    }
                 }
                 finish(layout, &d, &mut lo);
-                let mut halves = vec![0; n + 1];
-                pack(layout, &lo, &mut halves);
-                assert_eq!(halves, out, "{n} limbs, {simd}: split rows");
+                let mut parts = vec![0; n + 1];
+                pack(layout, &lo, &mut parts);
+                assert_eq!(parts, out, "{n} limbs, {simd}: rows in three parts");
             }
         }
     }
