@@ -774,7 +774,7 @@ fn burst<U: Unit, const DER: bool, const REBASE: bool>(
     // Lanes that rebased at the first step of the pair (their second step reads Z_1), and
     // Z_1 of the orbit of 0 in every lane.
     let mut first = [0u32; G];
-    let mut first_m: [U::m64s; G] = per_vector!(|g| u.less_than_f64s(k.zero, k.zero));
+    let mut first_m: [U::m64s; G] = [u.less_than_f64s(k.zero, k.zero); G];
     let z1 = if REBASE { p.refs[p.refs.len() - 1].get(1) } else { [0.0; 2] };
     let z1: Z<U> = (u.splat_f64s(z1[0]), u.splat_f64s(z1[1]));
     'pairs: while off < end {
