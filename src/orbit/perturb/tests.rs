@@ -30,6 +30,9 @@ const EYE_MINIBROT: [&str; 2] = [
     "-0.83031842675693053553109980802050591726924580592100415017586803599827560339120465373468510811787516730515186454892834980632246054605795",
     "0.23612476396680780363307856325882633547132442124365456398110558858530832926040168389957117374824216611986058042279006600832794659929318",
 ];
+/// Seahorse valley, the descent every zoom into it passes through: at 1e-6 a sample
+/// rebases about every 50 steps (the lanes rebase inside their bursts).
+const SEAHORSE: [&str; 2] = ["-0.743643887037158704752191506114774", "0.131825904205311970493132056385139"];
 const JULIA_CENTER: [&str; 2] = [
     "1.49899848626690059854946357005252043405194888410281635160902340639312066973795336",
     "-0.06597870537952971836904746440551643923003302222753852735309069970961233737180929",
@@ -321,6 +324,8 @@ fn lanes_match_one_sample_at_a_time() {
     same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, eps, None);
     same_both_ways(MINIBROT, None, "2e-30", 6000, Numbers::F64, None, None);
     same_both_ways(MINIBROT, None, "1e-12", 3000, Numbers::F64, eps, None);
+    same_both_ways(SEAHORSE, None, "2e-6", 5000, Numbers::F64, eps, None);
+    same_both_ways(SEAHORSE, None, "2e-10", 5000, Numbers::F64, eps, None);
     same_both_ways(LIIIINES, None, "2e-310", 12500, Numbers::FloatExp, eps, None);
     same_both_ways(E50, None, "2e-50", 263010, Numbers::F64, eps, None);
     // Without BLA, |z| lingers at 2 and the derivative leaves its window in the lanes.
