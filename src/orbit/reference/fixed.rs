@@ -358,8 +358,9 @@ impl FixedOrbit {
     /// [`FixedOrbit::team_size`] threads), else steps on this thread alone. The results are
     /// the same bits either way.
     pub fn with_stepper<R>(&mut self, share: bool, body: impl FnOnce(&mut Stepper<'_>) -> R) -> R {
-        let team = self.team_size();
-        if share && self.n >= THREADED_LIMBS && team >= 2 {
+        // The team's size (a query of the machine's cores) only where sharing is possible.
+        let team = if share && self.n >= THREADED_LIMBS { self.team_size() } else { 1 };
+        if team >= 2 {
             self.with_team(team, Policy::Adaptive(Contention::default()), body)
         } else {
             body(&mut Stepper { orbit: self, sharing: None })
