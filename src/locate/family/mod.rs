@@ -183,3 +183,170 @@ pub fn misiurewicz_in_view(
     };
     near.iter().take(MAX_NEWTON_TRIES).find_map(root).ok_or(FindError::NoMisiurewicz { max_preperiod, max_period })
 }
+
+#[cfg(test)]
+mod tests {
+    use malachite_float::Float;
+
+    use super::*;
+    use crate::compare::kf_maps::{Dual, kf_step_dual};
+    use crate::formula::{Kind, Phase};
+
+    fn formula(kind: Kind, power: u32) -> Formula {
+        Formula::single(Phase { kind, power })
+    }
+
+    /// The first-order distances |J_n⁻¹ z_n| from `c` to a root of z_n = 0, n = 1 ..= p, by
+    /// Kalles Fraktaler's expansions in big floats with the Jacobian by dual numbers
+    /// (`compare::kf_maps`, which shares no code with the engines' maps or with Newton's
+    /// method here); None for an n where J_n is singular.
+    fn distances(f: Formula, c: &BigC, p: u32) -> Vec<Option<FloatExp>> {
+        let bits = c.bits;
+        let cd = [Dual::variable(c.re.clone(), 0), Dual::variable(c.im.clone(), 1)];
+        let zero = || Dual::constant(Float::from(0u32));
+        let mut z = [zero(), zero()];
+        let fe = crate::num::bigfloat::to_floatexp;
+        (0..p)
+            .map(|n| {
+                z = kf_step_dual(f.phase(n), &z, &cd, bits).expect("a KF formula").z;
+                let [x, y] = [&z[0], &z[1]];
+                let (a, b, cc, d) = (fe(&x.d[0]), fe(&x.d[1]), fe(&y.d[0]), fe(&y.d[1]));
+                let det = a * d - b * cc;
+                if det.is_zero() {
+                    return None;
+                }
+                let (vx, vy) = (fe(&x.v), fe(&y.v));
+                let (sx, sy) = ((d * vx - b * vy) / det, (a * vy - cc * vx) / det);
+                Some((sx * sx + sy * sy).sqrt())
+            })
+            .collect()
+    }
+
+    /// Checks a mini found in the disc (`center`, `radius`) by its own orbit under KF's
+    /// formulas: inside the disc; z_p a root to far below the mini's size; and no earlier
+    /// z_n one (each first-order distance above the size): the period is the lowest.
+    fn check(f: Formula, center: &BigC, radius: FloatExp, m: &Mini) {
+        assert!(m.nucleus.sub(center).abs() <= radius, "{f}: outside the view");
+        let d = distances(f, &m.nucleus, m.period);
+        let last = d[m.period as usize - 1].expect("J_p invertible");
+        assert!(last < m.size.mul_f64(1e-12), "{f} period {}: |J⁻¹ z_p| {last:?}, size {:?}", m.period, m.size);
+        for (n, dn) in d[..m.period as usize - 1].iter().enumerate() {
+            let dn = dn.unwrap_or(FloatExp::from(f64::INFINITY));
+            assert!(dn > m.size, "{f}: z_{} nearly 0 ({dn:?}) at a nucleus of period {}", n + 1, m.period);
+        }
+    }
+
+    fn fixed(re: f64, im: f64, r: f64) -> (BigC, FloatExp) {
+        (BigC::from_f64(re, im, 128), FloatExp::from(r))
+    }
+
+    /// Views from boundary descents (the fuzzer's, seeded) to 1e5 and 1e7: whatever mini
+    /// the search finds there is checked; every family finds at least one.
+    fn descended(f: Formula) -> Vec<(BigC, FloatExp)> {
+        use crate::compare::boundary::descend;
+        use crate::compare::views::Rng;
+        let mut out = Vec::new();
+        for seed in 1..=4 {
+            let mut rng = Rng::new(seed);
+            let start = BigC::from_f64(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 64);
+            let depth = if seed % 2 == 0 { 5.0 } else { 7.0 };
+            if let Some(v) = descend(&mut rng, f, None, start, FloatExp::from(1.5), depth, 20_000) {
+                out.push((
+                    v.center.with_bits(crate::num::bigfloat::precision_for(-depth - 2.0)),
+                    v.radius.mul_f64(2.0),
+                ));
+            }
+        }
+        out
+    }
+
+    fn search(f: Formula, views: &[(BigC, FloatExp)]) -> usize {
+        let mut found = 0;
+        for (c, r) in views {
+            match minibrot_in_view(f, c, *r, 100_000) {
+                Ok(m) => {
+                    check(f, c, *r, &m);
+                    found += 1;
+                }
+                Err(e) => assert!(matches!(e, FindError::NoNucleus { .. } | FindError::NoPeriod { .. }), "{f}: {e}"),
+            }
+        }
+        found
+    }
+
+    #[test]
+    fn nuclei_of_the_folded_families_are_periodic_points_of_the_lowest_period() {
+        for (kind, power) in [(Kind::BurningShip, 2), (Kind::Mandelbar, 2), (Kind::Celtic, 2), (Kind::Mandelbrot, 3)] {
+            let f = formula(kind, power);
+            let mut views = vec![fixed(-1.752, 0.0005, 0.01)];
+            if power == 3 {
+                views = vec![fixed(0.34, 1.27, 0.07), fixed(0.0, 0.9, 0.2)];
+            }
+            let found = search(f, &views);
+            assert_eq!(found, views.len(), "{f}: the fixed views hold a mini");
+            let found = search(f, &descended(f));
+            assert!(found >= 1, "{f}: no mini in any descended view");
+        }
+    }
+
+    /// |z_(k+p) - z_k| / |z'_(k+p) - z'_k| for every k + p <= n, by KF's expansions in dual
+    /// numbers (the derivative along a, the complex derivative of a conformal map): the
+    /// first-order distances from c to roots of z_(k+p) = z_k.
+    fn misiurewicz_distances(f: Formula, c: &BigC, n: u32) -> Vec<Vec<FloatExp>> {
+        let bits = c.bits;
+        let cd = [Dual::variable(c.re.clone(), 0), Dual::variable(c.im.clone(), 1)];
+        let zero = || Dual::constant(Float::from(0u32));
+        let mut z = [zero(), zero()];
+        let mut orbit = vec![BigC::zero(bits)];
+        let mut slope = vec![BigC::zero(bits)];
+        for i in 0..n {
+            z = kf_step_dual(f.phase(i), &z, &cd, bits).expect("a KF formula").z;
+            orbit.push(BigC { re: z[0].v.clone(), im: z[1].v.clone(), bits });
+            slope.push(BigC { re: z[0].d[0].clone(), im: z[1].d[0].clone(), bits });
+        }
+        (0..n as usize)
+            .map(|k| {
+                (1..=n as usize - k)
+                    .map(|p| orbit[k + p].sub(&orbit[k]).abs() / slope[k + p].sub(&slope[k]).abs())
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// A Misiurewicz point of the Mandelbrot family at power 3 or 4, found in a view, is by
+    /// KF's own iteration a root of z_(k+p) = z_k to its precision, and of no z_(k'+p') =
+    /// z_k' with k' <= k, p' <= p and (k', p') lower.
+    #[test]
+    fn misiurewicz_points_of_higher_powers_have_exactly_their_preperiod_and_period() {
+        // Beside roots of (c^d + c)^d + c = c^d + c and z_4 = z_3 (numpy's roots of the
+        // polynomials): (2, 1) and (3, 1) at powers 3 and 4, unless the search finds a simpler
+        // point in the view; whatever it finds is checked.
+        let views = [(3, 0.345, 1.275, 0.05), (3, -0.712, 0.515, 0.03), (4, 0.295, 1.08, 0.05), (4, -1.14, 0.27, 0.02)];
+        let mut found = 0;
+        for (power, re, im, r) in views {
+            let f = formula(Kind::Mandelbrot, power);
+            let (c, r) = fixed(re, im, r);
+            let Ok(m) = misiurewicz_in_view(f, &c, r, 200, 40) else { continue };
+            found += 1;
+            assert!(m.point.sub(&c).abs() <= r);
+            let (k, p) = (m.preperiod as usize, m.period as usize);
+            assert!(k >= 2, "{f}: preperiod {k}");
+            let d = misiurewicz_distances(f, &m.point, (k + p) as u32);
+            let root = FloatExp::new(1.0, 32 - m.point.bits as i32);
+            assert!(d[k][p - 1] < root, "{f} ({k}, {p}): {:?}", d[k][p - 1]);
+            for kk in 0..=k {
+                for pp in 1..=p {
+                    if (kk, pp) != (k, p) {
+                        assert!(d[kk][pp - 1] > FloatExp::from(1e-20), "{f} ({k}, {p}) is also ({kk}, {pp})");
+                    }
+                }
+            }
+        }
+        assert!(found >= 3, "{found} of the views hold a Misiurewicz point");
+        // The folded families and hybrids are refused by name.
+        let e = misiurewicz_in_view(formula(Kind::BurningShip, 2), &BigC::zero(128), FloatExp::ONE, 10, 10);
+        assert!(matches!(&e, Err(FindError::NotConformal { formula, .. }) if formula == "burning-ship"), "{e:?}");
+        let hybrid = Formula::parse("mandelbrot,mandelbrot^3", None).unwrap();
+        assert!(matches!(check_conformal(hybrid), Err(FindError::NotConformal { .. })));
+    }
+}

@@ -179,7 +179,9 @@ pub fn size(formula: Formula, c: &BigC, period: u32) -> (FloatExp, f64) {
         FloatExp::ZERO
     };
     let angle = -(arg(l[0][0], l[1][0]) / (degree - 1.0) + arg(dr, di));
-    (size, angle)
+    // In (-π, π], as z² + c's estimate gives it.
+    let turned = std::f64::consts::PI - (std::f64::consts::PI - angle).rem_euclid(std::f64::consts::TAU);
+    (size, turned)
 }
 
 /// A root of Newton's method for `period` as a mini: refused where it lies farther than
