@@ -83,7 +83,7 @@ fn solve(j: &[BigC; 2], f: &BigC) -> Option<[Float; 2]> {
     let scale = j[0].abs() * j[1].abs();
     let d = crate::num::bigfloat::to_floatexp(&det).abs();
     // Also refuses a NaN (every comparison with it is false).
-    if !(d > scale * FloatExp::new(1.0, 16 - p as i32)) {
+    if d.partial_cmp(&(scale * FloatExp::new(1.0, 16 - p as i32))) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let x = m(&j[1].im, &f.re).sub_prec(m(&j[1].re, &f.im), p).0.div_prec(det.clone(), p).0;
