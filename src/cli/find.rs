@@ -1,7 +1,10 @@
 //! `deepfield find`: the lowest-period minibrot (or simplest Misiurewicz point) in a view,
-//! printed as a scene centred and framed on it.
+//! printed as a scene centred and framed on it. z² + c has its own search
+//! (`locate::search`); every other formula and hybrid the generic one (`locate::family`),
+//! whose Misiurewicz search takes the Mandelbrot family at one power only.
 
 use anyhow::anyhow;
+use deepfield::locate::family::{self, Mini};
 use deepfield::locate::search;
 use deepfield::num::bigcomplex::BigC;
 use deepfield::num::{Decimal, FloatExp, scientific};
@@ -18,16 +21,20 @@ const ITERATIONS_PER_PERIOD: u64 = 64;
 /// Runs `deepfield find`.
 pub fn run(args: FindArgs) -> Result<(), Failure> {
     let scene = super::scene::load(&args.scene)?;
-    if !scene.formula.is_quadratic() {
-        return Err(Failure::Input(anyhow!(
-            "find searches z^2 + c's parameter plane (nuclei by Newton's method on its quadratic orbit, Misiurewicz points); this scene's formula is {}",
-            scene.formula
-        )));
-    }
+    let quadratic = scene.formula.is_quadratic();
     if !matches!(scene.family, FamilySpec::Mandelbrot) {
-        return Err(Failure::Input(anyhow!(
-            "find searches the Mandelbrot set's parameter plane; this scene is a Julia set"
-        )));
+        return Err(Failure::Input(if quadratic {
+            anyhow!("find searches the Mandelbrot set's parameter plane; this scene is a Julia set")
+        } else {
+            anyhow!(
+                "find searches the parameter plane (the Mandelbrot form, c the pixel); this scene is {}'s Julia form, whose plane is z_0's",
+                scene.formula
+            )
+        }));
+    }
+    // Misiurewicz points of the folded families and hybrids are refused before any work.
+    if args.misiurewicz && !quadratic {
+        family::check_conformal(scene.formula).map_err(|e| Failure::Input(e.into()))?;
     }
     // Opened first, so an unwritable path fails before the search.
     let out = match &args.output {
@@ -45,20 +52,36 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
         let (max_preperiod, max_period) = match (args.max_preperiod, args.max_period) {
             (Some(k), Some(p)) => (k, p),
             (k, p) => {
-                let (auto_k, auto_p) = search::misiurewicz_limits(&center, disc);
+                let (auto_k, auto_p) = if quadratic {
+                    search::misiurewicz_limits(&center, disc)
+                } else {
+                    family::misiurewicz_limits(scene.formula, &center, disc)
+                };
                 (k.unwrap_or(auto_k), p.unwrap_or(auto_p))
             }
         };
-        let m = search::misiurewicz_in_view(&center, disc, max_preperiod, max_period)
-            .map_err(|e| Failure::Runtime(e.into()))?;
-        file.view.center = cli(decimals(&m.point));
+        let (point, preperiod, period) = if quadratic {
+            let m = search::misiurewicz_in_view(&center, disc, max_preperiod, max_period)
+                .map_err(|e| Failure::Runtime(e.into()))?;
+            (m.point, m.preperiod, m.period)
+        } else {
+            let m = family::misiurewicz_in_view(scene.formula, &center, disc, max_preperiod, max_period)
+                .map_err(|e| Failure::Runtime(e.into()))?;
+            (m.point, m.preperiod, m.period)
+        };
+        file.view.center = cli(decimals(&point));
         format!(
-            "# deepfield find: Misiurewicz point of preperiod {} and period {}, at the zoom of the view searched\n",
-            m.preperiod, m.period
+            "# deepfield find: Misiurewicz point of preperiod {preperiod} and period {period}, at the zoom of the view searched\n"
         )
     } else {
-        let m = search::minibrot_in_view(&center, disc, args.max_period.unwrap_or(100_000))
-            .map_err(|e| Failure::Runtime(e.into()))?;
+        let max_period = args.max_period.unwrap_or(100_000);
+        let m = if quadratic {
+            let m = search::minibrot_in_view(&center, disc, max_period).map_err(|e| Failure::Runtime(e.into()))?;
+            Mini { nucleus: m.nucleus, period: m.period, size: m.size, angle: m.angle }
+        } else {
+            family::minibrot_in_view(scene.formula, &center, disc, max_period)
+                .map_err(|e| Failure::Runtime(e.into()))?
+        };
         file.view.center = cli(decimals(&m.nucleus));
         file.view.zoom = Some(cli(scientific(search::framing_log10_zoom(m.size), 6)));
         file.view.radius = None;
@@ -68,7 +91,8 @@ pub fn run(args: FindArgs) -> Result<(), Failure> {
             file.iteration.max = cli(iterations as i64);
         }
         format!(
-            "# deepfield find: minibrot of period {}, size {}, turned {:.1} degrees; framed at 2.2 sizes\n",
+            "# deepfield find: {} of period {}, size {}, turned {:.1} degrees; framed at 2.2 sizes\n",
+            if quadratic { "minibrot" } else { "mini" },
             m.period,
             sci(m.size, 3),
             m.angle.to_degrees()

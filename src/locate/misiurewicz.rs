@@ -55,8 +55,13 @@ pub fn newton(start: &BigC, preperiod: u32, period: u32, max_steps: u32) -> Opti
 /// last bit is that large, its distance is not. None when nothing repeats that soon; a
 /// nucleus (z_p = 0, so preperiod 0) is reported as (0, p).
 pub fn orbit_type(c: &BigC, max_preperiod: u32, max_period: u32) -> Option<(u32, u32)> {
+    classify(c, &Orbit::of(c, (max_preperiod + max_period) as usize, None), max_preperiod, max_period)
+}
+
+/// [`orbit_type`] for `c` from its orbit (at least `max_preperiod + max_period` steps, with
+/// the derivative in c), under whichever map made it.
+pub fn classify(c: &BigC, orbit: &Orbit, max_preperiod: u32, max_period: u32) -> Option<(u32, u32)> {
     let tolerance = FloatExp::new(1.0, 24 - c.bits as i32) * FloatExp::ONE.max(c.abs());
-    let orbit = Orbit::of(c, (max_preperiod + max_period) as usize, None);
     for k in 0..=max_preperiod as usize {
         for p in 1..=max_period as usize {
             if k + p >= orbit.len() {
@@ -79,11 +84,21 @@ impl Orbit {
     /// |z_n| above `bound`, if one is given.
     pub fn of(c: &BigC, n: usize, bound: Option<FloatExp>) -> Orbit {
         let one = BigC::from_f64(1.0, 0.0, c.bits);
+        Orbit::by(c, n, bound, |_, z, dz| c.orbit_step((z, dz), &one))
+    }
+
+    /// [`Orbit::of`] under another map: `step` takes (n, z_n, z'_n) to (z_(n+1), z'_(n+1)).
+    pub fn by(
+        c: &BigC,
+        n: usize,
+        bound: Option<FloatExp>,
+        mut step: impl FnMut(u32, &BigC, &BigC) -> (BigC, BigC),
+    ) -> Orbit {
         let (mut z, mut dz) = (BigC::zero(c.bits), BigC::zero(c.bits));
         let mut orbit = Vec::with_capacity(n + 1);
         orbit.push((z.clone(), z.to_fe(), dz.to_fe()));
-        for _ in 0..n {
-            (z, dz) = c.orbit_step((&z, &dz), &one);
+        for i in 0..n {
+            (z, dz) = step(i as u32, &z, &dz);
             if bound.is_some_and(|b| z.abs() > b) {
                 break;
             }

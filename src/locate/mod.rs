@@ -10,6 +10,7 @@
 //! the caller chooses from the depth; the results keep it, so a centre found at 1e-2000 is
 //! exact to its last digit.
 
+pub mod family;
 pub mod misiurewicz;
 pub mod nucleus;
 pub mod period;

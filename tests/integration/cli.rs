@@ -694,6 +694,44 @@ fn find_prints_the_minibrot_or_misiurewicz_point_of_a_view_as_a_scene() {
     assert!(stderr(&o).contains("no minibrot of period up to 40"), "{}", stderr(&o));
 }
 
+/// `deepfield find` on the other formulas: the Burning Ship's period-3 miniship on the real
+/// axis (the real slice is z² + c's, so its nucleus is the airplane's,
+/// -1.7548776662466927600495088963585286918946...), written as a scene with its formula
+/// that renders; a Julia form and Misiurewicz points of a folded family are refused by
+/// name, with a non-zero exit.
+#[test]
+fn find_searches_every_formula_and_refuses_what_does_not_apply() {
+    let dir = scratch("cli-find-family");
+    write(
+        &dir,
+        "ship.toml",
+        "version = 1\n[formula]\nkind = \"burning-ship\"\n[view]\ncenter = [\"-1.752\", \"0.0005\"]\nzoom = \"100\"\n",
+    );
+    let o = deepfield(&["find", "ship.toml", "-o", "found.toml"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(dir.join("found.toml")).unwrap();
+    assert!(text.contains("mini of period 3,"), "{text}");
+    assert!(text.contains("kind = \"burning-ship\""), "{text}");
+    assert!(text.contains("\"-1.754877666246692760049508896358528"), "{text}");
+    let o = deepfield(&["render", "found.toml", "--size", "32x24", "-o", "found.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let o =
+        deepfield(&["find", "--formula", "mandelbrot^3", "--center=0.34,1.27", "--zoom", "30", "--misiurewicz"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("preperiod 2 and period 1"), "{}", stderr(&o));
+
+    let refused = |args: &[&str], needle: &str| {
+        let o = deepfield(args, &dir);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    };
+    refused(&["find", "--formula", "burning-ship", "--julia-c=-0.5,0.1"], "burning-ship's Julia form");
+    refused(&["find", "ship.toml", "--misiurewicz"], "burning-ship is not conformal");
+    refused(&["find", "--formula", "mandelbrot,mandelbrot^3", "--misiurewicz"], "is a hybrid");
+}
+
 /// Formula families: bad names and powers are located errors; engines and files built for
 /// z² + c alone refuse the others by name, with nothing written.
 #[test]

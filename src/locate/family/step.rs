@@ -1,0 +1,124 @@
+//! One step of a formula's map in big floats with its derivative, for Newton's method on
+//! any family: f(z) and the linear map Df(z) that carries a tangent vector through it.
+//!
+//! Forward-mode differentiation through the four steps of `formula::map` (fold, power,
+//! fold, negate), each taken in big floats at the orbit's precision: a fold negates the
+//! tangent's component where the folded part is negative (its derivative taken as +1 at
+//! 0, as the engines take it), the power multiplies the tangent, as a complex number, by
+//! p w^(p-1), and the negation negates a component. So Df is a complex multiplication
+//! between two sign flips of the components: conformal (a complex number) for the
+//! Mandelbrot family, conformal or anti-conformal (a complex number times a reflection)
+//! for every family; only the sums of such maps that the derivative in c accumulates are
+//! general 2×2 matrices.
+
+use malachite_float::Float;
+
+use crate::formula::Phase;
+use crate::formula::map::{FOLD_IM, FOLD_RE, SIGN_IM, SIGN_RE};
+use crate::num::FloatExp;
+use crate::num::bigcomplex::BigC;
+
+/// The derivative of one step at a point: v -> flip_out(a flip_in(v)).
+#[derive(Debug, Clone)]
+pub struct Derivative {
+    /// p w^(p-1), w the folded point.
+    a: BigC,
+    /// Components the first fold negates (folded and negative).
+    flip_in: [bool; 2],
+    /// Components the second fold and the negation negate together.
+    flip_out: [bool; 2],
+}
+
+/// `x`, negated where `flip`.
+fn signed(x: &Float, flip: bool) -> Float {
+    if flip { -x.clone() } else { x.clone() }
+}
+
+/// `v` with the components `flip` names negated.
+fn flipped(v: &BigC, flip: [bool; 2]) -> BigC {
+    BigC { re: signed(&v.re, flip[0]), im: signed(&v.im, flip[1]), bits: v.bits }
+}
+
+impl Derivative {
+    /// Df v.
+    pub fn apply(&self, v: &BigC) -> BigC {
+        flipped(&self.a.mul(&flipped(v, self.flip_in)), self.flip_out)
+    }
+
+    /// Df as a 2×2 matrix in FloatExp, rows first (its columns are Df 1 and Df i).
+    pub fn matrix(&self) -> [[FloatExp; 2]; 2] {
+        let one = BigC::from_f64(1.0, 0.0, self.a.bits);
+        let i = BigC::from_f64(0.0, 1.0, self.a.bits);
+        let ([a, c], [b, d]) = (self.apply(&one).to_fe(), self.apply(&i).to_fe());
+        [[a, b], [c, d]]
+    }
+
+    /// Whether Df is a complex number (no reflection between the flips).
+    pub fn conformal(&self) -> bool {
+        self.flip_in[0] == self.flip_in[1] && self.flip_out[0] == self.flip_out[1]
+    }
+
+    /// a, the complex factor between the flips.
+    pub fn factor(&self) -> &BigC {
+        &self.a
+    }
+}
+
+/// f(z) for `phase` (c not added) and its derivative at z, in big floats at `z.bits`. f(z)
+/// is computed by the same operations as `Map::apply_big`, so the two agree to the bit.
+pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
+    let (fold_in, p, fold_out, sign) = phase.kind.shape(phase.power);
+    let negative = |x: &Float| *x < 0u32;
+    let flip_in = [fold_in & FOLD_RE != 0 && negative(&z.re), fold_in & FOLD_IM != 0 && negative(&z.im)];
+    let w = flipped(z, flip_in);
+    // u = w^p as apply_big takes it (a square, then products), and w^(p-1) on the way.
+    let mut below = w.clone();
+    let mut u = w.square();
+    for _ in 2..p {
+        below = u.clone();
+        u = u.mul(&w);
+    }
+    let a = below.mul(&BigC::from_f64(p as f64, 0.0, z.bits));
+    let flip_out = [
+        (fold_out & FOLD_RE != 0 && negative(&u.re)) != (sign == SIGN_RE),
+        (fold_out & FOLD_IM != 0 && negative(&u.im)) != (sign == SIGN_IM),
+    ];
+    (flipped(&u, flip_out), Derivative { a, flip_in, flip_out })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::kind::KINDS;
+    use crate::formula::map::Map;
+
+    /// The value is the engines' big-float map to the bit, and the derivative is the
+    /// engines' f64 Jacobian (`Map::jacobian`), for every family at every power.
+    #[test]
+    fn the_step_is_the_engines_map_and_its_jacobian() {
+        for k in KINDS {
+            for p in k.min_power..=k.max_power {
+                let phase = Phase { kind: k.kind, power: p };
+                for z in [[0.3, -0.7], [-1.1, 0.2], [-0.4, -0.35], [0.05, 0.9]] {
+                    let zb = BigC::from_f64(z[0], z[1], 160);
+                    let (f, d) = step(phase, &zb);
+                    let want = crate::with_map!(phase, M => M::apply_big(&zb), unreachable!());
+                    assert_eq!(f, want, "{phase} {z:?}");
+                    let j = crate::with_map!(phase, M => M::jacobian(z), unreachable!());
+                    let m = d.matrix();
+                    for (r, row) in m.iter().enumerate() {
+                        for (c, v) in row.iter().enumerate() {
+                            let (got, want) = (v.to_f64(), j[r][c]);
+                            assert!((got - want).abs() <= 1e-12 * (1.0 + want.abs()), "{phase} {z:?} [{r}][{c}]");
+                        }
+                    }
+                    let conformal =
+                        phase.kind.shape(p).0 == 0 && phase.kind.shape(p).2 == 0 && phase.kind.shape(p).3 == 0;
+                    if conformal {
+                        assert!(d.conformal(), "{phase}");
+                    }
+                }
+            }
+        }
+    }
+}
