@@ -440,13 +440,20 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
-/// The truth's NF (0 for interior pixels); `ln_r` is ln(escape radius).
+/// The truth's NF (0 for interior pixels) for its formula's degree; `ln_r` is ln(escape
+/// radius).
 fn true_nf(t: &Truth, ln_r: f64) -> f64 {
     if t.n.is_none() {
         return 0.0;
     }
     let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
-    (1.0 - (lnz / ln_r).log2()).clamp(0.0, 1.0)
+    // log base p of ln|z| / ln R for the formula's degree p (log2 itself for p = 2).
+    let log_p = if t.ln_degree == std::f64::consts::LN_2 {
+        (lnz / ln_r).log2()
+    } else {
+        (lnz / ln_r).ln() / t.ln_degree
+    };
+    (1.0 - log_p).clamp(0.0, 1.0)
 }
 
 /// One CSV line per sampled pixel: its position, the truth (N, empty for interior; NF;
@@ -547,6 +554,7 @@ mod tests {
             near_circle: false,
             ill_conditioned: false,
             nf_ill_conditioned: false,
+            ln_degree: std::f64::consts::LN_2,
         }
     }
 

@@ -37,6 +37,9 @@ pub struct Truth {
     /// N holds but NF changes by more than [`super::NF_CONDITION`] when the point moves 1e-9
     /// sample spacings (set likewise, only where some engine's NF is that far off).
     pub nf_ill_conditioned: bool,
+    /// ln of the escape rate of the formula iterated (ln 2 for z^2 + c): the base of the
+    /// true NF's logarithm, as the engines' smooth fraction takes it.
+    pub ln_degree: f64,
 }
 
 /// Iterates the orbit of `point` (Mandelbrot: c = point, z_0 = 0; Julia: z_0 = point).
@@ -69,7 +72,7 @@ pub fn orbit(
                 v.to_f64()
             };
             let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
-            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false, nf_ill_conditioned: false };
+            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false, nf_ill_conditioned: false, ln_degree: std::f64::consts::LN_2 };
         }
         if n == max_iter {
             break;
@@ -86,7 +89,7 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false }
+    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false, ln_degree: std::f64::consts::LN_2 }
 }
 
 /// Iterates the orbit of `point` under `formula` (Mandelbrot form: c = point, z_0 = 0;
@@ -143,6 +146,7 @@ pub fn orbit_formula(
                 near_circle: near,
                 ill_conditioned: false,
                 nf_ill_conditioned: false,
+                ln_degree: formula.ln_degree(),
             };
         }
         if n == max_iter {
@@ -151,7 +155,15 @@ pub fn orbit_formula(
         let step = kf_maps::kf_step_dual(formula.phase(n), &z, &c, bits);
         z = step.expect("every phase of a validated formula is a row of KINDS").z;
     }
-    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false }
+    Truth {
+        n: None,
+        z: [0.0; 2],
+        dz: [0.0; 2],
+        near_circle: near,
+        ill_conditioned: false,
+        nf_ill_conditioned: false,
+        ln_degree: formula.ln_degree(),
+    }
 }
 
 #[cfg(test)]
