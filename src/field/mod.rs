@@ -362,7 +362,7 @@ impl Deep<'_> {
     fn orbits(self, offsets: &[[f64; 2]], out: &mut [Orbit], c: &mut Counters, simd: SimdLevel, cancel: &AtomicBool) {
         match self {
             Deep::Quadratic(d) => d.orbits(offsets, out, c, simd, cancel),
-            Deep::Generic(d) => d.orbits(offsets, out, c, cancel),
+            Deep::Generic(d) => d.orbits(offsets, out, c, simd, cancel),
         }
     }
 

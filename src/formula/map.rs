@@ -58,6 +58,8 @@ pub trait Num: Copy {
     fn neg(self) -> Self;
     /// +1 where self >= 0 (or is NaN), -1 where self < 0.
     fn sgn(self) -> Self;
+    /// [`diffabs`] of the reference part `self` and the delta `d`, lane by lane.
+    fn diffabs(self, d: Self) -> Self;
 }
 
 impl Num for f64 {
@@ -93,40 +95,85 @@ impl Num for f64 {
     fn sgn(self) -> Self {
         if self < 0.0 { -1.0 } else { 1.0 }
     }
+    #[inline(always)]
+    fn diffabs(self, d: Self) -> Self {
+        diffabs(self, d)
+    }
 }
 
 impl<const L: usize> Num for [f64; L] {
+    // Plain loops over the lanes (not `array::from_fn`, which the compiler may leave as a
+    // call outside the caller's vector target features).
     #[inline(always)]
     fn splat(x: f64) -> Self {
         [x; L]
     }
     #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        std::array::from_fn(|k| self[k] + o[k])
+    fn add(mut self, o: Self) -> Self {
+        for k in 0..L {
+            self[k] += o[k];
+        }
+        self
     }
     #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        std::array::from_fn(|k| self[k] - o[k])
+    fn sub(mut self, o: Self) -> Self {
+        for k in 0..L {
+            self[k] -= o[k];
+        }
+        self
     }
     #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        std::array::from_fn(|k| self[k] * o[k])
+    fn mul(mut self, o: Self) -> Self {
+        for k in 0..L {
+            self[k] *= o[k];
+        }
+        self
     }
     #[inline(always)]
-    fn mul_add(self, a: Self, b: Self) -> Self {
-        std::array::from_fn(|k| f64::mul_add(self[k], a[k], b[k]))
+    fn mul_add(mut self, a: Self, b: Self) -> Self {
+        for k in 0..L {
+            self[k] = f64::mul_add(self[k], a[k], b[k]);
+        }
+        self
     }
     #[inline(always)]
-    fn abs(self) -> Self {
-        std::array::from_fn(|k| f64::abs(self[k]))
+    fn abs(mut self) -> Self {
+        for x in &mut self {
+            *x = f64::abs(*x);
+        }
+        self
     }
     #[inline(always)]
-    fn neg(self) -> Self {
-        std::array::from_fn(|k| -self[k])
+    fn neg(mut self) -> Self {
+        for x in &mut self {
+            *x = -*x;
+        }
+        self
     }
     #[inline(always)]
-    fn sgn(self) -> Self {
-        std::array::from_fn(|k| if self[k] < 0.0 { -1.0 } else { 1.0 })
+    fn sgn(mut self) -> Self {
+        for x in &mut self {
+            *x = if *x < 0.0 { -1.0 } else { 1.0 };
+        }
+        self
+    }
+    #[inline(always)]
+    fn diffabs(self, d: Self) -> Self {
+        // The scalar `diffabs`'s four outcomes as selects (the lanes stay branch-free):
+        // with x >= 0, d where x + d >= 0 else -(d + 2x); with x < 0, d + 2x where x + d > 0
+        // else -d.
+        let mut r = d;
+        for k in 0..L {
+            let (x, d) = (self[k], d[k]);
+            let s = x + d;
+            let e = d + 2.0 * x;
+            let pos = x >= 0.0;
+            let kept = if pos { s >= 0.0 } else { s > 0.0 };
+            let a = if pos { d } else { e };
+            let b = if pos { e } else { d };
+            r[k] = if kept { a } else { -b };
+        }
+        r
     }
 }
 
@@ -150,6 +197,10 @@ pub trait Map: Copy + Default + Send + Sync + 'static {
     /// f(Z + d) - f(Z) for a reference value Z (f64) and a delta d, without cancellation:
     /// the power by the binomial expansion in d, the folds by [`diffabs`].
     fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2];
+    /// [`Map::delta`] in f64 for one sample or several in lanes (each lane its own Z):
+    /// the same operations in the same order, so each lane has the bits of
+    /// `delta::<f64>`.
+    fn delta_n<N: Num>(z: [N; 2], d: [N; 2]) -> [N; 2];
     /// The Jacobian of f at z (a fold's derivative taken as +1 at 0).
     #[inline(always)]
     fn jacobian(z: [f64; 2]) -> Mat2 {
@@ -240,6 +291,25 @@ fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
     cmul(t, d)
 }
 
+/// [`power_delta`] in [`Num`]s, operation for operation (the products of `cmul` are
+/// [`nmul`]'s, and `[1, 0]` is multiplied out as it is there).
+#[inline(always)]
+fn power_delta_n<const P: u32, N: Num>(w: [N; 2], d: [N; 2]) -> [N; 2] {
+    let one = [N::splat(1.0), N::splat(0.0)];
+    let mut pw = [one; MAX_POWER as usize];
+    for k in 1..P as usize {
+        pw[k] = nmul(pw[k - 1], w);
+    }
+    let mut t = one;
+    for k in (1..P).rev() {
+        let c = N::splat(binomial(P, k));
+        let a = pw[(P - k) as usize];
+        let td = nmul(t, d);
+        t = [td[0].add(c.mul(a[0])), td[1].add(c.mul(a[1]))];
+    }
+    nmul(t, d)
+}
+
 impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, P, OUT, SIGN> {
     const POWER: u32 = P;
     const CONFORMAL: bool = IN == FOLD_NONE && OUT == FOLD_NONE && SIGN == SIGN_NONE;
@@ -289,6 +359,30 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
         match SIGN {
             SIGN_IM => [du[0], -du[1]],
             SIGN_RE => [-du[0], du[1]],
+            _ => du,
+        }
+    }
+
+    #[inline(always)]
+    fn delta_n<N: Num>(z: [N; 2], d: [N; 2]) -> [N; 2] {
+        let dw = [
+            if IN & FOLD_RE != 0 { z[0].diffabs(d[0]) } else { d[0] },
+            if IN & FOLD_IM != 0 { z[1].diffabs(d[1]) } else { d[1] },
+        ];
+        let w = fold(IN, z);
+        let du = power_delta_n::<P, N>(w, dw);
+        let du = if OUT == FOLD_NONE {
+            du
+        } else {
+            let u = power::<P, N>(w);
+            [
+                if OUT & FOLD_RE != 0 { u[0].diffabs(du[0]) } else { du[0] },
+                if OUT & FOLD_IM != 0 { u[1].diffabs(du[1]) } else { du[1] },
+            ]
+        };
+        match SIGN {
+            SIGN_IM => [du[0], du[1].neg()],
+            SIGN_RE => [du[0].neg(), du[1]],
             _ => du,
         }
     }
@@ -449,6 +543,55 @@ mod tests {
         let j = [[dz[0], -dz[1]], [dz[1], dz[0]]];
         let g = gradient_dz([0.4, 2.5], j);
         assert!((g[0] - dz[0]).abs() < 1e-15 && (g[1] - dz[1]).abs() < 1e-15, "{g:?}");
+    }
+
+    /// `delta_n` in lanes gives each lane the bits of the scalar `delta::<f64>`, for every
+    /// family at every power, at values on and near the fold lines (signs of zero, deltas
+    /// that cross a fold) and at random ones.
+    #[test]
+    fn lane_deltas_have_the_scalar_deltas_bits() {
+        use crate::formula::Phase;
+        use crate::formula::kind::KINDS;
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rand = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let special = [0.0, -0.0, 1e-300, -1e-300, 0.5, -0.5, 1.75, -2.0];
+        let mut cases: Vec<([f64; 2], [f64; 2])> = vec![];
+        for &a in &special {
+            for &b in &special {
+                cases.push(([a, b], [-a * 0.5, b * 3.0]));
+                cases.push(([a, -b], [a * -2.0, 1e-5]));
+            }
+        }
+        for _ in 0..400 {
+            let scale = 10f64.powi((rand() * 8.0) as i32);
+            cases.push(([rand() * 2.0, rand() * 2.0], [rand() * scale, rand() * scale]));
+        }
+        const L: usize = 8;
+        for k in KINDS {
+            for p in k.min_power..=k.max_power {
+                let phase = Phase { kind: k.kind, power: p };
+                crate::with_map!(phase, M => {
+                    for chunk in cases.chunks(L) {
+                        let mut z = [[0.0; L]; 2];
+                        let mut d = [[0.0; L]; 2];
+                        for (j, (zc, dc)) in chunk.iter().enumerate() {
+                            (z[0][j], z[1][j], d[0][j], d[1][j]) = (zc[0], zc[1], dc[0], dc[1]);
+                        }
+                        let got = M::delta_n(z, d);
+                        for (j, (zc, dc)) in chunk.iter().enumerate() {
+                            let want = M::delta::<f64>(*zc, *dc);
+                            let lane = [got[0][j], got[1][j]];
+                            assert_eq!(lane.map(f64::to_bits), want.map(f64::to_bits), "{phase} {zc:?} {dc:?}");
+                        }
+                    }
+                }, unreachable!("{phase}"));
+            }
+        }
     }
 
     #[test]

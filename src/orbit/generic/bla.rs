@@ -122,6 +122,17 @@ impl<T: Real> Table<T> {
         best
     }
 
+    /// True when [`Table::lookup`] finds a step: the shortest step from `m` holds `d2`
+    /// (every longer one is looked at only if it does). The lanes' test for a BLA event.
+    #[inline(always)]
+    pub(super) fn can_step(&self, m: u32, d2: T, left: u32) -> bool {
+        if d2.partial_cmp(&self.max_r2) != Some(std::cmp::Ordering::Less) || m < self.origin || left < 2 {
+            return false;
+        }
+        let i = m - self.origin;
+        i & 1 == 0 && self.levels.first().and_then(|l| l.get((i >> 1) as usize)).is_some_and(|s| d2 < s.r2)
+    }
+
     /// Steps stored, over all levels.
     pub(super) fn len(&self) -> usize {
         self.levels.iter().map(Vec::len).sum()

@@ -17,6 +17,7 @@
 //! | `mod.rs` | [`Engine`], [`prepare`] and what the engine reports |
 //! | `reference.rs` | the reference orbits (one orbit of 0 per phase of a hybrid), f64 with FloatExp for wide values |
 //! | `perturb.rs` | the loop: single steps, rebasing, BLA steps, f64/FloatExp switching |
+//! | `lanes.rs` | the loop's single steps for many samples of one family in vector lanes, events in `perturb.rs`'s pass |
 //! | `wide.rs` | the step from a reference value f64 cannot stand for, in FloatExp |
 //! | `der.rs` | the Jacobian times the spacing, with its own exponent |
 //! | `bla.rs` | BLA tables: 2×2 steps merged in a tree, radii from the nonlinear terms and the fold lines |
@@ -30,6 +31,7 @@
 
 mod bla;
 mod der;
+mod lanes;
 mod perturb;
 mod reference;
 mod wide;
@@ -45,6 +47,7 @@ use crate::formula::end::Orbit;
 use crate::formula::{Formula, Stepper};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
+use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 use bla::Table;
 use reference::Track;
@@ -74,6 +77,9 @@ pub struct Engine {
     up_exp: i32,
     /// A rebase to a full value whose exponent is below this moves to FloatExp.
     down_exp: i32,
+    /// A rebase from a full value whose parts are at least this (and nonzero) is computed
+    /// in f64 (`perturb.rs`, `rebase_f64`): 2^-(1022/p - 56), p the largest power.
+    rebase_low: f64,
     bits: u64,
     orbit_seconds: f64,
     tables_seconds: f64,
@@ -139,6 +145,7 @@ pub fn prepare(
         numbers: spec.numbers,
         up_exp: -(960 / max_power as i32),
         down_exp: -(1000 / max_power as i32),
+        rebase_low: f64::from_bits(((1023 - (1022 / max_power as i32 - 56)) as u64) << 52),
         bits,
         orbit_seconds,
         tables_seconds: started.elapsed().as_secs_f64() - orbit_seconds,
@@ -167,8 +174,26 @@ impl Engine {
     }
 
     /// Iterates many samples without traps, on this thread; the same results as
-    /// [`Engine::orbit`]. Once `cancel` is raised the rest are left as they are.
-    pub fn orbits(&self, offsets: &[[f64; 2]], out: &mut [Orbit], counters: &mut Counters, cancel: &AtomicBool) {
+    /// [`Engine::orbit`], bit for bit, at every `simd` level (a single family without the
+    /// derivative runs in vector lanes at levels above scalar). Once `cancel` is raised
+    /// the rest are left as they are.
+    pub fn orbits(
+        &self,
+        offsets: &[[f64; 2]],
+        out: &mut [Orbit],
+        counters: &mut Counters,
+        simd: SimdLevel,
+        cancel: &AtomicBool,
+    ) {
+        if simd != SimdLevel::Scalar && !self.derivative && self.formula.phases().len() == 1 {
+            let lanes = crate::with_map!(self.formula.phases()[0], M => {
+                self.orbits_lanes::<M>(simd, offsets, out, counters, cancel);
+                true
+            }, false);
+            if lanes {
+                return;
+            }
+        }
         crate::with_stepper!(self.formula, st => if self.derivative {
             self.each::<_, true>(&st, offsets, out, counters, cancel)
         } else {

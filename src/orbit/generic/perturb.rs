@@ -42,21 +42,21 @@ const CANCEL_MASK: u32 = (1 << 12) - 1;
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Sample<D> {
     /// δ against Z_m of the current track.
-    d: [D; 2],
+    pub(super) d: [D; 2],
     /// The offset δc (zero for Julia sets; in f64 it may have underflowed).
-    dc: [D; 2],
+    pub(super) dc: [D; 2],
     /// The track followed.
-    t: usize,
+    pub(super) t: usize,
     /// Index on that track.
-    m: u32,
+    pub(super) m: u32,
     /// Iteration index of the sample.
-    n: u32,
+    pub(super) n: u32,
     /// The track's next index the hot loop does not handle.
-    stop: u32,
+    pub(super) stop: u32,
 }
 
 /// How a run in one number type ended.
-enum Exit {
+pub(super) enum Exit {
     Done(Orbit),
     F64(Sample<f64>),
     Fe(Sample<FloatExp>),
@@ -66,6 +66,20 @@ enum Exit {
 #[inline(always)]
 fn max_exp<D: Real>(d: [D; 2]) -> i32 {
     d[0].to_fe().exponent().max(d[1].to_fe().exponent())
+}
+
+/// f_n(0 + full) - f_n(0) + dc in f64 where that has the bits of the FloatExp rebase step
+/// (see `Engine::rebase_f64`), `low` = 2^-T for the largest power; None elsewhere.
+#[inline(always)]
+fn rebase_delta_f64<S: Stepper>(st: &S, n: u32, full: [f64; 2], dc: [f64; 2], low: f64) -> Option<[f64; 2]> {
+    const LEAST: f64 = f64::from_bits((1023 - 1000) << 52);
+    let big = |x: f64| x.abs() >= low;
+    let normal = |x: f64| x == 0.0 || x.abs() >= LEAST;
+    if !(big(full[0]) && big(full[1]) && normal(dc[0]) && normal(dc[1])) {
+        return None;
+    }
+    let d = cadd(st.delta::<f64>(n, [0.0; 2], full), dc);
+    (d[0].abs() >= LEAST && d[1].abs() >= LEAST).then_some(d)
 }
 
 /// A v for a 2×2 matrix in D.
@@ -88,26 +102,55 @@ impl Engine {
         cancel: &AtomicBool,
         bla: bool,
     ) -> Orbit {
+        let Some((s, dc_fe)) = self.start(offset) else { return Orbit::interior() };
+        let mut der = Jac::new(self.spacing, self.mandelbrot);
+        let (t64, tfe): (&[Table<f64>], &[Table<FloatExp>]) = if bla { (&self.t64, &self.tfe) } else { (&[], &[]) };
+        let next = self.first(s, dc_fe);
+        self.drive::<S, DER>(st, next, &mut der, dc_fe, t64, tfe, traps, states, counters, cancel)
+    }
+
+    /// The state of the sample at `offset` before its first iteration, with its offset δc
+    /// in FloatExp; None where the iteration limit is below its first index.
+    #[inline(always)]
+    pub(super) fn start(&self, offset: [f64; 2]) -> Option<(Sample<FloatExp>, [FloatExp; 2])> {
         let u = [self.spacing.mul_f64(offset[0]), self.spacing.mul_f64(offset[1])];
         let (dc_fe, n) = if self.mandelbrot { (u, 1) } else { ([FloatExp::ZERO; 2], 0) };
         if n > self.max_iter {
-            return Orbit::interior();
+            return None;
         }
-        let s = Sample { d: u, dc: dc_fe, t: 0, m: n, n, stop: self.tracks[0].stop(n) };
-        let mut der = Jac::new(self.spacing, self.mandelbrot);
-        let (t64, tfe): (&[Table<f64>], &[Table<FloatExp>]) = if bla { (&self.t64, &self.tfe) } else { (&[], &[]) };
-        let mut next = if self.numbers == Numbers::FloatExp && max_exp(u) <= self.up_exp {
+        Some((Sample { d: u, dc: dc_fe, t: 0, m: n, n, stop: self.tracks[0].stop(n) }, dc_fe))
+    }
+
+    /// A new sample's first state: f64 unless its offset is below f64's range.
+    #[inline(always)]
+    pub(super) fn first(&self, s: Sample<FloatExp>, dc_fe: [FloatExp; 2]) -> Exit {
+        if self.numbers == Numbers::FloatExp && max_exp(s.d) <= self.up_exp {
             Exit::Fe(s)
         } else {
             Exit::F64(self.to_f64(s, dc_fe))
-        };
+        }
+    }
+
+    /// Runs a sample from `next` to its end, in f64 and FloatExp as its delta asks.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn drive<S: Stepper, const DER: bool>(
+        &self,
+        st: &S,
+        mut next: Exit,
+        der: &mut Jac,
+        dc_fe: [FloatExp; 2],
+        t64: &[Table<f64>],
+        tfe: &[Table<FloatExp>],
+        traps: &[Trap],
+        states: &mut [TrapState],
+        counters: &mut Counters,
+        cancel: &AtomicBool,
+    ) -> Orbit {
         loop {
             next = match next {
                 Exit::Done(o) => return o,
-                Exit::F64(s) => self.run::<S, f64, DER>(st, s, &mut der, dc_fe, t64, traps, states, counters, cancel),
-                Exit::Fe(s) => {
-                    self.run::<S, FloatExp, DER>(st, s, &mut der, dc_fe, tfe, traps, states, counters, cancel)
-                }
+                Exit::F64(s) => self.run::<S, f64, DER>(st, s, der, dc_fe, t64, traps, states, counters, cancel),
+                Exit::Fe(s) => self.run::<S, FloatExp, DER>(st, s, der, dc_fe, tfe, traps, states, counters, cancel),
             };
         }
     }
@@ -141,69 +184,8 @@ impl Engine {
         // Counted locally and added on exit, so that the loop's state stays in registers.
         let mut local = Counters::default();
         let exit = loop {
-            if s.m >= s.stop {
-                let d = cconv(s.d);
-                local.iterations += 1;
-                match self.special::<S, D, DER>(st, &s, d, dc_fe, der, traps, states, &mut local) {
-                    Err(o) => break Exit::Done(o),
-                    Ok(moved) => match self.moved(&mut s, moved, dc_fe) {
-                        Some(e) => break e,
-                        None => continue,
-                    },
-                }
-            }
-            let zr = self.tracks[s.t].z[s.m as usize];
-            let full = [D::from_f64(zr[0]) + s.d[0], D::from_f64(zr[1]) + s.d[1]];
-            let z = cto_f64(full);
-            if s.n >= 1 {
-                for (trap, state) in traps.iter().zip(states.iter_mut()) {
-                    trap.observe(state, z);
-                }
-            }
-            if z[0] * z[0] + z[1] * z[1] > self.escape2 {
-                break Exit::Done(Orbit { n: s.n, z, dz: if DER { der.output(z) } else { [0.0; 2] } });
-            }
-            if s.n >= self.max_iter {
-                break Exit::Done(Orbit::interior());
-            }
-            let d2 = norm2(s.d);
-            if norm2(full) < d2 {
-                local.iterations += 1;
-                let moved = self.rebase_step::<S, DER>(st, s.n, cconv(full), dc_fe, der, &mut local);
-                match self.moved(&mut s, moved, dc_fe) {
-                    Some(e) => break e,
-                    None => continue,
-                }
-            }
-            if let Some(table) = tables.get(s.t)
-                && let Some((step, len)) = table.lookup(s.m, d2, self.max_iter - s.n)
-            {
-                let ad = mat_vec(&step.a, s.d);
-                s.d = if self.mandelbrot { cadd(ad, mat_vec(&step.b, s.dc)) } else { ad };
-                if DER {
-                    der.bla(&step.a, &step.b);
-                }
-                s.m += len;
-                s.n += len;
-                local.bla_steps += 1;
-                local.bla_iterations += u64::from(len);
-                local.iterations += u64::from(len);
-                continue;
-            }
-            if DER {
-                // A FloatExp part below f64's range rounds to ±0, whose sign a fold's
-                // derivative would misread.
-                let at = if fe { wide::signed_f64(cconv(full)) } else { z };
-                der.step(st.jacobian(s.n, at));
-            }
-            s.d = cadd(st.delta(s.n, zr, s.d), s.dc);
-            s.m += 1;
-            s.n += 1;
-            local.steps += 1;
-            local.iterations += 1;
-            if fe && max_exp(s.d) > self.up_exp {
-                let f = Sample { d: cconv(s.d), dc: cconv(dc_fe), t: s.t, m: s.m, n: s.n, stop: s.stop };
-                break Exit::F64(f);
+            if let Some(e) = self.iteration::<S, D, DER>(st, &mut s, der, dc_fe, tables, traps, states, &mut local) {
+                break e;
             }
             if s.n & CANCEL_MASK == 0 && cancel.load(Ordering::Relaxed) {
                 break Exit::Done(Orbit::interior());
@@ -214,6 +196,98 @@ impl Engine {
         }
         counters.add(&local);
         exit
+    }
+
+    /// One pass of the loop in D: the out-of-line step at a track's `stop`, or the end
+    /// tests, then a rebase, a BLA step or a single step. Some: the sample ended or needs
+    /// the other number type. The lanes (`lanes.rs`) run this same pass for a lane whose
+    /// sample meets an event, so that both paths take the same steps.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn iteration<S: Stepper, D: Real, const DER: bool>(
+        &self,
+        st: &S,
+        s: &mut Sample<D>,
+        der: &mut Jac,
+        dc_fe: [FloatExp; 2],
+        tables: &[Table<D>],
+        traps: &[Trap],
+        states: &mut [TrapState],
+        local: &mut Counters,
+    ) -> Option<Exit> {
+        let fe = D::NAME == FloatExp::NAME;
+        if s.m >= s.stop {
+            let d = cconv(s.d);
+            local.iterations += 1;
+            match self.special::<S, D, DER>(st, s, d, dc_fe, der, traps, states, local) {
+                Err(o) => return Some(Exit::Done(o)),
+                Ok(moved) => return self.moved(s, moved, dc_fe),
+            }
+        }
+        let zr = self.tracks[s.t].z[s.m as usize];
+        let full = [D::from_f64(zr[0]) + s.d[0], D::from_f64(zr[1]) + s.d[1]];
+        let z = cto_f64(full);
+        if s.n >= 1 {
+            for (trap, state) in traps.iter().zip(states.iter_mut()) {
+                trap.observe(state, z);
+            }
+        }
+        if z[0] * z[0] + z[1] * z[1] > self.escape2 {
+            return Some(Exit::Done(Orbit { n: s.n, z, dz: if DER { der.output(z) } else { [0.0; 2] } }));
+        }
+        if s.n >= self.max_iter {
+            return Some(Exit::Done(Orbit::interior()));
+        }
+        let d2 = norm2(s.d);
+        if norm2(full) < d2 {
+            local.iterations += 1;
+            if !fe && let Some(d) = self.rebase_f64(st, s.n, cto_f64(full), cto_f64(s.dc)) {
+                local.rebases += 1;
+                local.steps += 1;
+                if DER {
+                    der.step(st.jacobian(s.n, z));
+                }
+                s.t = self.zeros + (s.n % self.period) as usize;
+                s.m = 1;
+                s.n += 1;
+                s.stop = self.tracks[s.t].stop(1);
+                s.d = [D::from_f64(d[0]), D::from_f64(d[1])];
+                return None;
+            }
+            let moved = self.rebase_step::<S, DER>(st, s.n, cconv(full), dc_fe, der, local);
+            return self.moved(s, moved, dc_fe);
+        }
+        if let Some(table) = tables.get(s.t)
+            && let Some((step, len)) = table.lookup(s.m, d2, self.max_iter - s.n)
+        {
+            let ad = mat_vec(&step.a, s.d);
+            s.d = if self.mandelbrot { cadd(ad, mat_vec(&step.b, s.dc)) } else { ad };
+            if DER {
+                der.bla(&step.a, &step.b);
+            }
+            s.m += len;
+            s.n += len;
+            local.bla_steps += 1;
+            local.bla_iterations += u64::from(len);
+            local.iterations += u64::from(len);
+            return None;
+        }
+        if DER {
+            // A FloatExp part below f64's range rounds to ±0, whose sign a fold's
+            // derivative would misread.
+            let at = if fe { wide::signed_f64(cconv(full)) } else { z };
+            der.step(st.jacobian(s.n, at));
+        }
+        s.d = cadd(st.delta(s.n, zr, s.d), s.dc);
+        s.m += 1;
+        s.n += 1;
+        local.steps += 1;
+        local.iterations += 1;
+        if fe && max_exp(s.d) > self.up_exp {
+            let f = Sample { d: cconv(s.d), dc: cconv(dc_fe), t: s.t, m: s.m, n: s.n, stop: s.stop };
+            return Some(Exit::F64(f));
+        }
+        None
     }
 
     /// Takes a state one iteration on, `moved` = (track, index, delta in FloatExp) from an
@@ -286,6 +360,25 @@ impl Engine {
         Ok((s.t, s.m + 1, cadd(step, dc_fe)))
     }
 
+    /// [`Engine::rebase_step`]'s delta computed in f64, where that gives its bits: None
+    /// unless every part of `full` is nonzero and at least 2^-(1022/p - 56), every part of
+    /// `dc` is 0 or normal, and every part of the result is nonzero and at least 2^-1000
+    /// (and, with FloatExp deltas allowed, not below the switch to them).
+    ///
+    /// FloatExp's operations are f64's own on mantissas with the exponent apart (a product
+    /// rounds once; a sum aligns exactly and rounds once), so they round as f64 does
+    /// wherever every value is a normal f64. From δ = full with parts of at least 2^-T, a
+    /// product of k parts is at least 2^-kT and a difference that cancels is still at
+    /// least 2^-52 of its terms, so every nonzero value of the binomial expansion of degree
+    /// p stays above 2^-(pT + 52p) >= 2^-1022 for T <= 1022/p - 52; zeros may differ in
+    /// sign, which a nonzero result does not see.
+    #[inline(always)]
+    fn rebase_f64<S: Stepper>(&self, st: &S, n: u32, full: [f64; 2], dc: [f64; 2]) -> Option<[f64; 2]> {
+        let d = rebase_delta_f64(st, n, full, dc, self.rebase_low)?;
+        let fe_next = self.numbers == Numbers::FloatExp && max_exp(d) < self.down_exp;
+        (!fe_next).then_some(d)
+    }
+
     /// A rebase at iteration `n` (the sample's full value `full` becomes its delta against
     /// Z_0 = 0 of the orbit of 0 whose phase is n's) and the step from there, in FloatExp:
     /// δ = f_n(full) + δc at index 1.
@@ -307,5 +400,55 @@ impl Engine {
         }
         let t = self.zeros + (n % self.period) as usize;
         (t, 1, cadd(st.delta::<FloatExp>(n, [0.0; 2], full), dc_fe))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formula::kind::KINDS;
+    use crate::formula::{Formula, Phase, Single};
+
+    /// The f64 rebase step has the FloatExp step's bits wherever it answers, for every
+    /// family at every power, from full values near its lower bound to the escape radius
+    /// (signs and sizes mixed, so that parts cancel), and it answers for most of them.
+    #[test]
+    fn the_f64_rebase_has_the_floatexp_rebases_bits() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rand = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in KINDS {
+            for p in k.min_power..=k.max_power {
+                let formula = Formula::single(Phase { kind: k.kind, power: p });
+                let low = f64::from_bits(((1023 - (1022 / p as i32 - 56)) as u64) << 52);
+                let lg = low.log2();
+                let (mut answered, mut tried) = (0, 0);
+                crate::with_map!(formula.phases()[0], M => {
+                    let st = Single(M::default());
+                    for j in 0..3000 {
+                        let e = |r: f64| if j % 3 == 0 { lg + r * 8.0 } else { lg + r * (8.0 - lg) };
+                        let sign = |r: f64| if r < 0.5 { -1.0 } else { 1.0 };
+                        let (a, b) = (e(rand()), e(rand()));
+                        let mut full = [sign(rand()) * a.exp2(), sign(rand()) * b.exp2()];
+                        if j % 5 == 0 {
+                            // Equal sizes: x^2 - y^2 and its kin cancel.
+                            full[1] = sign(rand()) * full[0].abs();
+                        }
+                        let dc = [(lg - 30.0 * rand()).exp2() * sign(rand()), if j % 7 == 0 { 0.0 } else { 1e-200 }];
+                        tried += 1;
+                        let Some(got) = rebase_delta_f64(&st, 0, full, dc, low) else { continue };
+                        answered += 1;
+                        let fe = |v: [f64; 2]| [FloatExp::from(v[0]), FloatExp::from(v[1])];
+                        let want: [f64; 2] = cconv(cadd(st.delta::<FloatExp>(0, [0.0; 2], fe(full)), fe(dc)));
+                        assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{formula} {full:?} {dc:?}");
+                    }
+                }, unreachable!());
+                assert!(answered * 2 > tried, "{formula}: {answered} of {tried}");
+            }
+        }
     }
 }

@@ -141,13 +141,23 @@ fn truth(view: &View, spec: &DeepSpec) -> Vec<Orbit> {
         .collect()
 }
 
-/// The engine's orbits of every sample (the batch entry).
+/// The widest SIMD level this CPU has.
+fn widest() -> SimdLevel {
+    *SimdLevel::usable().last().expect("scalar at least")
+}
+
+/// The engine's orbits of every sample (the batch entry, at the widest SIMD level).
 fn engine(view: &View, spec: &DeepSpec) -> (Vec<Orbit>, Counters) {
+    engine_at(view, spec, widest())
+}
+
+/// The engine's orbits of every sample at `simd`.
+fn engine_at(view: &View, spec: &DeepSpec, simd: SimdLevel) -> (Vec<Orbit>, Counters) {
     let e = prepare(spec, view.formula, &NEVER, None).expect("prepared");
     let offs = offsets();
     let mut out = vec![Orbit::interior(); offs.len()];
     let mut counters = Counters::default();
-    e.orbits(&offs, &mut out, &mut counters, &NEVER);
+    e.orbits(&offs, &mut out, &mut counters, simd, &NEVER);
     (out, counters)
 }
 
@@ -413,6 +423,50 @@ fn floatexp_views_beyond_1e_320() {
     }
 }
 
+/// Every SIMD level gives the scalar loop's N and z_n, bit for bit, and takes the same
+/// steps (the counters agree), with and without BLA: single families run in vector lanes
+/// above the scalar level, on views with f64 and with FloatExp deltas, wide reference
+/// values (the Burning Ship's real axis), Julia sets, and a hybrid (the scalar loop at
+/// every level).
+#[test]
+fn every_simd_level_gives_the_scalar_loops_bits() {
+    let axis = View {
+        formula: Formula::parse("burning-ship", None).unwrap(),
+        center: dec(&["-2", "3e-335"]),
+        julia: None,
+        radius: FloatExp::exp10(-330.0),
+        max_iter: 4000,
+        numbers: Numbers::FloatExp,
+    };
+    let views = [
+        ("burning-ship 1e-45", preperiodic_view("burning-ship", None, 45, 3000)),
+        ("celtic 1e-4", preperiodic_view("celtic", None, 4, 1000)),
+        ("buffalo^3 1e-45", preperiodic_view("buffalo^3", None, 45, 3000)),
+        ("mandelbar 1e-45", preperiodic_view("mandelbar", None, 45, 3000)),
+        ("perpendicular-burning-ship 1e-45", preperiodic_view("perpendicular-burning-ship", None, 45, 3000)),
+        ("mandelbrot^3 1e-330", preperiodic_view("mandelbrot^3", None, 330, 4000)),
+        ("buffalo julia 1e-40", preperiodic_view("buffalo", Some(["-0.2", "0.1"]), 40, 2000)),
+        ("burning-ship at -2 + 3e-335 i", axis),
+        ("burning-ship,mandelbrot^3 1e-45", preperiodic_view("burning-ship,mandelbrot^3", None, 45, 2000)),
+    ];
+    for (name, view) in &views {
+        for bla in [None, Some(DEFAULT_BLA)] {
+            let spec = view.spec(bla, false);
+            let (want, wc) = engine_at(view, &spec, SimdLevel::Scalar);
+            for simd in SimdLevel::usable() {
+                let (got, gc) = engine_at(view, &spec, simd);
+                for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(g.n, w.n, "{name} bla {bla:?} {simd:?} sample {k}");
+                    assert_eq!(g.z.map(f64::to_bits), w.z.map(f64::to_bits), "{name} bla {bla:?} {simd:?} sample {k}");
+                }
+                let c =
+                    |c: &Counters| (c.iterations, c.steps, c.bla_steps, c.bla_iterations, c.rebases, c.floatexp_steps);
+                assert_eq!(c(&gc), c(&wc), "{name} bla {bla:?} {simd:?}: counters");
+            }
+        }
+    }
+}
+
 /// dz against central differences of the big-float orbit (z_N at c ± h, N the sample's
 /// escape count), on a subset of the samples, for the Mandelbrot and the Julia form.
 #[test]
@@ -515,7 +569,7 @@ fn a_raised_flag_stops_the_batch() {
     let offs = offsets();
     let mut out = vec![Orbit { n: 7, z: [0.0; 2], dz: [0.0; 2] }; offs.len()];
     let mut c = Counters::default();
-    e.orbits(&offs, &mut out, &mut c, &AtomicBool::new(true));
+    e.orbits(&offs, &mut out, &mut c, widest(), &AtomicBool::new(true));
     assert!(out.iter().all(|o| o.n == 7));
     assert!(prepare(&view.spec(None, false), view.formula, &AtomicBool::new(true), None).is_err());
 }
@@ -547,7 +601,7 @@ fn speed_of_burning_ship_past_1e100() {
             let mut out = vec![Orbit::interior(); offs.len()];
             let mut c = Counters::default();
             let started = std::time::Instant::now();
-            e.orbits(&offs, &mut out, &mut c, &NEVER);
+            e.orbits(&offs, &mut out, &mut c, widest(), &NEVER);
             let t = started.elapsed().as_secs_f64();
             eprintln!(
                 "{name} 1e-{digits} bla {bla:?}: reference {} its, prepare {prep:.2} s; {} samples in {t:.2} s: \
