@@ -448,11 +448,8 @@ fn true_nf(t: &Truth, ln_r: f64) -> f64 {
     }
     let lnz = 0.5 * (t.z[0] * t.z[0] + t.z[1] * t.z[1]).ln();
     // log base p of ln|z| / ln R for the formula's degree p (log2 itself for p = 2).
-    let log_p = if t.ln_degree == std::f64::consts::LN_2 {
-        (lnz / ln_r).log2()
-    } else {
-        (lnz / ln_r).ln() / t.ln_degree
-    };
+    let log_p =
+        if t.ln_degree == std::f64::consts::LN_2 { (lnz / ln_r).log2() } else { (lnz / ln_r).ln() / t.ln_degree };
     (1.0 - log_p).clamp(0.0, 1.0)
 }
 

@@ -72,7 +72,15 @@ pub fn orbit(
                 v.to_f64()
             };
             let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
-            return Truth { n: Some(n), z, dz, near_circle: near, ill_conditioned: false, nf_ill_conditioned: false, ln_degree: std::f64::consts::LN_2 };
+            return Truth {
+                n: Some(n),
+                z,
+                dz,
+                near_circle: near,
+                ill_conditioned: false,
+                nf_ill_conditioned: false,
+                ln_degree: std::f64::consts::LN_2,
+            };
         }
         if n == max_iter {
             break;
@@ -89,7 +97,15 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth { n: None, z: [0.0; 2], dz: [0.0; 2], near_circle: near, ill_conditioned: false, nf_ill_conditioned: false, ln_degree: std::f64::consts::LN_2 }
+    Truth {
+        n: None,
+        z: [0.0; 2],
+        dz: [0.0; 2],
+        near_circle: near,
+        ill_conditioned: false,
+        nf_ill_conditioned: false,
+        ln_degree: std::f64::consts::LN_2,
+    }
 }
 
 /// Iterates the orbit of `point` under `formula` (Mandelbrot form: c = point, z_0 = 0;
