@@ -19,7 +19,7 @@ if [ "$#" -eq 0 ]; then set -- --only bla; fi
 bin="${DEEPFIELD:-}"
 if [ -z "$bin" ]; then
     cargo build --release --quiet
-    bin=target/release/deepfield
+    bin="${CARGO_TARGET_DIR:-target}/release/deepfield"
 fi
 echo "| scene | engine | N mismatch | pixels | ill-conditioned (N, NF) | NF p50 | NF p99 | DE p50 | DE p99 |"
 echo "|---|---|---|---|---|---|---|---|---|"

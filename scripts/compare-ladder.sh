@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 size="${1:-400x300}"
 samples="${2:-100}"
 cargo build --release --quiet
-bin=target/release/deepfield
+bin="${CARGO_TARGET_DIR:-target}/release/deepfield"
 center="$(sed -n 's/^center = \["\([^"]*\)", "\([^"]*\)"\]/\1,\2/p' scenes/liiiines.toml)"
 echo "| zoom | engine | seconds | iterations/s | N mismatch | NF p50 | NF p99 | DE p50 | DE p99 |"
 echo "|---|---|---|---|---|---|---|---|---|"

@@ -17,7 +17,7 @@ max_iter="${3:-5000}"
 bin="${DEEPFIELD:-}"
 if [ -z "$bin" ]; then
     cargo build --release --quiet
-    bin=target/release/deepfield
+    bin="${CARGO_TARGET_DIR:-target}/release/deepfield"
 fi
 center="-0.743643887037158704752191506114774,0.131825904205311970493132056385139"
 out="$(mktemp -d)"

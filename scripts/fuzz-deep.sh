@@ -35,7 +35,7 @@ out="${1:-fuzz-failures}"
 shift || true
 mkdir -p "$out"
 cargo build --release --quiet --example deep_fuzz
-fuzz=target/release/examples/deep_fuzz
+fuzz="${CARGO_TARGET_DIR:-target}/release/examples/deep_fuzz"
 if [ "$mode" = single ]; then
 	"$fuzz" --seconds "$seconds" --out "$out" "$@" 2>&1 | tee "$out/fuzz.log"
 	exit "${PIPESTATUS[0]}"
