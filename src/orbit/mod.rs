@@ -29,6 +29,7 @@
 //! | | `perturb/skip.rs` | [`Skip`]: the BLA steps every sample of a view takes, as one polynomial |
 //! | | `perturb/der.rs` | the derivative as a mantissa pair with its own exponent |
 //! | | `perturb/lanes.rs` | single steps of several samples in vector lanes (AVX2, AVX-512, NEON) |
+//! | | `perturb/lanes/burst.rs` | the lanes' bursts: plain steps with nothing but an event test, rebases taken in the lane |
 //! | | `perturb/turns.rs` | the turn loop round a nucleus's periodic reference |
 //! | | `perturb/tail.rs` | the loop through a packed tail |
 //! | | `perturb/report.rs` | what a built engine tells its callers (settings, sizes, timings) |
@@ -42,6 +43,7 @@
 //! | generic | `generic/mod.rs` | [`generic::Engine`]: the deep engine for every formula but z² + c, generic over its stepper |
 //! | | `generic/reference.rs` | its reference orbits: the centre's and one orbit of 0 per phase of a hybrid |
 //! | | `generic/perturb.rs` | its loop: single steps, rebasing, BLA steps, f64 and FloatExp deltas |
+//! | | `generic/lanes.rs` | its single steps for several samples of one family in vector lanes |
 //! | | `generic/wide.rs` | the step from a reference value below f64's range, in FloatExp |
 //! | | `generic/der.rs` | the real Jacobian times the spacing, with its own exponent |
 //! | | `generic/bla.rs` | BLA with real 2×2 matrices, radii from the nonlinear terms and the fold lines |

@@ -1,0 +1,212 @@
+//! The lanes' bursts: plain steps of every vector while nothing can happen but a step, the
+//! deltas in registers and the only test per step one for an event ([`burst`]), and the
+//! rebases a burst takes in the lane ([`settle`] brings the samples' records up to date
+//! after it). Split from the lanes' loop (`lanes.rs`, whose module doc says how the two
+//! meet) as the part that runs nearly all of a deep view's single steps.
+#![allow(unsafe_code)]
+
+use super::*;
+
+/// The lanes that rebased inside a burst (see [`burst`]): every vector's lanes that rebased
+/// at least once, those of them that leave the lanes after their step from Z_0 (their delta
+/// at or below `single_d2`, where the scalar loop looks for a BLA step), and how many
+/// rebases were taken.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Moved {
+    pub(super) rebased: [u32; G],
+    pub(super) leave: [u32; G],
+    pub(super) count: u64,
+}
+
+/// Plain steps of every vector while nothing can happen but a step: every lane active,
+/// none just rebased, none within reach of its stop, and (tested before each step) no lane
+/// at an event. The deltas stay in registers for the whole run and each lane's Z_m is read
+/// at its start address plus the bytes stepped, so a step is the arithmetic and the loads
+/// alone. Returns before the first step at which any lane of any vector has an event,
+/// leaving it to [`step`]: every vector has then taken the same number of steps, each
+/// exactly as [`step`] takes it.
+///
+/// With `REBASE`, a rebase is not such an event: the lane's delta becomes its full value and
+/// it steps at once from Z_0 = 0 of the orbit of 0, as the scalar loop's `op` does (a rebase
+/// and the step after it in one call), and it goes on from Z_1 there. Near the 1e6 zooms of
+/// an ordinary descent a sample rebases about every 50 steps: with 16 lanes in flight, a
+/// burst that ended at each rebase ran three steps on average and [`step`] took the rest.
+/// A lane whose delta after that step is at or below `single_d2` ends the burst (the scalar
+/// loop looks for a BLA step for it, as `op`'s next call would; [`settle`] hands it back).
+#[inline(always)]
+pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool>(
+    u: U,
+    lanes: &mut [Lanes<U>; G],
+    k: &Consts<U>,
+    refs: &Refs,
+    p: &Perturbation,
+) -> Moved {
+    let mut moved = Moved::default();
+    let full = Lanes::<U>::FULL;
+    if per_vector!(|g| lanes[g].act != full || lanes[g].fresh != 0) != [false; G] {
+        return moved;
+    }
+    // Pairs of steps while every vector has two steps before any stop.
+    let [r0, r1] = per_vector!(|g| (lanes[g].next_stop - lanes[g].t16) / 32);
+    let room = r0.min(r1);
+    if room < 2 {
+        return moved;
+    }
+    let mut at: [[usize; MAX_W]; G] = per_vector!(|g| lanes[g].addresses(refs));
+    let mut d: [Z<U>; G] = per_vector!(|g| (lanes[g].dzr, lanes[g].dzi));
+    let c: [Z<U>; G] = per_vector!(|g| (lanes[g].dcr, lanes[g].dci));
+    let mut der: [Z<U>; G] = per_vector!(|g| (lanes[g].der_r, lanes[g].der_i));
+    let add: [U::f64s; G] = per_vector!(|g| lanes[g].add);
+    let mut off = 0usize;
+    let mut end = room as usize * 32;
+    // Lanes that rebased at the first step of the pair (their second step reads Z_1), and
+    // Z_1 of the orbit of 0 in every lane.
+    let mut first = [0u32; G];
+    let mut first_m: [U::m64s; G] = [u.less_than_f64s(k.zero, k.zero); G];
+    let z1 = if REBASE { p.refs[p.refs.len() - 1].get(1) } else { [0.0; 2] };
+    let z1: Z<U> = (u.splat_f64s(z1[0]), u.splat_f64s(z1[1]));
+    'pairs: while off < end {
+        // SAFETY: every lane is active and at least two steps from its stop (`room`, and
+        // `end` lowered for a lane that rebased), so Z_m and Z_m+1 lie inside its reference.
+        let z: [(Z<U>, Z<U>); G] = per_vector!(|g| unsafe { u.load_pair(&at[g].map(|x| x.wrapping_add(off))) });
+        for second in [false, true] {
+            let mut zs: [Z<U>; G] = per_vector!(|g| if second { z[g].1 } else { z[g].0 });
+            if REBASE && second && first != [0; G] {
+                zs = per_vector!(|g| (
+                    u.select_f64s(first_m[g], z1.0, zs[g].0),
+                    u.select_f64s(first_m[g], z1.1, zs[g].1)
+                ));
+                first = [0; G];
+            }
+            // Z_m + δ of every vector, which the event test and the derivative's step share.
+            let f: [Z<U>; G] = per_vector!(|g| plus(u, zs[g], d[g]));
+            let mut ev = event::<U, DER>(u, k, f[0], d[0]);
+            for g in 1..G {
+                ev = u.or_m64s(ev, event::<U, DER>(u, k, f[g], d[g]));
+            }
+            let mut now = [0u32; G];
+            if u.bits(ev) != 0 {
+                if !REBASE {
+                    break 'pairs;
+                }
+                let esc = per_vector!(|g| u.bits(u.greater_than_f64s(norm(u, f[g]), k.esc2)));
+                if esc != [0; G] {
+                    break 'pairs;
+                }
+                // With the derivative, a step from a tiny |z| is the scalar loop's.
+                if DER && per_vector!(|g| u.bits(u.less_than_f64s(norm(u, f[g]), k.tiny))) != [0; G] {
+                    break 'pairs;
+                }
+                // Any other event is a rebase: δ becomes the full value and this step reads
+                // Z_0 = 0 (the derivative steps from the full value, as `op`'s does).
+                let reb: [U::m64s; G] = per_vector!(|g| u.less_than_f64s(norm(u, f[g]), norm(u, d[g])));
+                for g in 0..G {
+                    d[g] = (u.select_f64s(reb[g], f[g].0, d[g].0), u.select_f64s(reb[g], f[g].1, d[g].1));
+                    zs[g] = (u.select_f64s(reb[g], k.zero, zs[g].0), u.select_f64s(reb[g], k.zero, zs[g].1));
+                }
+                now = per_vector!(|g| u.bits(reb[g]) & full);
+                for g in 0..G {
+                    if now[g] != 0 {
+                        let stop = move_lanes(&mut lanes[g], &mut at[g], now[g], off, p, refs);
+                        end = end.min(stop / 32 * 32);
+                        moved.rebased[g] |= now[g];
+                        moved.count += u64::from(now[g].count_ones());
+                    }
+                }
+                if !second {
+                    (first, first_m) = (now, reb);
+                }
+            }
+            if DER {
+                // A step after which a derivative must be renormalised is left to `step`,
+                // which hands the sample back for it.
+                let next: [Z<U>; G] = per_vector!(|g| der_step(u, k, f[g], der[g], add[g]));
+                if per_vector!(|g| renorm_bits(u, k, next[g])) != [0; G] {
+                    break 'pairs;
+                }
+                der = next;
+            }
+            for g in 0..G {
+                d[g] = plain(u, k, zs[g], d[g], c[g]);
+            }
+            off += 16;
+            if REBASE && now != [0; G] {
+                // `op` looks for a BLA step after a rebase's step unless |δ|^2 > single_d2.
+                moved.leave = per_vector!(|g| !u.bits(u.greater_than_f64s(norm(u, d[g]), k.single_d2)) & now[g]);
+                if moved.leave != [0; G] {
+                    break 'pairs;
+                }
+            }
+        }
+    }
+    for (g, l) in lanes.iter_mut().enumerate() {
+        (l.dzr, l.dzi) = d[g];
+        if DER {
+            (l.der_r, l.der_i) = der[g];
+        }
+        l.t16 += off as i64;
+        if moved.rebased[g] != 0 {
+            l.next_stop = l.stop.iter().copied().min().unwrap_or(i64::MAX);
+        }
+    }
+    moved
+}
+
+/// Moves the lanes of `mask`, rebased inside a burst `off` bytes into it, to the orbit of 0:
+/// the step about to be taken reads its Z_0, and the next one Z_1. Returns the earliest of
+/// their new stops, as bytes into the burst.
+#[inline(never)]
+fn move_lanes<S: Simd>(
+    l: &mut Lanes<S>,
+    at: &mut [usize; MAX_W],
+    mask: u32,
+    off: usize,
+    p: &Perturbation,
+    refs: &Refs,
+) -> usize {
+    let which = p.refs.len() - 1;
+    let last = p.refs[which].last();
+    let mut stop = usize::MAX;
+    let here = l.t16 + off as i64;
+    for i in 0..S::F64_LANES {
+        if mask & (1 << i) == 0 {
+            continue;
+        }
+        // The lane reads Z_1 after this step: its address at `off + 16` is Z_0's plus 16.
+        at[i] = (refs.start[which] as usize).wrapping_sub(off);
+        l.at0[i] = refs.start[which] - here;
+        let n = (l.n0[i] + here / 16) as u32;
+        let left = (p.max_iter.saturating_sub(n)).min(last);
+        l.stop[i] = here + 16 * left as i64;
+        stop = stop.min(off + 16 * left as usize);
+    }
+    stop
+}
+
+/// After a burst in which lanes rebased: their samples now follow the orbit of 0, in
+/// single-step mode, but for those that leave the lanes for the scalar loop's BLA lookup.
+pub(super) fn settle<U: Unit, F: FnMut(Option<Held>, &mut Counters) -> Option<Held>>(
+    lanes: &mut [Lanes<U>; G],
+    meta: &mut [[Option<Held>; MAX_W]; G],
+    moved: &Moved,
+    p: &Perturbation,
+    refs: &Refs,
+    feed: &mut F,
+    counters: &mut Counters,
+) {
+    counters.rebases += moved.count;
+    let which = p.refs.len() - 1;
+    for g in 0..G {
+        for (i, slot) in meta[g].iter_mut().enumerate().take(U::F64_LANES) {
+            if let Some(h) = slot
+                && moved.rebased[g] & (1 << i) != 0
+            {
+                h.s.which = which;
+                h.s.single = moved.leave[g] & (1 << i) == 0;
+            }
+        }
+        if moved.leave[g] != 0 {
+            hand_back(&mut lanes[g], &mut meta[g], moved.leave[g], false, p, refs, feed, counters);
+        }
+    }
+}
