@@ -497,7 +497,7 @@ pub fn render<P: Send>(
             None => {
                 let strip = field::compute_strip(&params, sample_rows, cancel)?;
                 iterations.fetch_add(strip.iterations, Ordering::Relaxed);
-                if params.deep.is_some() {
+                if params.deep.is_some() || params.deep_generic.is_some() {
                     counters.lock().unwrap_or_else(|e| e.into_inner()).add(&strip.counters);
                 }
                 strip.planes

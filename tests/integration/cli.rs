@@ -218,6 +218,33 @@ fn deep_views_render_with_perturbation_and_report_it() {
     assert!(json["engine_reason"].as_str().unwrap().contains("below the f64-safe"));
     assert_eq!(json["glitched_pixels"], 0);
     assert!(json["deep"]["reference_bits"].as_u64().unwrap() > 1096);
+    // The generic engine (every family but z² + c) counts its steps too: a Burning Ship
+    // view at 1e30 takes single steps, BLA steps and rebases, and --stats says how many.
+    let o = deepfield(
+        &[
+            "render",
+            "--formula",
+            "burning-ship",
+            "--center=-0.7992241941043727780907714492699964879292,-0.8948712007261344556031963401559132320635",
+            "--zoom",
+            "1e20",
+            "--size",
+            "32x24",
+            "--max-iter",
+            "3000",
+            "-o",
+            "b.png",
+            "--stats-json",
+            "b.json",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
+    assert_eq!(json["engine"], "perturb-f64");
+    let deep = &json["deep"];
+    assert!(deep["steps"].as_u64().unwrap() > 0, "{json}");
+    assert!(deep["bla_steps"].as_u64().unwrap() > 0, "{json}");
 }
 
 /// Interior detection: by default on a view centred on a minibrot (to a limit of at least
