@@ -99,6 +99,15 @@ pub(super) struct Build {
     pub(super) floatexp: bool,
 }
 
+impl Table<f64> {
+    /// The first look of [`Table::can_step`]: no |δ|² at or above this (or NaN) finds a
+    /// step.
+    #[inline(always)]
+    pub(super) fn gate(&self) -> f64 {
+        self.max_r2
+    }
+}
+
 impl<T: Real> Table<T> {
     /// The longest step from index `m` whose radius holds |δ|^2 = `d2`, no longer than
     /// `left` iterations; with its length.

@@ -64,7 +64,7 @@ pub(super) enum Exit {
 
 /// The largest binary exponent of a pair (very negative for zero).
 #[inline(always)]
-fn max_exp<D: Real>(d: [D; 2]) -> i32 {
+pub(super) fn max_exp<D: Real>(d: [D; 2]) -> i32 {
     d[0].to_fe().exponent().max(d[1].to_fe().exponent())
 }
 
