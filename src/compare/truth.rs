@@ -42,6 +42,15 @@ pub struct Truth {
     pub ln_degree: f64,
 }
 
+impl Truth {
+    /// An orbit's end as a big-float loop finds it: escaped at `n` with z_n and dz_n, or
+    /// (None) interior; the conditioning flags are set later, where some engine disagrees
+    /// ([`super::mark_ill_conditioned`]).
+    fn found(n: Option<u32>, z: [f64; 2], dz: [f64; 2], near_circle: bool, ln_degree: f64) -> Truth {
+        Truth { n, z, dz, near_circle, ill_conditioned: false, nf_ill_conditioned: false, ln_degree }
+    }
+}
+
 /// Iterates the orbit of `point` (Mandelbrot: c = point, z_0 = 0; Julia: z_0 = point).
 pub fn orbit(
     point: &[Float; 2],
@@ -72,15 +81,7 @@ pub fn orbit(
                 v.to_f64()
             };
             let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
-            return Truth {
-                n: Some(n),
-                z,
-                dz,
-                near_circle: near,
-                ill_conditioned: false,
-                nf_ill_conditioned: false,
-                ln_degree: std::f64::consts::LN_2,
-            };
+            return Truth::found(Some(n), z, dz, near, std::f64::consts::LN_2);
         }
         if n == max_iter {
             break;
@@ -97,15 +98,7 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth {
-        n: None,
-        z: [0.0; 2],
-        dz: [0.0; 2],
-        near_circle: near,
-        ill_conditioned: false,
-        nf_ill_conditioned: false,
-        ln_degree: std::f64::consts::LN_2,
-    }
+    Truth::found(None, [0.0; 2], [0.0; 2], near, std::f64::consts::LN_2)
 }
 
 /// Iterates the orbit of `point` under `formula` (Mandelbrot form: c = point, z_0 = 0;
@@ -155,15 +148,7 @@ pub fn orbit_formula(
             // J times the spacing, rows first, then the derivative a distance estimate uses.
             let j = [[scaled(&z[0].d[0]), scaled(&z[0].d[1])], [scaled(&z[1].d[0]), scaled(&z[1].d[1])]];
             let dz = gradient_dz(zf, j);
-            return Truth {
-                n: Some(n),
-                z: zf,
-                dz,
-                near_circle: near,
-                ill_conditioned: false,
-                nf_ill_conditioned: false,
-                ln_degree: formula.ln_degree(),
-            };
+            return Truth::found(Some(n), zf, dz, near, formula.ln_degree());
         }
         if n == max_iter {
             break;
@@ -171,15 +156,7 @@ pub fn orbit_formula(
         let step = kf_maps::kf_step_dual(formula.phase(n), &z, &c, bits);
         z = step.expect("every phase of a validated formula is a row of KINDS").z;
     }
-    Truth {
-        n: None,
-        z: [0.0; 2],
-        dz: [0.0; 2],
-        near_circle: near,
-        ill_conditioned: false,
-        nf_ill_conditioned: false,
-        ln_degree: formula.ln_degree(),
-    }
+    Truth::found(None, [0.0; 2], [0.0; 2], near, formula.ln_degree())
 }
 
 #[cfg(test)]
