@@ -27,6 +27,14 @@
 //! same bits), and N and z_n are the scalar engine's bits on every SIMD level (a test
 //! checks every level this CPU has). The derivative and hybrids (whose lanes would be at
 //! different phases) run in the scalar loop.
+//!
+//! The lanes' state is held field by field in arrays whose elements are all 64 bits wide
+//! (masks included), and a lane's index on its track as the address of its reference value:
+//! one-byte masks were packed and unpacked around every compare, and the read of Z_m through
+//! a track, an index and a bounds test per lane cost more than the step's arithmetic.
+//! `unsafe` here is that one read, through the address (at most the track's last index, as
+//! the read says).
+#![allow(unsafe_code)]
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -57,41 +65,80 @@ fn pick(r: u64, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & r) | (b.to_bits() & !r))
 }
 
-/// The lanes' state: each lane a [`Sample`] in f64, by field.
+/// All ones where `b`, else zero: a lane's mask, as wide as its values (masks one byte
+/// wide were packed and unpacked around every vector compare).
+#[inline(always)]
+fn mask(b: bool) -> u64 {
+    0u64.wrapping_sub(b as u64)
+}
+
+/// True where `x` is 0 or at least 2^-1000: an offset whose f64 step the rebase bounds hold.
+#[inline(always)]
+fn normal(x: f64) -> bool {
+    (x == 0.0) | (x.abs() >= f64::from_bits((1023 - 1000) << 52))
+}
+
+/// [`pick`] for indices.
+#[inline(always)]
+fn pick_i(r: u64, a: i64, b: i64) -> i64 {
+    ((a as u64 & r) | (b as u64 & !r)) as i64
+}
+
+/// The lanes' state: each lane a [`Sample`] in f64, by field, every field 64 bits wide so
+/// that the lanes' tests and updates are vectors of one width. A lane's index on its track
+/// is held as the address of its reference value, so that the read of Z_m is one load.
 struct Lanes<const L: usize> {
     dx: [f64; L],
     dy: [f64; L],
     cx: [f64; L],
     cy: [f64; L],
-    t: [usize; L],
-    m: [u32; L],
-    n: [u32; L],
-    stop: [u32; L],
+    /// The track (0 or 1).
+    t: [u64; L],
+    /// The address of Z_m on the lane's track.
+    at: [i64; L],
+    /// The address of Z_stop (the end test is `at >= stop`).
+    stop: [i64; L],
+    n: [i64; L],
+    /// The BLA table's first look for the lane's track ([`Table::gate`]).
+    gate: [f64; L],
+    /// All ones for a lane with a sample in it.
+    live: [u64; L],
+    /// All ones where both parts of δc are [`normal`] (a rebase bound).
+    normal_c: [u64; L],
     /// The offset δc in FloatExp (what out-of-line steps add).
     dc_fe: [[FloatExp; 2]; L],
     /// The sample in each lane (IDLE: none).
     pixel: [usize; L],
+    /// Each track's Z_0, as an address.
+    base: [i64; 2],
+    /// Each track's gate.
+    gates: [f64; 2],
 }
 
 impl<const L: usize> Lanes<L> {
     fn get(&self, k: usize) -> Sample<f64> {
+        let t = self.t[k] as usize;
+        let index = |a: i64| ((a - self.base[t]) / 16) as u32;
         Sample {
             d: [self.dx[k], self.dy[k]],
             dc: [self.cx[k], self.cy[k]],
-            t: self.t[k],
-            m: self.m[k],
-            n: self.n[k],
-            stop: self.stop[k],
+            t,
+            m: index(self.at[k]),
+            n: self.n[k] as u32,
+            stop: index(self.stop[k]),
         }
     }
 
     fn set(&mut self, k: usize, s: &Sample<f64>) {
+        let base = self.base[s.t];
         [self.dx[k], self.dy[k]] = s.d;
         [self.cx[k], self.cy[k]] = s.dc;
-        self.t[k] = s.t;
-        self.m[k] = s.m;
-        self.n[k] = s.n;
-        self.stop[k] = s.stop;
+        self.t[k] = s.t as u64;
+        self.at[k] = base + 16 * i64::from(s.m);
+        self.stop[k] = base + 16 * i64::from(s.stop);
+        self.n[k] = s.n.into();
+        self.gate[k] = self.gates[s.t];
+        self.normal_c[k] = mask(normal(s.dc[0]) & normal(s.dc[1]));
     }
 }
 
@@ -164,6 +211,7 @@ impl Engine {
                     s.set(k, &f);
                     s.dc_fe[k] = dc_fe;
                     s.pixel[k] = p;
+                    s.live[k] = mask(true);
                     return true;
                 }
                 e => {
@@ -173,7 +221,8 @@ impl Engine {
             }
         }
         s.pixel[k] = IDLE;
-        s.set(k, &Sample { d: [0.0; 2], dc: [0.0; 2], t: 0, m: 0, n: 0, stop: u32::MAX });
+        s.live[k] = 0;
+        s.set(k, &Sample { d: [0.0; 2], dc: [0.0; 2], t: 0, m: 0, n: 0, stop: u32::MAX >> 8 });
         false
     }
 
@@ -192,44 +241,60 @@ impl Engine {
         let tables = &self.t64[..];
         let mut der = Jac::new(self.spacing, self.mandelbrot);
         let mut local = Counters::default();
+        // A single family has one track, or two for a Julia set (the centre's orbit and the
+        // orbit of 0).
+        debug_assert!(self.tracks.len() <= 2 && !self.tracks.is_empty());
+        let track = |t: usize| &self.tracks[t.min(self.tracks.len() - 1)];
+        let base = [0, 1].map(|t| track(t).z.as_ptr().expose_provenance() as i64);
+        // The BLA tables' first look per track; -inf: no table, no step.
+        let gates = [0, 1].map(|t| tables.get(t).map_or(f64::NEG_INFINITY, Table::gate));
         let mut s = Lanes::<L> {
             dx: [0.0; L],
             dy: [0.0; L],
             cx: [0.0; L],
             cy: [0.0; L],
             t: [0; L],
-            m: [0; L],
+            at: [base[0]; L],
+            stop: [i64::MAX; L],
             n: [0; L],
-            stop: [u32::MAX; L],
+            gate: [f64::NEG_INFINITY; L],
+            live: [0; L],
+            normal_c: [0; L],
             dc_fe: [[FloatExp::ZERO; 2]; L],
             pixel: [IDLE; L],
+            base,
+            gates,
         };
         let mut next = 0;
         let mut active = 0;
         for k in 0..L {
             active += self.refill::<M, L>(&mut s, k, &mut next, offsets, out, &mut der, &mut local, cancel) as usize;
         }
-        let (escape2, max_iter) = (self.escape2, self.max_iter);
+        let (escape2, max_iter) = (self.escape2, i64::from(self.max_iter));
         // A rebase in the lanes (see the module doc): where it lands, and the bounds under
-        // which its f64 step has the scalar loop's bits (`rebase_delta_f64`).
-        let (zero_track, low) = (self.zeros, self.rebase_low);
-        let stop1 = self.tracks[zero_track].stop(1);
+        // which its f64 step has the scalar loop's bits (`rebase_delta_f64`). It lands on
+        // index 1, so the orbit of 0 must have one.
+        let (zero_track, low) = (self.zeros as u64, self.rebase_low);
+        let (at1, stop1) = (base[self.zeros] + 16, base[self.zeros] + 16 * i64::from(self.tracks[self.zeros].stop(1)));
+        let gate0 = gates[self.zeros];
+        let rebase_here = mask(self.tracks[self.zeros].last() >= 1);
         let least = f64::from_bits((1023 - 1000) << 52);
         let fe_numbers = self.numbers == Numbers::FloatExp;
-        // The BLA tables' first look per track (a single family has one track, or two for
-        // a Julia set: the centre's orbit and the orbit of 0); -inf: no table, no step.
-        debug_assert!(self.tracks.len() <= 2);
-        let gate = |t: usize| tables.get(t).map_or(f64::NEG_INFINITY, Table::gate);
-        let gates = [gate(0), gate(1)];
         let mut passes = 0u64;
         let mut steps = 0u64;
-        let mut rebases = 0u64;
+        let mut rebases = [0u64; L];
         while active > 0 {
+            // Every live lane that meets no event below takes a single step.
+            steps += active as u64;
             let mut zx = [0.0; L];
             let mut zy = [0.0; L];
             for k in 0..L {
-                // m <= the track's last index in every lane (an idle lane sits at 0).
-                let z = self.tracks[s.t[k]].z[s.m[k] as usize];
+                debug_assert!(s.get(k).m <= self.tracks[s.t[k] as usize].last());
+                // SAFETY: every lane's address is its track's Z_m with m at most the track's
+                // last index (m <= stop <= last for a live lane, which `Track::stop` and the
+                // rebase onto index 1 of an orbit that has it keep; an idle lane reads Z_0 of
+                // track 0), exposed above from the track's values.
+                let z = unsafe { *std::ptr::with_exposed_provenance::<[f64; 2]>(s.at[k] as usize) };
                 (zx[k], zy[k]) = (z[0], z[1]);
             }
             // The scalar pass's values: z = Z + δ, |z|², |δ|², and the single step; a lane
@@ -238,11 +303,11 @@ impl Engine {
             let fy = zy.add(s.dy);
             let r2 = fx.mul(fx).add(fy.mul(fy));
             let d2 = s.dx.mul(s.dx).add(s.dy.mul(s.dy));
-            let mut near = [false; L];
+            let mut near = [0u64; L];
             let (mut ax, mut ay, mut bx, mut by) = (zx, zy, s.dx, s.dy);
             for k in 0..L {
-                near[k] = r2[k] < d2[k];
-                let r = 0u64.wrapping_sub(near[k] as u64);
+                let r = mask(r2[k] < d2[k]);
+                near[k] = r;
                 ax[k] = pick(r, 0.0, zx[k]);
                 ay[k] = pick(r, 0.0, zy[k]);
                 bx[k] = pick(r, fx[k], s.dx[k]);
@@ -251,54 +316,52 @@ impl Engine {
             let step = M::delta_n([ax, ay], [bx, by]);
             let nx = step[0].add(s.cx);
             let ny = step[1].add(s.cy);
-            let mut event = [false; L];
-            let mut rebased = [false; L];
-            let mut any = false;
+            let mut event = [0u64; L];
+            let mut rebased = [0u64; L];
+            let mut any = 0u64;
             for k in 0..L {
-                // Bitwise, not short-circuit, so that the lanes' tests stay vector compares.
-                let normal = |x: f64| (x == 0.0) | (x.abs() >= least);
-                let f64_rebase = (fx[k].abs() >= low)
-                    & (fy[k].abs() >= low)
-                    & normal(s.cx[k])
-                    & normal(s.cy[k])
-                    & (nx[k].abs() >= least)
-                    & (ny[k].abs() >= least);
-                let end = (s.m[k] >= s.stop[k]) | (r2[k] > escape2) | (s.n[k] >= max_iter);
-                let e = end | (near[k] & !f64_rebase);
+                let f64_rebase =
+                    mask((fx[k].abs() >= low) & (fy[k].abs() >= low) & (nx[k].abs() >= least) & (ny[k].abs() >= least))
+                        & s.normal_c[k]
+                        & rebase_here;
+                let end = mask((s.at[k] >= s.stop[k]) | (r2[k] > escape2) | (s.n[k] >= max_iter));
+                let e = (end | (near[k] & !f64_rebase)) & s.live[k];
                 event[k] = e;
-                rebased[k] = near[k] & !e & (s.pixel[k] != IDLE);
+                rebased[k] = near[k] & !e & s.live[k];
                 any |= e;
             }
             if fe_numbers {
                 // Below the switch to FloatExp deltas the scalar loop's rebase moves there.
                 for k in 0..L {
-                    if rebased[k] && max_exp([nx[k], ny[k]]) < self.down_exp {
-                        (event[k], rebased[k], any) = (true, false, true);
+                    if rebased[k] != 0 && max_exp([nx[k], ny[k]]) < self.down_exp {
+                        (event[k], rebased[k], any) = (!0, 0, !0);
                     }
                 }
             }
             // The BLA test: the table's first look (`Table::gate`) in the lanes, the rest
             // only for the lanes that pass it.
-            let mut maybe = [false; L];
-            let mut look = false;
+            let mut maybe = [0u64; L];
+            let mut look = 0u64;
             for k in 0..L {
-                let gate = if s.t[k] == 0 { gates[0] } else { gates[1] };
-                maybe[k] = !event[k] & !near[k] & (s.pixel[k] != IDLE) & (d2[k] < gate);
+                maybe[k] = !event[k] & !near[k] & s.live[k] & mask(d2[k] < s.gate[k]);
                 look |= maybe[k];
             }
-            if look {
+            if look != 0 {
                 for k in 0..L {
-                    if maybe[k] && tables[s.t[k]].can_step(s.m[k], d2[k], max_iter - s.n[k]) {
-                        event[k] = true;
-                        any = true;
+                    if maybe[k] != 0
+                        && tables[s.t[k] as usize].can_step(s.get(k).m, d2[k], self.max_iter - s.n[k] as u32)
+                    {
+                        event[k] = !0;
+                        any = !0;
                     }
                 }
             }
-            if any {
+            if any != 0 {
                 for k in 0..L {
-                    if !event[k] || s.pixel[k] == IDLE {
+                    if event[k] == 0 {
                         continue;
                     }
+                    steps -= 1;
                     let mut smp = s.get(k);
                     let dc_fe = s.dc_fe[k];
                     let done = match self.iteration::<_, f64, false>(
@@ -339,36 +402,27 @@ impl Engine {
                     }
                 }
             }
-            // Every other lane takes its single step (from Z_0 of the orbit of 0 where it
-            // rebased, on to index 1 there). One loop per type, so that each is a few vector
-            // selects.
-            let mut go = [false; L];
+            // Every other live lane takes its single step (from Z_0 of the orbit of 0 where
+            // it rebased, on to index 1 there), by masks: as `if`, the updates were compiled
+            // to masked stores that the next pass's loads of the same arrays waited on.
             for k in 0..L {
-                go[k] = !event[k] & (s.pixel[k] != IDLE);
-            }
-            for k in 0..L {
-                s.dx[k] = if go[k] { nx[k] } else { s.dx[k] };
-                s.dy[k] = if go[k] { ny[k] } else { s.dy[k] };
-            }
-            // The indices by arithmetic rather than `if`: written as selects, they were
-            // compiled to masked stores that the next loads of the same arrays waited on.
-            for k in 0..L {
-                let r = 0u32.wrapping_sub(rebased[k] as u32);
-                s.m[k] = ((s.m[k] + go[k] as u32) & !r) | (1 & r);
-                s.n[k] += go[k] as u32;
-                s.stop[k] = (s.stop[k] & !r) | (stop1 & r);
-            }
-            for k in 0..L {
-                let r = 0usize.wrapping_sub(rebased[k] as usize);
+                let go = !event[k] & s.live[k];
+                let r = rebased[k];
+                s.dx[k] = pick(go, nx[k], s.dx[k]);
+                s.dy[k] = pick(go, ny[k], s.dy[k]);
+                s.at[k] = pick_i(r, at1, s.at[k] + (go & 16) as i64);
+                s.n[k] += (go & 1) as i64;
+                s.stop[k] = pick_i(r, stop1, s.stop[k]);
                 s.t[k] = (s.t[k] & !r) | (zero_track & r);
+                s.gate[k] = pick(r, gate0, s.gate[k]);
+                rebases[k] = rebases[k].wrapping_sub(r);
             }
-            steps += go.iter().filter(|&&g| g).count() as u64;
-            rebases += rebased.iter().filter(|&&r| r).count() as u64;
             passes += 1;
             if passes.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
                 break;
             }
         }
+        let rebases: u64 = rebases.iter().sum();
         local.steps += steps;
         local.iterations += steps;
         local.rebases += rebases;
