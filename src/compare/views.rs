@@ -229,7 +229,7 @@ fn descend(rng: &mut Rng, log10_zoom: f64, max_period: u32) -> Option<Minibrot> 
         let here = point.with_bits(bits);
         // A step that finds nothing ends the descent where it is: the deepest minibrot so
         // far still makes a view nobody tuned to, only shallower than asked.
-        let Some(p) = period::ball_period(&here, radius, max_period) else { break };
+        let Some(p) = period::ball_period(crate::formula::Formula::default(), &here, radius, max_period) else { break };
         let Some(m) = nucleus::minibrot(&here, p) else { break };
         let depth = -m.size.log2() * std::f64::consts::LOG10_2;
         if depth >= log10_zoom - 1.0 {

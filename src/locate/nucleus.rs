@@ -283,7 +283,13 @@ mod tests {
             ),
             400,
         );
-        let p = super::super::period::ball_period(&near, FloatExp::exp10(-40.0), 100_000).expect("a period");
+        let p = super::super::period::ball_period(
+            crate::formula::Formula::default(),
+            &near,
+            FloatExp::exp10(-40.0),
+            100_000,
+        )
+        .expect("a period");
         assert_eq!(p, 1282);
         let m = minibrot(&near, p).expect("found");
         assert!((-74.0..-72.0).contains(&(m.size.log2() * std::f64::consts::LOG10_2)), "size {:?}", m.size);

@@ -24,6 +24,7 @@
 
 use rayon::prelude::*;
 
+use crate::formula::Formula;
 use crate::num::{Decimal, FloatExp};
 
 use super::nucleus::{self, Minibrot};
@@ -94,19 +95,25 @@ pub fn disc(center: &[Decimal; 2], log10_radius: f64) -> (BigC, FloatExp) {
 
 /// Periods above the ball method's that [`minibrot_in_view`] tries one by one: up to this
 /// many times it (and at least up to [`MIN_UPWARD`]).
-const UPWARD_FACTOR: u32 = 8;
+pub(super) const UPWARD_FACTOR: u32 = 8;
 /// See [`UPWARD_FACTOR`].
-const MIN_UPWARD: u32 = 64;
+pub(super) const MIN_UPWARD: u32 = 64;
 /// Periods of the centre's atom domains tried after those ([`period::atom_periods`]).
-const MORE_PERIODS: usize = 8;
+pub(super) const MORE_PERIODS: usize = 8;
 /// Newton's steps from the view's centre for each period after the ball method's (where
 /// the centre lies in a nucleus's basin it converges within a few dozen).
-const MORE_NEWTON_STEPS: u32 = 64;
+pub(super) const MORE_NEWTON_STEPS: u32 = 64;
 /// What those Newton searches may cost together at most, in big-float iterations at 128
 /// bits (an iteration at b bits counted b / 128 times): about a second. Each is charged the
 /// steps it took (most that fail leave their leash within a few), and the last one gets the
 /// steps the budget still holds; at depth, where each step costs more, fewer are tried.
-const MORE_WORK: u64 = 4_000_000;
+pub(super) const MORE_WORK: u64 = 4_000_000;
+
+/// The last period tried one by one above the ball method's `p`: [`UPWARD_FACTOR`] times
+/// it, at least [`MIN_UPWARD`], at most `max_period`.
+pub(super) fn upward_top(p: u32, max_period: u32) -> u32 {
+    max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD))
+}
 
 /// The lowest-period minibrot whose nucleus lies in the disc of `radius` about `center`
 /// (the view's centre and half-height, `center` at the precision the view needs), as far as
@@ -127,14 +134,15 @@ const MORE_WORK: u64 = 4_000_000;
 /// (about a second at 128 bits, less at depth, where each try costs more), each try charged
 /// the steps it took; the first nucleus found in the disc is returned.
 pub fn minibrot_in_view(center: &BigC, radius: FloatExp, max_period: u32) -> Result<Minibrot, SearchError> {
-    let p = period::ball_period(center, radius, max_period).ok_or(SearchError::NoPeriod { max_period })?;
+    let p = period::ball_period(Formula::default(), center, radius, max_period)
+        .ok_or(SearchError::NoPeriod { max_period })?;
     if let Some(m) = nucleus::minibrot_within(center, p, radius) {
         return Ok(m);
     }
     let mut left = MORE_WORK;
     let mut attempt = |q: u32| nucleus::minibrot_budgeted(center, q, MORE_NEWTON_STEPS, radius, &mut left);
-    let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
-    let later = || period::atom_periods(center, top, max_period, MORE_PERIODS);
+    let top = upward_top(p, max_period);
+    let later = || period::atom_periods(Formula::default(), center, top, max_period, MORE_PERIODS);
     (p + 1..=top)
         .find_map(&mut attempt)
         .or_else(|| later().into_iter().find_map(&mut attempt))
@@ -151,7 +159,7 @@ pub const MAX_AUTO_PERIOD: u32 = 4096;
 /// (283, 324) and (1227, 1296), at deep-e318's at 1e40 (P = 1676) (1657, 836), at
 /// floral-fantasy's at 1e30 (P = 260) (244, 1). Returns (max preperiod, max period).
 pub fn misiurewicz_limits(center: &BigC, radius: FloatExp) -> (u32, u32) {
-    let p = period::ball_period(center, radius, MAX_AUTO_PERIOD).unwrap_or(MAX_AUTO_PERIOD);
+    let p = period::ball_period(Formula::default(), center, radius, MAX_AUTO_PERIOD).unwrap_or(MAX_AUTO_PERIOD);
     (p.saturating_mul(2).clamp(5000, 2 * MAX_AUTO_PERIOD), p.clamp(64, MAX_AUTO_PERIOD))
 }
 
@@ -404,7 +412,7 @@ mod tests {
         assert!(exact_nucleus(&m.nucleus, 16, 1e-40));
         let c = BigC::from_f64(-0.75, 0.1, 192);
         let r = FloatExp::from(3.3e-2);
-        assert_eq!(period::ball_period(&c, r, 1000), Some(8));
+        assert_eq!(period::ball_period(Formula::default(), &c, r, 1000), Some(8));
         let m = minibrot_in_view(&c, r, 1000).unwrap();
         assert!(m.period > 8 && exact_nucleus(&m.nucleus, m.period, 1e-40), "period {}", m.period);
         assert!(m.nucleus.sub(&c).abs() <= r);
@@ -428,7 +436,7 @@ mod tests {
         let im = parse("0.112436757524417052314660847064084632753529873418744313970532617");
         let c = BigC::from_decimals(&re, &im, 192);
         let r = FloatExp::from(3.3e-20);
-        assert_eq!(period::ball_period(&c, r, 100_000), Some(1380));
+        assert_eq!(period::ball_period(Formula::default(), &c, r, 100_000), Some(1380));
         let m = minibrot_in_view(&c, r, 100_000).unwrap();
         assert_eq!(m.period, 1518);
         let away = (m.nucleus.sub(&c).abs() / r).to_f64();

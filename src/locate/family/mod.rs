@@ -4,8 +4,9 @@
 //! orientation from the cycle) and, for the Mandelbrot family at any power, the simplest
 //! Misiurewicz point.
 //!
-//! The search is z² + c's ([`crate::locate::search`]) with each part made generic:
-//! [`period`] bounds the periods, [`nucleus`] solves for the nucleus with the Jacobian by
+//! The search is z² + c's ([`crate::locate::search`]) with each part made generic: the
+//! periods are bounded as for z² + c ([`crate::locate::period`] serves every formula),
+//! [`nucleus`] solves for the nucleus with the Jacobian by
 //! forward-mode derivatives in big floats ([`step`]), and the same periods are tried in the
 //! same order within the same budget. z² + c keeps its own code (`find` calls it for that
 //! formula, so its output is unchanged); the generic code reduces to it at power 2, which
@@ -13,9 +14,12 @@
 
 pub mod misiurewicz;
 pub mod nucleus;
-pub mod period;
 pub mod step;
 
+use super::period;
+// The later periods are tried as z² + c's search tries them, within the same budget (an
+// iteration here, with its two tangents, is counted 4 times).
+use super::search::{MORE_NEWTON_STEPS, MORE_PERIODS, MORE_WORK, upward_top};
 use crate::formula::Formula;
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
@@ -75,19 +79,8 @@ pub enum FindError {
     },
 }
 
-/// Periods above the ball method's tried: up to this many times it, at least [`MIN_UPWARD`].
-const UPWARD_FACTOR: u32 = 8;
-/// See [`UPWARD_FACTOR`].
-const MIN_UPWARD: u32 = 64;
-/// Periods of the centre's atom domains tried after those.
-const MORE_PERIODS: usize = 8;
 /// Newton's steps from the centre for the ball method's period.
 const NEWTON_STEPS: u32 = 200;
-/// Newton's steps for each later period.
-const MORE_NEWTON_STEPS: u32 = 64;
-/// The big-float work the later periods may take together, in iterations at 128 bits (as
-/// z² + c's search; an iteration here, with its two tangents, is counted 4 times).
-const MORE_WORK: u64 = 4_000_000;
 /// How far Newton's method may stray, in radii of the view.
 const LEASH: f64 = 16.0;
 
@@ -125,7 +118,7 @@ pub fn minibrot_in_view(formula: Formula, center: &BigC, radius: FloatExp, max_p
         singular |= s;
         m
     };
-    let top = max_period.min(p.saturating_mul(UPWARD_FACTOR).max(MIN_UPWARD));
+    let top = upward_top(p, max_period);
     let found = (p + 1..=top).find_map(&mut more);
     let found = found.or_else(|| {
         period::atom_periods(formula, center, top, max_period, MORE_PERIODS).into_iter().find_map(&mut more)
