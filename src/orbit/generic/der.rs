@@ -53,6 +53,21 @@ impl Jac {
         j
     }
 
+    /// The f64 part the vector lanes step: the mantissa matrix and what a step adds to its
+    /// diagonal (at the matrix's exponent).
+    pub(super) fn parts(&self) -> (Mat2, f64) {
+        (self.m, self.add)
+    }
+
+    /// Sets the mantissa matrix after steps the lanes took, each [`Jac::step`]'s f64 case
+    /// (the exponent is unchanged by those).
+    pub(super) fn set_matrix(&mut self, m: Mat2) {
+        self.m = m;
+    }
+
+    /// The range of the largest entry of a step's f64 result that [`Jac::step`] keeps.
+    pub(super) const RANGE: (f64, f64) = (LO, HI);
+
     /// The value in FloatExp.
     fn to_fe(self) -> MatFe {
         self.m.map(|row| row.map(|x| FloatExp::new(x, self.exp)))

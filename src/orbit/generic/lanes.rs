@@ -109,6 +109,11 @@ struct Lanes<const L: usize> {
     dc_fe: [[FloatExp; 2]; L],
     /// The sample in each lane (IDLE: none).
     pixel: [usize; L],
+    /// With the derivative: each lane's Jacobian ([`Jac`], whose f64 matrix the lanes hold
+    /// in `jm` while they step it, and what a step adds to its diagonal in `jadd`).
+    jac: [Jac; L],
+    jm: [[[f64; L]; 2]; 2],
+    jadd: [f64; L],
     /// Each track's Z_0, as an address.
     base: [i64; 2],
     /// Each track's gate.
@@ -140,10 +145,28 @@ impl<const L: usize> Lanes<L> {
         self.gate[k] = self.gates[s.t];
         self.normal_c[k] = mask(normal(s.dc[0]) & normal(s.dc[1]));
     }
+
+    /// Lane `k`'s Jacobian, with the matrix the lanes stepped.
+    fn jac(&self, k: usize) -> Jac {
+        let mut j = self.jac[k];
+        j.set_matrix([[self.jm[0][0][k], self.jm[0][1][k]], [self.jm[1][0][k], self.jm[1][1][k]]]);
+        j
+    }
+
+    fn set_jac(&mut self, k: usize, j: Jac) {
+        let (m, add) = j.parts();
+        for (r, row) in m.iter().enumerate() {
+            for (c, &x) in row.iter().enumerate() {
+                self.jm[r][c][k] = x;
+            }
+        }
+        self.jadd[k] = add;
+        self.jac[k] = j;
+    }
 }
 
 /// One call of the lanes, run by pulp under the level's target features.
-struct Job<'a, M: Map> {
+struct Job<'a, M: Map, const DER: bool> {
     engine: &'a Engine,
     offsets: &'a [[f64; 2]],
     out: &'a mut [Orbit],
@@ -153,24 +176,24 @@ struct Job<'a, M: Map> {
     _map: M,
 }
 
-impl<M: Map> WithSimd for Job<'_, M> {
+impl<M: Map, const DER: bool> WithSimd for Job<'_, M, DER> {
     type Output = ();
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, _: S) -> Self::Output {
         let Job { engine, offsets, out, counters, cancel, lanes, .. } = self;
         match lanes {
-            16 => engine.lanes::<M, 16>(offsets, out, counters, cancel),
-            8 => engine.lanes::<M, 8>(offsets, out, counters, cancel),
-            _ => engine.lanes::<M, 4>(offsets, out, counters, cancel),
+            16 => engine.lanes::<M, DER, 16>(offsets, out, counters, cancel),
+            8 => engine.lanes::<M, DER, 8>(offsets, out, counters, cancel),
+            _ => engine.lanes::<M, DER, 4>(offsets, out, counters, cancel),
         }
     }
 }
 
 impl Engine {
-    /// Iterates many samples of the single family `M` in vector lanes at `simd` (no traps,
-    /// no derivative): the results of [`Engine::orbit`], bit for bit.
-    pub(super) fn orbits_lanes<M: Map>(
+    /// Iterates many samples of the single family `M` in vector lanes at `simd` (no traps;
+    /// the Jacobian where `DER`): the results of [`Engine::orbit`], bit for bit.
+    pub(super) fn orbits_lanes<M: Map, const DER: bool>(
         &self,
         simd: SimdLevel,
         offsets: &[[f64; 2]],
@@ -180,21 +203,20 @@ impl Engine {
     ) {
         // Two vectors' worth of lanes, interleaved to hide the latency of each step.
         let lanes = simd.f64_lanes() * 2;
-        simd.arch().dispatch(Job::<M> { engine: self, offsets, out, counters, cancel, lanes, _map: M::default() });
+        simd.arch().dispatch(Job::<M, DER> { engine: self, offsets, out, counters, cancel, lanes, _map: M::default() });
     }
 
     /// Loads the next sample that needs the lanes into lane `k` (samples that start below
     /// f64's range, or end at once, are finished here); false when none is left (the lane
     /// is idle).
     #[allow(clippy::too_many_arguments)]
-    fn refill<M: Map, const L: usize>(
+    fn refill<M: Map, const DER: bool, const L: usize>(
         &self,
         s: &mut Lanes<L>,
         k: usize,
         next: &mut usize,
         offsets: &[[f64; 2]],
         out: &mut [Orbit],
-        der: &mut Jac,
         local: &mut Counters,
         cancel: &AtomicBool,
     ) -> bool {
@@ -206,17 +228,32 @@ impl Engine {
                 out[p] = Orbit::interior();
                 continue;
             };
+            // Each sample's Jacobian starts at I × spacing.
+            let mut der = Jac::new(self.spacing, self.mandelbrot);
             match self.first(smp, dc_fe) {
                 Exit::F64(f) => {
                     s.set(k, &f);
+                    if DER {
+                        s.set_jac(k, der);
+                    }
                     s.dc_fe[k] = dc_fe;
                     s.pixel[k] = p;
                     s.live[k] = mask(true);
                     return true;
                 }
                 e => {
-                    out[p] =
-                        self.drive::<_, false>(&st, e, der, dc_fe, &self.t64, &self.tfe, &[], &mut [], local, cancel);
+                    out[p] = self.drive::<_, DER>(
+                        &st,
+                        e,
+                        &mut der,
+                        dc_fe,
+                        &self.t64,
+                        &self.tfe,
+                        &[],
+                        &mut [],
+                        local,
+                        cancel,
+                    );
                 }
             }
         }
@@ -227,7 +264,7 @@ impl Engine {
     }
 
     #[inline(always)]
-    fn lanes<M: Map, const L: usize>(
+    fn lanes<M: Map, const DER: bool, const L: usize>(
         &self,
         offsets: &[[f64; 2]],
         out: &mut [Orbit],
@@ -239,7 +276,7 @@ impl Engine {
         }
         let st = Single(M::default());
         let tables = &self.t64[..];
-        let mut der = Jac::new(self.spacing, self.mandelbrot);
+        let start = Jac::new(self.spacing, self.mandelbrot);
         let mut local = Counters::default();
         // A single family has one track, or two for a Julia set (the centre's orbit and the
         // orbit of 0).
@@ -262,13 +299,16 @@ impl Engine {
             normal_c: [0; L],
             dc_fe: [[FloatExp::ZERO; 2]; L],
             pixel: [IDLE; L],
+            jac: [start; L],
+            jm: [[[0.0; L]; 2]; 2],
+            jadd: [0.0; L],
             base,
             gates,
         };
         let mut next = 0;
         let mut active = 0;
         for k in 0..L {
-            active += self.refill::<M, L>(&mut s, k, &mut next, offsets, out, &mut der, &mut local, cancel) as usize;
+            active += self.refill::<M, DER, L>(&mut s, k, &mut next, offsets, out, &mut local, cancel) as usize;
         }
         let (escape2, max_iter) = (self.escape2, i64::from(self.max_iter));
         // A rebase in the lanes (see the module doc): where it lands, and the bounds under
@@ -316,6 +356,28 @@ impl Engine {
             let step = M::delta_n([ax, ay], [bx, by]);
             let nx = step[0].add(s.cx);
             let ny = step[1].add(s.cy);
+            // With the derivative, `Jac::step` at z = Z + δ (the rebase's step too): J' = Jf J
+            // + I (times the spacing), as `mat_mul` computes it; a lane whose J' leaves the
+            // f64 range `Jac::step` keeps (or is NaN) is an event, for the scalar pass.
+            let mut jn = [[[0.0; L]; 2]; 2];
+            let mut jac_ok = [!0u64; L];
+            if DER {
+                let jf = M::jacobian_n([fx, fy]);
+                let (lo, hi) = Jac::RANGE;
+                for k in 0..L {
+                    let e = |r: usize, c: usize| jf[r][0][k] * s.jm[0][c][k] + jf[r][1][k] * s.jm[1][c][k];
+                    let m = [[e(0, 0) + s.jadd[k], e(0, 1)], [e(1, 0), e(1, 1) + s.jadd[k]]];
+                    let a = [m[0][0].abs(), m[0][1].abs(), m[1][0].abs(), m[1][1].abs()];
+                    let within = (a[0] <= hi) & (a[1] <= hi) & (a[2] <= hi) & (a[3] <= hi);
+                    let big = (a[0] >= lo) | (a[1] >= lo) | (a[2] >= lo) | (a[3] >= lo);
+                    jac_ok[k] = mask(within & big);
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            jn[r][c][k] = m[r][c];
+                        }
+                    }
+                }
+            }
             let mut event = [0u64; L];
             let mut rebased = [0u64; L];
             let mut any = 0u64;
@@ -325,7 +387,7 @@ impl Engine {
                         & s.normal_c[k]
                         & rebase_here;
                 let end = mask((s.at[k] >= s.stop[k]) | (r2[k] > escape2) | (s.n[k] >= max_iter));
-                let e = (end | (near[k] & !f64_rebase)) & s.live[k];
+                let e = (end | (near[k] & !f64_rebase) | !jac_ok[k]) & s.live[k];
                 event[k] = e;
                 rebased[k] = near[k] & !e & s.live[k];
                 any |= e;
@@ -363,8 +425,9 @@ impl Engine {
                     }
                     steps -= 1;
                     let mut smp = s.get(k);
+                    let mut der = if DER { s.jac(k) } else { start };
                     let dc_fe = s.dc_fe[k];
-                    let done = match self.iteration::<_, f64, false>(
+                    let done = match self.iteration::<_, f64, DER>(
                         &st,
                         &mut smp,
                         &mut der,
@@ -376,14 +439,20 @@ impl Engine {
                     ) {
                         None => {
                             s.set(k, &smp);
+                            if DER {
+                                s.set_jac(k, der);
+                            }
                             continue;
                         }
                         Some(Exit::F64(f)) => {
                             s.set(k, &f);
+                            if DER {
+                                s.set_jac(k, der);
+                            }
                             continue;
                         }
                         Some(Exit::Done(o)) => o,
-                        Some(e @ Exit::Fe(_)) => self.drive::<_, false>(
+                        Some(e @ Exit::Fe(_)) => self.drive::<_, DER>(
                             &st,
                             e,
                             &mut der,
@@ -397,7 +466,7 @@ impl Engine {
                         ),
                     };
                     out[s.pixel[k]] = done;
-                    if !self.refill::<M, L>(&mut s, k, &mut next, offsets, out, &mut der, &mut local, cancel) {
+                    if !self.refill::<M, DER, L>(&mut s, k, &mut next, offsets, out, &mut local, cancel) {
                         active -= 1;
                     }
                 }
@@ -410,6 +479,13 @@ impl Engine {
                 let r = rebased[k];
                 s.dx[k] = pick(go, nx[k], s.dx[k]);
                 s.dy[k] = pick(go, ny[k], s.dy[k]);
+                if DER {
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            s.jm[r][c][k] = pick(go, jn[r][c][k], s.jm[r][c][k]);
+                        }
+                    }
+                }
                 s.at[k] = pick_i(r, at1, s.at[k] + (go & 16) as i64);
                 s.n[k] += (go & 1) as i64;
                 s.stop[k] = pick_i(r, stop1, s.stop[k]);

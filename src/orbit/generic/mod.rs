@@ -174,8 +174,8 @@ impl Engine {
     }
 
     /// Iterates many samples without traps, on this thread; the same results as
-    /// [`Engine::orbit`], bit for bit, at every `simd` level (a single family without the
-    /// derivative runs in vector lanes at levels above scalar). Once `cancel` is raised
+    /// [`Engine::orbit`], bit for bit, at every `simd` level (a single family runs in vector
+    /// lanes at levels above scalar). Once `cancel` is raised
     /// the rest are left as they are.
     pub fn orbits(
         &self,
@@ -185,9 +185,13 @@ impl Engine {
         simd: SimdLevel,
         cancel: &AtomicBool,
     ) {
-        if simd != SimdLevel::Scalar && !self.derivative && self.formula.phases().len() == 1 {
+        if simd != SimdLevel::Scalar && self.formula.phases().len() == 1 {
             let lanes = crate::with_map!(self.formula.phases()[0], M => {
-                self.orbits_lanes::<M>(simd, offsets, out, counters, cancel);
+                if self.derivative {
+                    self.orbits_lanes::<M, true>(simd, offsets, out, counters, cancel);
+                } else {
+                    self.orbits_lanes::<M, false>(simd, offsets, out, counters, cancel);
+                }
                 true
             }, false);
             if lanes {

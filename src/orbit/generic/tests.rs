@@ -424,7 +424,8 @@ fn floatexp_views_beyond_1e_320() {
 }
 
 /// Every SIMD level gives the scalar loop's N and z_n, bit for bit, and takes the same
-/// steps (the counters agree), with and without BLA: single families run in vector lanes
+/// steps (the counters agree), with and without BLA, with and without the derivative (dz
+/// to the bit as well): single families run in vector lanes
 /// above the scalar level, on views with f64 and with FloatExp deltas, wide reference
 /// values (the Burning Ship's real axis), Julia sets, and a hybrid (the scalar loop at
 /// every level).
@@ -451,18 +452,20 @@ fn every_simd_level_gives_the_scalar_loops_bits() {
     ];
     let mut rebases = 0;
     for (name, view) in &views {
-        for bla in [None, Some(DEFAULT_BLA)] {
-            let spec = view.spec(bla, false);
+        for (bla, der) in [(None, false), (Some(DEFAULT_BLA), false), (None, true), (Some(DEFAULT_BLA), true)] {
+            let spec = view.spec(bla, der);
             let (want, wc) = engine_at(view, &spec, SimdLevel::Scalar);
             for simd in SimdLevel::usable() {
                 let (got, gc) = engine_at(view, &spec, simd);
+                let at = format!("{name} bla {bla:?} derivative {der} {simd:?}");
                 for (k, (g, w)) in got.iter().zip(&want).enumerate() {
-                    assert_eq!(g.n, w.n, "{name} bla {bla:?} {simd:?} sample {k}");
-                    assert_eq!(g.z.map(f64::to_bits), w.z.map(f64::to_bits), "{name} bla {bla:?} {simd:?} sample {k}");
+                    assert_eq!(g.n, w.n, "{at} sample {k}");
+                    assert_eq!(g.z.map(f64::to_bits), w.z.map(f64::to_bits), "{at} sample {k}");
+                    assert_eq!(g.dz.map(f64::to_bits), w.dz.map(f64::to_bits), "{at} sample {k}: dz");
                 }
                 let c =
                     |c: &Counters| (c.iterations, c.steps, c.bla_steps, c.bla_iterations, c.rebases, c.floatexp_steps);
-                assert_eq!(c(&gc), c(&wc), "{name} bla {bla:?} {simd:?}: counters");
+                assert_eq!(c(&gc), c(&wc), "{at}: counters");
                 // The lanes take rebases themselves (where f64 gives their bits): the
                 // views must have some for that path to be held to the scalar loop's.
                 rebases += gc.rebases;
