@@ -25,8 +25,10 @@
 //! So every sample takes the steps the scalar loop takes, in the same order, with the same
 //! IEEE operations ([`Map::delta_n`] is [`Map::delta`] over lanes; a test holds them to the
 //! same bits), and N and z_n are the scalar engine's bits on every SIMD level (a test
-//! checks every level this CPU has). The derivative and hybrids (whose lanes would be at
-//! different phases) run in the scalar loop.
+//! checks every level this CPU has). With the derivative, each lane also steps the f64
+//! mantissa of its Jacobian as [`Jac::step`] does (a result outside the range that step
+//! keeps in f64 is an event too), so distance estimates run at the lanes' speed. Hybrids
+//! (whose lanes would be at different phases) run in the scalar loop.
 //!
 //! The lanes' state is held field by field in arrays whose elements are all 64 bits wide
 //! (masks included), and a lane's index on its track as the address of its reference value:
