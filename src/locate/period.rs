@@ -20,7 +20,7 @@
 //! |a - b| in each part), a negation is an isometry, and the power satisfies |(w + e)^p -
 //! w^p| <= (|w| + |e|)^p - |w|^p (the binomial expansion and the triangle inequality), with
 //! |w| = |z| after a fold. So r_(n+1) = (|z_n| + r_n)^p - |z_n|^p + r, p the power of
-//! iteration n's phase, which is z² + c's recurrence at p = 2 (to the bit: [`growth`]).
+//! iteration n's phase, which is z² + c's recurrence at p = 2 (to the bit, as a test checks).
 //!
 //! This is preferred to an atom-domain test on the Newton step J_n⁻¹ z_n (the first n whose
 //! step is shorter than the disc): that test needs J_n to be invertible, and near the fold

@@ -222,7 +222,6 @@ impl Engine {
         local: &mut Counters,
         cancel: &AtomicBool,
     ) -> bool {
-        let st = Single(M::default());
         while *next < offsets.len() {
             let p = *next;
             *next += 1;
@@ -243,26 +242,27 @@ impl Engine {
                     s.live[k] = mask(true);
                     return true;
                 }
-                e => {
-                    out[p] = self.drive::<_, DER>(
-                        &st,
-                        e,
-                        &mut der,
-                        dc_fe,
-                        &self.t64,
-                        &self.tfe,
-                        &[],
-                        &mut [],
-                        local,
-                        cancel,
-                    );
-                }
+                e => out[p] = self.finish::<M, DER>(e, &mut der, dc_fe, local, cancel),
             }
         }
         s.pixel[k] = IDLE;
         s.live[k] = 0;
         s.set(k, &Sample { d: [0.0; 2], dc: [0.0; 2], t: 0, m: 0, n: 0, stop: u32::MAX >> 8 });
         false
+    }
+
+    /// Runs a sample from `e` to its end in the scalar loop (f64 and FloatExp as its delta
+    /// asks): a sample that leaves the lanes' number type.
+    fn finish<M: Map, const DER: bool>(
+        &self,
+        e: Exit,
+        der: &mut Jac,
+        dc_fe: [FloatExp; 2],
+        local: &mut Counters,
+        cancel: &AtomicBool,
+    ) -> Orbit {
+        let st = Single(M::default());
+        self.drive::<_, DER>(&st, e, der, dc_fe, &self.t64, &self.tfe, &[], &mut [], local, cancel)
     }
 
     #[inline(always)]
@@ -429,7 +429,7 @@ impl Engine {
                     let mut smp = s.get(k);
                     let mut der = if DER { s.jac(k) } else { start };
                     let dc_fe = s.dc_fe[k];
-                    let done = match self.iteration::<_, f64, DER>(
+                    let on = match self.iteration::<_, f64, DER>(
                         &st,
                         &mut smp,
                         &mut der,
@@ -439,33 +439,20 @@ impl Engine {
                         &mut [],
                         &mut local,
                     ) {
-                        None => {
-                            s.set(k, &smp);
-                            if DER {
-                                s.set_jac(k, der);
-                            }
-                            continue;
-                        }
-                        Some(Exit::F64(f)) => {
+                        None => Ok(smp),
+                        Some(Exit::F64(f)) => Ok(f),
+                        Some(Exit::Done(o)) => Err(o),
+                        Some(e @ Exit::Fe(_)) => Err(self.finish::<M, DER>(e, &mut der, dc_fe, &mut local, cancel)),
+                    };
+                    let done = match on {
+                        Ok(f) => {
                             s.set(k, &f);
                             if DER {
                                 s.set_jac(k, der);
                             }
                             continue;
                         }
-                        Some(Exit::Done(o)) => o,
-                        Some(e @ Exit::Fe(_)) => self.drive::<_, DER>(
-                            &st,
-                            e,
-                            &mut der,
-                            dc_fe,
-                            &self.t64,
-                            &self.tfe,
-                            &[],
-                            &mut [],
-                            &mut local,
-                            cancel,
-                        ),
+                        Err(o) => o,
                     };
                     out[s.pixel[k]] = done;
                     if !self.refill::<M, DER, L>(&mut s, k, &mut next, offsets, out, &mut local, cancel) {
