@@ -45,7 +45,7 @@ use pulp::{Simd, WithSimd};
 use super::Engine;
 use super::bla::Table;
 use super::der::Jac;
-use super::perturb::{Exit, Sample, max_exp};
+use super::perturb::{Exit, LEAST, Sample, max_exp};
 use crate::formula::Single;
 use crate::formula::end::Orbit;
 use crate::formula::map::{Map, Num};
@@ -77,7 +77,7 @@ fn mask(b: bool) -> u64 {
 /// True where `x` is 0 or at least 2^-1000: an offset whose f64 step the rebase bounds hold.
 #[inline(always)]
 fn normal(x: f64) -> bool {
-    (x == 0.0) | (x.abs() >= f64::from_bits((1023 - 1000) << 52))
+    (x == 0.0) | (x.abs() >= LEAST)
 }
 
 /// [`pick`] for indices.
@@ -123,16 +123,19 @@ struct Lanes<const L: usize> {
 }
 
 impl<const L: usize> Lanes<L> {
+    /// The index on lane `k`'s track of the address `a`.
+    fn index(&self, k: usize, a: i64) -> u32 {
+        ((a - self.base[self.t[k] as usize]) / 16) as u32
+    }
+
     fn get(&self, k: usize) -> Sample<f64> {
-        let t = self.t[k] as usize;
-        let index = |a: i64| ((a - self.base[t]) / 16) as u32;
         Sample {
             d: [self.dx[k], self.dy[k]],
             dc: [self.cx[k], self.cy[k]],
-            t,
-            m: index(self.at[k]),
+            t: self.t[k] as usize,
+            m: self.index(k, self.at[k]),
             n: self.n[k] as u32,
-            stop: index(self.stop[k]),
+            stop: self.index(k, self.stop[k]),
         }
     }
 
@@ -320,7 +323,6 @@ impl Engine {
         let (at1, stop1) = (base[self.zeros] + 16, base[self.zeros] + 16 * i64::from(self.tracks[self.zeros].stop(1)));
         let gate0 = gates[self.zeros];
         let rebase_here = mask(self.tracks[self.zeros].last() >= 1);
-        let least = f64::from_bits((1023 - 1000) << 52);
         let fe_numbers = self.numbers == Numbers::FloatExp;
         let mut passes = 0u64;
         let mut steps = 0u64;
@@ -331,7 +333,7 @@ impl Engine {
             let mut zx = [0.0; L];
             let mut zy = [0.0; L];
             for k in 0..L {
-                debug_assert!(s.get(k).m <= self.tracks[s.t[k] as usize].last());
+                debug_assert!(s.index(k, s.at[k]) <= self.tracks[s.t[k] as usize].last());
                 // SAFETY: every lane's address is its track's Z_m with m at most the track's
                 // last index (m <= stop <= last for a live lane, which `Track::stop` and the
                 // rebase onto index 1 of an orbit that has it keep; an idle lane reads Z_0 of
@@ -385,7 +387,7 @@ impl Engine {
             let mut any = 0u64;
             for k in 0..L {
                 let f64_rebase =
-                    mask((fx[k].abs() >= low) & (fy[k].abs() >= low) & (nx[k].abs() >= least) & (ny[k].abs() >= least))
+                    mask((fx[k].abs() >= low) & (fy[k].abs() >= low) & (nx[k].abs() >= LEAST) & (ny[k].abs() >= LEAST))
                         & s.normal_c[k]
                         & rebase_here;
                 let end = mask((s.at[k] >= s.stop[k]) | (r2[k] > escape2) | (s.n[k] >= max_iter));
@@ -413,7 +415,7 @@ impl Engine {
             if look != 0 {
                 for k in 0..L {
                     if maybe[k] != 0
-                        && tables[s.t[k] as usize].can_step(s.get(k).m, d2[k], self.max_iter - s.n[k] as u32)
+                        && tables[s.t[k] as usize].can_step(s.index(k, s.at[k]), d2[k], self.max_iter - s.n[k] as u32)
                     {
                         event[k] = !0;
                         any = !0;

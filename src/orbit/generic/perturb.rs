@@ -68,11 +68,14 @@ pub(super) fn max_exp<D: Real>(d: [D; 2]) -> i32 {
     d[0].to_fe().exponent().max(d[1].to_fe().exponent())
 }
 
+/// 2^-1000: the least magnitude (besides 0) of an offset and of a result that the f64
+/// rebase step takes (the lanes test the same bound).
+pub(super) const LEAST: f64 = f64::from_bits((1023 - 1000) << 52);
+
 /// f_n(0 + full) - f_n(0) + dc in f64 where that has the bits of the FloatExp rebase step
 /// (see `Engine::rebase_f64`), `low` = 2^-T for the largest power; None elsewhere.
 #[inline(always)]
 fn rebase_delta_f64<S: Stepper>(st: &S, n: u32, full: [f64; 2], dc: [f64; 2], low: f64) -> Option<[f64; 2]> {
-    const LEAST: f64 = f64::from_bits((1023 - 1000) << 52);
     let big = |x: f64| x.abs() >= low;
     let normal = |x: f64| x == 0.0 || x.abs() >= LEAST;
     if !(big(full[0]) && big(full[1]) && normal(dc[0]) && normal(dc[1])) {
