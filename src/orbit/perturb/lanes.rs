@@ -89,7 +89,7 @@ macro_rules! per_vector {
 
 mod burst;
 
-use burst::{burst, settle};
+use burst::{Rate, burst, settle};
 
 /// Where an empty lane reads: two steps' worth of zeros.
 static PARK: [f64; 4] = [0.0; 4];
@@ -584,15 +584,19 @@ fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Co
     // has its two steps of a pair. With interior detection bursts run only while every
     // lane's sample has left it, and such a sample rebases as any other.
     let rebase_in_burst = p.numbers != Numbers::FloatExp && p.refs[p.refs.len() - 1].last() >= 2;
+    // Where the bursts hold the lanes' addresses follows how often they rebase (speed only:
+    // both give the same bits).
+    let mut rate = Rate::default();
     while lanes.iter().any(|l| l.act != 0) {
         // With interior detection, bursts only while every lane's sample has left it (its
         // |dz/dz|^2 is not followed; the bursts' steps are then exactly `step`'s).
         if !INT || per_vector!(|g| lanes[g].act & !lanes[g].plain) == [0; G] {
-            let moved = if rebase_in_burst {
-                burst::<U, DER, true>(unit, &mut lanes, &k, &refs, p)
-            } else {
-                burst::<U, DER, false>(unit, &mut lanes, &k, &refs, p)
+            let moved = match (rebase_in_burst, rate.often()) {
+                (true, true) => burst::<U, DER, true, true>(unit, &mut lanes, &k, &refs, p),
+                (true, false) => burst::<U, DER, true, false>(unit, &mut lanes, &k, &refs, p),
+                (false, _) => burst::<U, DER, false, false>(unit, &mut lanes, &k, &refs, p),
             };
+            rate.add(&moved, U::F64_LANES);
             if moved.count != 0 {
                 settle(&mut lanes, &mut meta, &moved, p, &refs, feed, counters);
             }

@@ -16,6 +16,31 @@ pub(super) struct Moved {
     pub(super) rebased: [u32; G],
     pub(super) leave: [u32; G],
     pub(super) count: u64,
+    /// Steps every lane took in the burst.
+    pub(super) steps: u64,
+}
+
+/// How often the lanes have rebased inside bursts so far, which decides where the next
+/// burst holds its lanes' addresses (see [`retarget`]).
+#[derive(Clone, Copy, Default)]
+pub(super) struct Rate {
+    rebases: u64,
+    lane_steps: u64,
+}
+
+impl Rate {
+    /// A rebase in more than one lane step in this many: the addresses in vector registers.
+    const OFTEN: u64 = 150;
+
+    pub(super) fn add(&mut self, moved: &Moved, lanes: usize) {
+        self.rebases += moved.count;
+        self.lane_steps += moved.steps * (lanes * G) as u64;
+    }
+
+    /// Whether lanes rebase often enough that the burst holds the addresses in registers.
+    pub(super) fn often(&self) -> bool {
+        self.rebases * Self::OFTEN > self.lane_steps
+    }
 }
 
 /// Plain steps of every vector while nothing can happen but a step: every lane active,
@@ -34,7 +59,7 @@ pub(super) struct Moved {
 /// A lane whose delta after that step is at or below `single_d2` ends the burst (the scalar
 /// loop looks for a BLA step for it, as `op`'s next call would; [`settle`] hands it back).
 #[inline(always)]
-pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool>(
+pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool, const HELD: bool>(
     u: U,
     lanes: &mut [Lanes<U>; G],
     k: &Consts<U>,
@@ -120,7 +145,11 @@ pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool>(
                 for g in 0..G {
                     // The lane reads Z_1 of the orbit of 0 after this step: its address at
                     // `off + 16` is Z_0's plus 16. Its stop is settled after the burst.
-                    retarget(&mut at[g], now[g], zero.wrapping_sub(off));
+                    if HELD {
+                        retarget(&mut at[g], now[g], zero.wrapping_sub(off));
+                    } else {
+                        retarget_apart(&mut at[g], now[g], zero.wrapping_sub(off));
+                    }
                     moved.rebased[g] |= now[g];
                     moved.count += u64::from(now[g].count_ones());
                 }
@@ -145,6 +174,7 @@ pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool>(
             }
         }
     }
+    moved.steps = off as u64 / 16;
     for (g, l) in lanes.iter_mut().enumerate() {
         (l.dzr, l.dzi) = d[g];
         if DER {
@@ -161,13 +191,24 @@ pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool>(
 /// Sets `at[i]` to `to` in every lane of `mask`, without a branch per lane. Inlined, it
 /// lets the compiler keep the burst's addresses in vector registers and take each lane's
 /// out for its load: where lanes rebase often (about every 50 steps near zoom 1e6) that
-/// measured 9% faster than an out-of-line loop over the mask's bits, which kept them in
-/// memory; where they rebase rarely (bench-e50: once in 450 steps) 4% slower.
+/// measured 9% faster than [`retarget_apart`], which keeps them in memory; where they
+/// rebase rarely (bench-e50: once in 450 steps) 4% slower. [`Rate`] picks between them.
 #[inline(always)]
 fn retarget(at: &mut [usize; MAX_W], mask: u32, to: usize) {
     for (i, a) in at.iter_mut().enumerate() {
         let r = 0usize.wrapping_sub((mask >> i) as usize & 1);
         *a = (to & r) | (*a & !r);
+    }
+}
+
+/// [`retarget`] out of line, over the mask's bits, so that the addresses stay in memory
+/// where the burst's loads read them as scalars.
+#[inline(never)]
+fn retarget_apart(at: &mut [usize; MAX_W], mask: u32, to: usize) {
+    let mut b = mask;
+    while b != 0 {
+        at[b.trailing_zeros() as usize % MAX_W] = to;
+        b &= b - 1;
     }
 }
 
