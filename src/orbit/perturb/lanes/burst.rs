@@ -1,7 +1,8 @@
 //! The lanes' bursts: plain steps of every vector while nothing can happen but a step, the
 //! deltas in registers and the only test per step one for an event ([`burst`]), and the
 //! rebases a burst takes in the lane ([`settle`] brings the samples' records up to date
-//! after it). Split from the lanes' loop (`lanes.rs`, whose module doc says how the two
+//! after it; [`Rate`] decides from how often they happen where a burst holds its lanes'
+//! addresses). Split from the lanes' loop (`lanes.rs`, whose module doc says how the two
 //! meet) as the part that runs nearly all of a deep view's single steps.
 #![allow(unsafe_code)]
 
