@@ -444,6 +444,12 @@ impl<S: Simd> Lanes<S> {
         self.next_stop = self.next_stop.min(self.stop[i]);
     }
 
+    /// Sets `next_stop` from every lane's stop, after stops moved later (a lane emptied
+    /// or moved to another reference).
+    fn restop(&mut self) {
+        self.next_stop = self.stop.iter().copied().min().unwrap_or(i64::MAX);
+    }
+
     /// Lanes whose stop has come.
     #[inline(always)]
     fn stopped(&self) -> u32 {
@@ -495,7 +501,7 @@ fn hand_back<S: Simd>(
             *slot = Some(h);
         }
     }
-    lanes.next_stop = lanes.stop.iter().copied().min().unwrap_or(i64::MAX);
+    lanes.restop();
 }
 
 /// Rebases the lanes of `mask` where they are, as `op` does: δ becomes the full value

@@ -233,7 +233,7 @@ fn replace<S: Simd>(
             l.place(i, which, m, n, p, refs);
         }
     }
-    l.next_stop = l.stop.iter().copied().min().unwrap_or(i64::MAX);
+    l.restop();
 }
 
 /// After a burst in which lanes rebased: their samples now follow the orbit of 0, in
