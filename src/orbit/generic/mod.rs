@@ -257,6 +257,12 @@ impl Engine {
         self.t64.iter().map(Table::len).sum()
     }
 
+    /// Steps from dip to dip of the references' orbits (f64 tables; see `bla`), and the
+    /// most stages of dips of any.
+    pub fn dip_steps(&self) -> (usize, usize) {
+        self.t64.iter().map(Table::dip_steps).fold((0, 0), |(n, k), (a, b)| (n + a, k.max(b)))
+    }
+
     /// Seconds the reference orbits took.
     pub fn orbit_seconds(&self) -> f64 {
         self.orbit_seconds

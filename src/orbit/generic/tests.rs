@@ -395,6 +395,37 @@ fn burning_ship_on_its_real_axis() {
     check_view("burning-ship at -1.8", &view, 10);
 }
 
+/// Around a minibrot of z^3 + c at 1e-50 (`scenes/bench-mandelbrot3-e50.toml`'s nucleus,
+/// period 51, size 1.2e-51): its reference repeats, and samples near the mini pass its
+/// dips towards 0 at every period (rebasing there or not). The dips' steps take them from
+/// one deep dip to the next in one BLA step, where the binary tree takes as many as 51
+/// has binary digits (its 51 iterations at most as 32 + 16 + 2 + 1); the samples must
+/// still match big floats.
+#[test]
+fn minibrot_neighbourhoods_cross_their_dips_in_one_step() {
+    let view = View {
+        formula: Formula::parse("mandelbrot^3", None).unwrap(),
+        center: dec(&[
+            "-0.71685219696788307239224678350203056345481160036535758237649796346759554544382774703",
+            "0.51263299419901874303360192864648685671638257294098210745133150664298881863507782238",
+        ]),
+        julia: None,
+        radius: FloatExp::from(4e-51),
+        max_iter: 3264,
+        numbers: Numbers::F64,
+    };
+    check_view("mandelbrot^3 mini at 1e-50", &view, 10);
+    let spec = view.spec(Some(DEFAULT_BLA), false);
+    let e = prepare(&spec, view.formula, &NEVER, None).expect("prepared");
+    assert!(e.dip_steps().0 > 0, "the nucleus's orbit has dips");
+    let (_, counters) = engine(&view, &spec);
+    let per_step = counters.bla_iterations as f64 / counters.bla_steps as f64;
+    eprintln!("BLA steps {} covering {} iterations ({per_step:.1} each)", counters.bla_steps, counters.bla_iterations);
+    // The binary tree alone covers 10.5 iterations a step here (the samples escape after a
+    // few periods, where the steps get short).
+    assert!(per_step > 16.0, "a BLA step covers {per_step:.1} iterations: the dips' steps are not taken");
+}
+
 /// Past 1e-320: FloatExp deltas, at the Misiurewicz point -2 of the Burning Ship (on its
 /// real axis, and 3e-335 off it, where Im Z stays below f64's range for a thousand
 /// iterations: wide values), at preperiodic points of other families, and at repelling
