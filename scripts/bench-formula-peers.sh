@@ -9,6 +9,8 @@
 #
 #   scripts/bench-formula-peers.sh FRACTALL_CLI FRAKTALER3 WISDOM [ROUNDS] [DEEPFIELD]
 #
+# SCENES="bench-mandelbrot3-e80 ..." (names in scenes/, without .toml) runs only those.
+#
 # Neither peer is built here; give "-" for one that is not at hand, and its rows say so.
 # - fractall-rust (its `fractall-cli`): built from its source with `cargo build --release
 #   --bin fractall-cli` in its own folder and its own target folder (Debian packages
@@ -41,7 +43,8 @@ fi
 here=$(cd "$(dirname "$0")/.." && pwd)
 source "$here/scripts/common.sh"
 peer_setup "$here" "${5:-}"
-scenes=$(cd "$here/scenes" && ls bench-burning-ship-e*.toml bench-mandelbar-e*.toml bench-mandelbrot3-e*.toml 2> /dev/null | sed 's/\.toml$//' || true)
+scenes=${SCENES:-}
+[ -n "$scenes" ] || scenes=$(cd "$here/scenes" && ls bench-burning-ship-e*.toml bench-mandelbar-e*.toml bench-mandelbrot3-e*.toml 2> /dev/null | sed 's/\.toml$//' || true)
 [ -n "$scenes" ] || { echo "no bench-burning-ship/mandelbar/mandelbrot3 scenes in $here/scenes" >&2; exit 2; }
 for scene in $scenes; do
     # Writes $scene.fr.toml, $scene.fr.args (fractall-rust's flags) and $scene.f3.toml.
