@@ -218,7 +218,7 @@ const DIP: f64 = 1.0 / 64.0;
 /// The positions of `at` (ascending) kept as marks: the first, and each whose squared
 /// magnitude `mag2` is below DIP^2 times the least since the last kept one (not counting
 /// that one itself).
-fn dips(at: impl IntoIterator<Item = u32>, mag2: impl Fn(u32) -> FloatExp) -> Vec<u32> {
+pub(in crate::orbit) fn dips(at: impl IntoIterator<Item = u32>, mag2: impl Fn(u32) -> FloatExp) -> Vec<u32> {
     let mut at = at.into_iter();
     let mut keep: Vec<u32> = at.next().into_iter().collect();
     let mut low: Option<FloatExp> = None;

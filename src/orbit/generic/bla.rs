@@ -54,6 +54,7 @@ use super::reference::Track;
 use crate::formula::map::{FOLD_IM, FOLD_RE};
 use crate::formula::{Formula, Stepper};
 use crate::num::{FloatExp, Real};
+use crate::orbit::bla::dips;
 
 /// The tree covers at most this many indices from its origin: it takes about 220 bytes per
 /// index (f64 and FloatExp), 0.9 GB here.
@@ -89,8 +90,9 @@ pub(super) struct Table<T> {
 
 /// Steps that run from just after one dip of the reference towards 0 to later dips, in
 /// stages (the z^2 engine's stages after Zhuoran's "LA v2", in short). A dip is an index
-/// where |Z| falls below [`DIP`] times the least |Z| since the previous dip (stage 0); the
-/// dips of stage k + 1 are those of stage k where the same holds among stage k's. A sample
+/// where |Z| falls below 1/64 of the least |Z| since the previous dip (stage 0, found by
+/// the z^2 engine's [`dips`]); the dips of stage k + 1 are those of stage k where the same
+/// holds among stage k's. A sample
 /// stands at a dip when it rebases there or passes it with a small delta (a reference
 /// that repeats, a nucleus's, is passed at every period); from the next index (the origin,
 /// after a rebase) one step takes it to the next dip of each stage, the longest whose
@@ -155,10 +157,6 @@ impl<T: Real> Dips<Step<T>> {
         self
     }
 }
-
-/// How far below the least |Z| since the previous dip the reference must fall for a new
-/// dip (as in the z^2 engine's stages).
-const DIP: f64 = 1.0 / 64.0;
 
 /// A step while the tree is built: matrices and radius in FloatExp.
 #[derive(Debug, Clone, Copy)]
@@ -369,32 +367,18 @@ fn dip_steps(singles: &[Wide], track: &Track, origin: u32, dc_max: FloatExp) -> 
     let count = singles.len() as u32;
     let mag2 = |j: u32| {
         let z = track.z[(origin + j) as usize];
-        z[0] * z[0] + z[1] * z[1]
+        FloatExp::from(z[0] * z[0] + z[1] * z[1])
     };
-    // The dips of stage 0, and each one's highest stage.
-    let dips = |at: &[u32]| {
-        let mut keep = Vec::new();
-        let mut low: Option<f64> = None;
-        for &j in at {
-            let v = mag2(j);
-            match low {
-                Some(l) if v < l * (DIP * DIP) => {
-                    keep.push(j);
-                    low = None;
-                }
-                _ => low = Some(low.map_or(v, |l| l.min(v))),
-            }
-        }
-        keep
-    };
-    let d = dips(&(1..count).collect::<Vec<_>>());
+    // The z^2 engine's marks keep their first index; here the origin is no dip, and the
+    // first index only sets the least |Z| (a placeholder first, dropped after).
+    let find = |at: &mut dyn Iterator<Item = u32>| dips(std::iter::once(0).chain(at), mag2).split_off(1);
+    let d = find(&mut (1..count));
+    // Each dip's highest stage: stage k + 1's dips are found among stage k's the same way.
     let mut stage = vec![0usize; d.len()];
     let mut marks = d.clone();
     let mut stages = 1;
     loop {
-        // Stage `stages` among the dips of the one before, found as stage 0's among the
-        // indices (the first only sets the least |Z|).
-        let next = dips(&marks);
+        let next = find(&mut marks.iter().copied());
         if next.is_empty() || next.len() + 1 == marks.len() {
             break;
         }
