@@ -207,6 +207,11 @@ pub struct Perturbation {
 }
 
 impl Perturbation {
+    /// Whether samples carry the derivative (a distance estimate is wanted).
+    pub fn derivative(&self) -> bool {
+        self.derivative
+    }
+
     /// The same engine for a raster of another `spacing` over the same or a smaller extent
     /// (a coarse preview pass of the same view): the reference orbits, tables and common
     /// steps are shared, since they depend on the centre and on the extent of the offsets,
