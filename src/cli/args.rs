@@ -479,6 +479,13 @@ pub struct CompareArgs {
     /// (e.g. `bla` leaves out the slow engines without BLA at depth)
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub only: Vec<String>,
+    /// Also score another program's raw data, NAME=FILE: an EXR with one sample per pixel of
+    /// this view (top row first) holding N as a u32 (its IterationsBias attribute taken off;
+    /// u32::MAX where the sample did not escape) and NF, as Fraktaler-3, fractall-rust and
+    /// Kalles Fraktaler write them. Read at the same sampled pixels as the engines; its row
+    /// has no time and no distance errors. Repeatable
+    #[arg(long, value_name = "NAME=FILE")]
+    pub peer: Vec<String>,
     /// Also write one CSV line per sampled pixel to FILE: position, the truth's N and NF
     /// (and whether N is ill-conditioned), and every engine's N and NF
     #[arg(long, value_name = "FILE")]

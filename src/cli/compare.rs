@@ -50,6 +50,14 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         None => None,
     };
     let pixels = compare::sample_pixels(&scene, args.samples);
+    // Peers' values, read before any work: a file that does not fit the view fails at once.
+    let samples_wide = (scene.width * scene.aa) as usize;
+    let samples_high = (scene.height * scene.aa) as usize;
+    let peers = args
+        .peer
+        .iter()
+        .map(|spec| peer(spec, (samples_wide, samples_high), &pixels))
+        .collect::<Result<Vec<_>, _>>()?;
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = ProgressBar::new(pixels.len() as u64);
         let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} {msg}")
@@ -85,18 +93,29 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 b.set_position(k as u64 + 1);
             }
         }
+        let names: Vec<String> =
+            variants.iter().map(|v| v.name.clone()).chain(peers.iter().map(|p| p.0.clone())).collect();
+        measured.extend(peers.into_iter().map(|p| p.1));
         let suspects = compare::suspects(&measured, &truths, scene.escape_radius);
         if let Some(b) = &bar {
             b.set_message(format!("conditioning of {} disagreeing pixels", suspects.len()));
         }
         compare::mark_ill_conditioned(&scene, scene.formula, &pixels, &mut truths, &suspects, &cancel)
             .map_err(|_| Failure::Cancelled)?;
-        let rows = variants
+        let rows = names
             .iter()
             .zip(&measured)
-            .map(|(v, m)| compare::score(&v.name, m, &truths, scene.escape_radius, scene.transform))
+            .enumerate()
+            .map(|(k, (name, m))| {
+                let mut row = compare::score(name, m, &truths, scene.escape_radius, scene.transform);
+                if k >= variants.len() {
+                    // A peer's: no time of ours, no distance estimate.
+                    (row.iterations_per_second, row.de_error_p50, row.de_error_p99) = (f64::NAN, f64::NAN, f64::NAN);
+                }
+                row
+            })
             .collect();
-        let names: Vec<&str> = variants.iter().map(|v| v.name.as_str()).collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let csv =
             pixel_file.is_some().then(|| compare::pixel_csv(&pixels, &truths, &names, &measured, scene.escape_radius));
         Ok((rows, csv))
@@ -118,6 +137,25 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
     std::io::stdout().lock().write_all(text.as_bytes()).map_err(|e| Failure::Runtime(anyhow!(e)))
 }
 
+/// A peer's name and values from `NAME=FILE` (see `--peer`), at the sampled `pixels` of a
+/// view of `size` samples.
+fn peer(spec: &str, size: (usize, usize), pixels: &[(u32, u32)]) -> Result<(String, compare::Measured), Failure> {
+    let Some((name, file)) = spec.split_once('=').filter(|(n, f)| !n.is_empty() && !f.is_empty()) else {
+        return Err(Failure::Input(anyhow!("--peer {spec}: expected NAME=FILE (for example fraktaler-3=f3.exr)")));
+    };
+    let path = std::path::Path::new(file);
+    let raw = deepfield::io::read_exr_planes(path, usize::MAX).map_err(Failure::input)?;
+    let bias = deepfield::io::read_exr_iteration_bias(path).map_err(Failure::input)?;
+    let (mut n, mut nf) = (Vec::new(), Vec::new());
+    for strip in &raw.strips {
+        n.extend_from_slice(&strip.n);
+        nf.extend_from_slice(&strip.nf);
+    }
+    let m = compare::peer::measured(&n, &nf, (raw.header.width, raw.header.height), size, bias, pixels)
+        .map_err(|e| Failure::Input(anyhow!("--peer {name}: {file}: {e}")))?;
+    Ok((format!("peer {name}"), m))
+}
+
 const KEYS: [&str; 11] = [
     "engine",
     "seconds",
@@ -133,15 +171,17 @@ const KEYS: [&str; 11] = [
 ];
 
 fn fields(r: &Row) -> [String; 11] {
+    // Not measured (a peer's time and distance errors): "-".
+    let or_dash = |x: f64, s: String| if x.is_nan() { "-".to_string() } else { s };
     [
         r.engine.clone(),
-        format!("{:.4}", r.seconds),
-        format!("{:.4e}", r.iterations_per_second),
+        or_dash(r.seconds, format!("{:.4}", r.seconds)),
+        or_dash(r.iterations_per_second, format!("{:.4e}", r.iterations_per_second)),
         format!("{:.6}", r.n_mismatch_fraction),
         format!("{:.3e}", r.nf_error_p50),
         format!("{:.3e}", r.nf_error_p99),
-        format!("{:.3e}", r.de_error_p50),
-        format!("{:.3e}", r.de_error_p99),
+        or_dash(r.de_error_p50, format!("{:.3e}", r.de_error_p50)),
+        or_dash(r.de_error_p99, format!("{:.3e}", r.de_error_p99)),
         r.compared.to_string(),
         r.ill_conditioned.to_string(),
         r.nf_ill_conditioned.to_string(),

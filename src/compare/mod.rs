@@ -19,6 +19,7 @@
 pub mod boundary;
 pub mod fuzz;
 pub mod kf_maps;
+pub mod peer;
 mod truth;
 pub mod views;
 

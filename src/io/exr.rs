@@ -360,3 +360,20 @@ pub fn read_exr_scene(path: &Path) -> Result<Option<String>, IoError> {
         _ => None,
     }))
 }
+
+/// The `IterationsBias` attribute of an EXR's first layer: what Kalles Fraktaler,
+/// Fraktaler-3 and fractall-rust add to every escape count they store in N (1024 in the
+/// latter two). 0 when the file has none (deepfield's own files) or a negative one.
+pub fn read_exr_iteration_bias(path: &Path) -> Result<u32, IoError> {
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| IoError::caused(path, e))?;
+    let key = Text::from("IterationsBias");
+    Ok(meta
+        .headers
+        .first()
+        .and_then(|h| h.own_attributes.other.get(&key).or_else(|| h.shared_attributes.other.get(&key)))
+        .and_then(|v| match v {
+            AttributeValue::I32(b) => u32::try_from(*b).ok(),
+            _ => None,
+        })
+        .unwrap_or(0))
+}

@@ -26,7 +26,7 @@ mod tile_exr;
 pub use atomic::AtomicFile;
 pub use bitmap::load_bitmap;
 pub use error::{Cause, IoError};
-pub use exr::{ExrEncoder, ExrLayout, ExrWriter, TILE_ATTRIBUTE, read_exr_scene};
+pub use exr::{ExrEncoder, ExrLayout, ExrWriter, TILE_ATTRIBUTE, read_exr_iteration_bias, read_exr_scene};
 pub use exr_read::{ExrStrips, RawData, RawHeader, read_exr_planes};
 pub use png::{PngEncoder, PngWriter, SCENE_KEYWORD, read_png_scene, write_png_rgb8};
 pub use scene_source::{SceneSource, read_scene_source};

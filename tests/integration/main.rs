@@ -15,6 +15,7 @@ mod interior;
 mod kfr_presets;
 mod layout;
 mod locate;
+mod peer;
 mod reference;
 mod sink;
 mod units;
