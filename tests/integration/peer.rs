@@ -49,7 +49,7 @@ fn a_peers_values_are_scored_beside_the_engine_that_made_them() {
     let raw = deepfield::io::read_exr_planes(&dir.join("own.exr"), usize::MAX).unwrap();
     let (n, nf): (Vec<u32>, Vec<f32>) =
         (raw.strips.iter().flat_map(|s| s.n.clone()).collect(), raw.strips.iter().flat_map(|s| s.nf.clone()).collect());
-    assert!(n.iter().any(|&v| v == u32::MAX) && n.iter().any(|&v| v != u32::MAX), "interior and exterior in view");
+    assert!(n.contains(&u32::MAX) && n.iter().any(|&v| v != u32::MAX), "interior and exterior in view");
     write_peer(&dir.join("peer.exr"), (64, 48), &n, &nf, 0);
     write_peer(&dir.join("late.exr"), (64, 48), &n, &nf, 1);
     let args = ["compare", "scene.toml", "--samples", "60", "--only", "f64", "--json"];
