@@ -136,7 +136,7 @@ fn single_steps_one_thread(bencher: divan::Bencher<'_, '_>) {
     bencher.counter(ItemsCount::new(iterations)).bench(|| one_thread(|| run(&params, false)));
 }
 
-/// The seahorse descent at zoom 1e6 (the view of `scripts/descent-table.sh`), where `auto`
+/// The seahorse descent at zoom 1e6 (the view of `scripts/descent-trade.sh`), where `auto`
 /// first leaves direct f64 for perturbation: 256×192 samples, 5000 iterations, long orbits
 /// (about 2000 iterations a sample, a rebase every 50).
 const DESCENT_E6: &str = r##"
