@@ -226,7 +226,8 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
         out += &line(&c.iter().map(String::as_str).collect::<Vec<_>>());
     }
     out + "pixels: compared for N (orbits passing within 1e-9 of the escape circle left out); \
-           ill-cond.: wrong N where the true N changes within 1e-9 pixel (left out); \
+           ill-cond.: wrong N where the true N changes within 1e-9 pixel, or the orbit spreads 1e-9 pixel \
+           to 1 while |z| <= 2 (left out); \
            NF ill-cond.: NF more than 1e-4 off where the true NF changes by more than 1e-4 within 1e-9 pixel \
            (left out of the NF and DE errors)\n"
 }

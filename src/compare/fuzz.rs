@@ -7,7 +7,8 @@
 //! instruction sets must agree bit for bit (they do the same arithmetic); each engine's
 //! values at the sampled pixels are then scored against the truth as `deepfield compare`
 //! scores them, with the same exemptions (orbits passing within 1e-9 of the escape circle,
-//! pixels whose true N changes within 1e-9 of a pixel, and, for NF and distance errors,
+//! pixels whose true N changes within 1e-9 of a pixel or whose orbit spreads 1e-9 of a pixel
+//! to a unit (chaotic), and, for NF and distance errors,
 //! pixels whose true NF changes by more than 1e-4 within 1e-9 of a pixel). The bar, per
 //! configuration: no N mismatch, NF error median <= 1e-6 and 99th percentile <= 1e-4,
 //! distance-estimate error median <= 1e-6, and no NaN or infinity in any value.

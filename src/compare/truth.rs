@@ -31,8 +31,15 @@ pub struct Truth {
     pub dz: [f64; 2],
     /// Some |z_k| came within 1e-9 relative of the escape radius: N is ill-conditioned.
     pub near_circle: bool,
-    /// N changes when the point moves 1e-9 sample spacings (set by
-    /// [`super::mark_ill_conditioned`], only on pixels some engine got wrong).
+    /// About log2 of the largest |dz_k / d(parameter)| times the sample spacing while
+    /// |z_k| <= 2 (the binary exponent of the largest entry of the Jacobian; `i32::MIN`
+    /// where it stayed 0): how far the orbit spreads a neighbourhood of the pixel, in units
+    /// of the spacing, before it leaves the disk the bounded orbits live in
+    /// ([`Truth::spreads`]).
+    pub spread_log2: i32,
+    /// N changes when the point moves 1e-9 sample spacings, or the orbit spreads that
+    /// distance to a unit ([`Truth::spreads`]) (set by [`super::mark_ill_conditioned`], only
+    /// on pixels some engine got wrong).
     pub ill_conditioned: bool,
     /// N holds but NF changes by more than [`super::NF_CONDITION`] when the point moves 1e-9
     /// sample spacings (set likewise, only where some engine's NF is that far off).
@@ -46,8 +53,35 @@ impl Truth {
     /// An orbit's end as a big-float loop finds it: escaped at `n` with z_n and dz_n, or
     /// (None) interior; the conditioning flags are set later, where some engine disagrees
     /// ([`super::mark_ill_conditioned`]).
-    fn found(n: Option<u32>, z: [f64; 2], dz: [f64; 2], near_circle: bool, ln_degree: f64) -> Truth {
-        Truth { n, z, dz, near_circle, ill_conditioned: false, nf_ill_conditioned: false, ln_degree }
+    fn found(n: Option<u32>, z: [f64; 2], dz: [f64; 2], near_circle: bool, spread_log2: i32, ln_degree: f64) -> Truth {
+        Truth { n, z, dz, near_circle, spread_log2, ill_conditioned: false, nf_ill_conditioned: false, ln_degree }
+    }
+
+    /// Whether the orbit spreads a disk of `shift` sample spacings around the pixel to a
+    /// size of 1 or more while |z| <= 2: some z_k of the points in that disk lie a whole unit
+    /// apart, so the disk covers a macroscopic part of the bounded dynamics and which of its
+    /// points escape, and when, is decided by digits finer than `shift` of a spacing. A
+    /// chaotic orbit does that (the Burning Ship's and Celtic's miniship neighbourhoods are
+    /// full of them): its growth of about e^(λk) turns any rounding, f64's at each step or
+    /// the truth's own at its precision, into an unrelated orbit, so the truth at the pixel's
+    /// centre is one draw among its neighbours and N is ill-conditioned.
+    pub fn spreads(&self, shift: f64) -> bool {
+        self.spread_log2 != i32::MIN && f64::from(self.spread_log2) + shift.log2() >= 0.0
+    }
+}
+
+/// The largest binary exponent among `parts` (entries of d z / d parameter), `i32::MIN`
+/// where all are zero.
+fn max_exponent<'a>(parts: impl IntoIterator<Item = &'a Float>) -> i32 {
+    parts.into_iter().filter_map(Float::get_exponent).max().unwrap_or(i32::MIN)
+}
+
+/// [`Truth::spread_log2`] from the largest exponent of the Jacobian's entries and the
+/// spacing's.
+fn spread(max_exp: i32, spacing: &Float) -> i32 {
+    match (max_exp, spacing.get_exponent()) {
+        (i32::MIN, _) | (_, None) => i32::MIN,
+        (e, Some(s)) => e.saturating_add(s),
     }
 }
 
@@ -67,6 +101,7 @@ pub fn orbit(
     };
     let r2 = escape * escape;
     let mut near = false;
+    let mut widest = i32::MIN;
     let f = |v: &Float| bigfloat::to_floatexp(v).to_f64();
     for n in 0..=max_iter {
         let xx = x.square_prec_ref(bits).0;
@@ -75,13 +110,16 @@ pub fn orbit(
         if ((m2 / r2).sqrt() - 1.0).abs() < 1e-9 {
             near = true;
         }
+        if m2 <= 4.0 {
+            widest = widest.max(max_exponent([&dx, &dy]));
+        }
         if m2 > r2 {
             let scaled = |d: &Float| -> f64 {
                 let v: FloatExp = bigfloat::to_floatexp(d) * bigfloat::to_floatexp(spacing);
                 v.to_f64()
             };
             let (z, dz) = ([f(&x), f(&y)], [scaled(&dx), scaled(&dy)]);
-            return Truth::found(Some(n), z, dz, near, std::f64::consts::LN_2);
+            return Truth::found(Some(n), z, dz, near, spread(widest, spacing), std::f64::consts::LN_2);
         }
         if n == max_iter {
             break;
@@ -98,7 +136,7 @@ pub fn orbit(
         x = xx.sub_prec(yy, bits).0.add_prec_ref_ref(&cx, bits).0;
         y = (xy << 1u32).add_prec_ref_ref(&cy, bits).0;
     }
-    Truth::found(None, [0.0; 2], [0.0; 2], near, std::f64::consts::LN_2)
+    Truth::found(None, [0.0; 2], [0.0; 2], near, spread(widest, spacing), std::f64::consts::LN_2)
 }
 
 /// Iterates the orbit of `point` under `formula` (Mandelbrot form: c = point, z_0 = 0;
@@ -133,11 +171,15 @@ pub fn orbit_formula(
     };
     let r2 = escape * escape;
     let mut near = false;
+    let mut widest = i32::MIN;
     let f = |v: &Float| bigfloat::to_floatexp(v).to_f64();
     for n in 0..=max_iter {
         let m2 = f(&z[0].v.square_prec_ref(bits).0) + f(&z[1].v.square_prec_ref(bits).0);
         if ((m2 / r2).sqrt() - 1.0).abs() < 1e-9 {
             near = true;
+        }
+        if m2 <= 4.0 {
+            widest = widest.max(max_exponent(z.iter().flat_map(|p| p.d.iter())));
         }
         if m2 > r2 {
             let scaled = |d: &Float| -> f64 {
@@ -148,7 +190,7 @@ pub fn orbit_formula(
             // J times the spacing, rows first, then the derivative a distance estimate uses.
             let j = [[scaled(&z[0].d[0]), scaled(&z[0].d[1])], [scaled(&z[1].d[0]), scaled(&z[1].d[1])]];
             let dz = gradient_dz(zf, j);
-            return Truth::found(Some(n), zf, dz, near, formula.ln_degree());
+            return Truth::found(Some(n), zf, dz, near, spread(widest, spacing), formula.ln_degree());
         }
         if n == max_iter {
             break;
@@ -156,7 +198,7 @@ pub fn orbit_formula(
         let step = kf_maps::kf_step_dual(formula.phase(n), &z, &c, bits);
         z = step.expect("every phase of a validated formula is a row of KINDS").z;
     }
-    Truth::found(None, [0.0; 2], [0.0; 2], near, formula.ln_degree())
+    Truth::found(None, [0.0; 2], [0.0; 2], near, spread(widest, spacing), formula.ln_degree())
 }
 
 #[cfg(test)]
@@ -230,5 +272,34 @@ mod tests {
         let want = gradient_dz(t.z, j);
         let size = want[0].hypot(want[1]);
         assert!((t.dz[0] - want[0]).abs() <= 1e-6 * size && (t.dz[1] - want[1]).abs() <= 1e-6 * size, "{t:?} {want:?}");
+    }
+
+    /// A pixel of a Burning Ship miniship's neighbourhood (zoom 1.6e12, 64×48) whose
+    /// big-float orbit stays bounded in a chaotic set that a few percent of its neighbours
+    /// leave: its Jacobian spreads 1e-9 of a spacing to a unit within the limit, so its N is
+    /// ill-conditioned although two shifted orbits stay bounded too. Points on attracting
+    /// cycles, the Burning Ship's (c = -0.2 + 0.01i, the real quadratic's fixed point) and
+    /// z² + c's (-0.1 + 0.1i), do not spread at any depth a view has.
+    #[test]
+    fn chaotic_bounded_orbits_spread_and_attracted_ones_do_not() {
+        let ship = Formula::single(Phase { kind: crate::formula::Kind::BurningShip, power: 2 });
+        let bits = 160;
+        let dec = |t: &str| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), bits);
+        let spacing = dec("1.284336128e-12").mul_prec(f(2.0 / 48.0), bits).0;
+        let at = |centre: &Float, k: f64| centre.add_prec_ref_ref(&f(k).mul_prec_ref_ref(&spacing, bits).0, bits).0;
+        let point = [
+            at(&dec("-0.962730847674877211587188843374065790131981540325592592438619377"), -17.5),
+            at(&dec("-0.5562060518186959832065133561785838685815563879120244049347743243"), 18.5),
+        ];
+        let t = orbit_formula(&point, None, ship, 3000, 65536.0, &spacing, bits);
+        assert_eq!(t.n, None, "{t:?}");
+        assert!(t.spreads(1e-9), "{t:?}");
+        for (formula, c) in [(ship, [-0.2, 0.01]), (Formula::default(), [-0.1, 0.1])] {
+            for spacing in [1e-3, 1e-12, 1e-300] {
+                let t = orbit_formula(&[f(c[0]), f(c[1])], None, formula, 3000, 65536.0, &f(spacing), bits);
+                assert_eq!(t.n, None, "{c:?}");
+                assert!(t.spread_log2 > i32::MIN && !t.spreads(1e-9), "{c:?} {spacing}: {t:?}");
+            }
+        }
     }
 }
