@@ -305,10 +305,22 @@ pub const KINDS: [KindInfo; 26] = [
     ),
 ];
 
+// Each family's row is at its index in `Kind`, so that `Kind::info` is one load: a hybrid's
+// loops look their phase's shape up at every step (`formula::Cycle`), where a search of the
+// table cost up to 26 comparisons an iteration.
+const _: () = {
+    let mut i = 0;
+    while i < KINDS.len() {
+        assert!(KINDS[i].kind as usize == i, "KINDS must list the families in the order of `Kind`");
+        i += 1;
+    }
+};
+
 impl Kind {
     /// The family's row.
+    #[inline(always)]
     pub fn info(self) -> &'static KindInfo {
-        KINDS.iter().find(|k| k.kind == self).expect("every kind has a row")
+        &KINDS[self as usize]
     }
 
     /// The name users write.
@@ -338,6 +350,7 @@ impl Kind {
     }
 
     /// The four steps of the map at power `p`: (fold in, power, fold out, sign).
+    #[inline(always)]
     pub fn shape(self, p: u32) -> (u8, u32, u8, u8) {
         let i = self.info();
         (i.fold_in, p, i.fold_out, if p == 3 { i.sign3 } else { i.sign })
