@@ -129,7 +129,7 @@ fn main() {
     let cancel = AtomicBool::new(false);
     let start = Instant::now();
     let mut rng = Rng::new(f.seed);
-    let (mut checked, mut failed) = (0u32, 0u32);
+    let (mut checked, mut failed, mut n_only) = (0u32, 0u32, 0u32);
     println!(
         "formula {}, seed {}, instruction sets {:?}, bar {BAR:?}",
         f.formula,
@@ -167,9 +167,19 @@ fn main() {
             }
         };
         checked += 1;
-        let worst = verdict.rows.iter().map(|r| r.nf_error_p99).fold(0.0, f64::max);
+        // NF is scored over the escaped pixels whose N is right: say over how many, and
+        // that a view with none checked N only (its NF error is not 0, it is unmeasured).
+        let nf_pixels = verdict.rows.iter().map(|r| r.nf_scored).min().unwrap_or(0);
+        let nf = if nf_pixels == 0 {
+            n_only += 1;
+            "N only (no escaped pixel to score NF on)".to_string()
+        } else {
+            // f64::max skips NaN.
+            let worst = verdict.rows.iter().map(|r| r.nf_error_p99).fold(0.0, f64::max);
+            format!("NF p99 <= {worst:.1e} over {nf_pixels} px")
+        };
         println!(
-            "{:<28} zoom 1e{:<7.1} max {:>8} {:>5.1} s  {} configurations, NF p99 <= {worst:.1e}{}",
+            "{:<28} zoom 1e{:<7.1} max {:>8} {:>5.1} s  {} configurations, {nf}{}",
             view.name,
             -view.scene.log10_spacing() - (view.scene.height as f64 / 4.0).log10(),
             view.scene.max_iter,
@@ -200,7 +210,10 @@ fn main() {
             }
         }
     }
-    println!("{checked} views checked in {:.0} s, {failed} failed", start.elapsed().as_secs_f64());
+    println!(
+        "{checked} views checked in {:.0} s, {failed} failed, {n_only} of them N only",
+        start.elapsed().as_secs_f64()
+    );
     if failed > 0 {
         std::process::exit(1);
     }

@@ -111,6 +111,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
                 if k >= variants.len() {
                     // A peer's: no time of ours, no distance estimate.
                     (row.iterations_per_second, row.de_error_p50, row.de_error_p99) = (f64::NAN, f64::NAN, f64::NAN);
+                    row.de_scored = 0;
                 }
                 row
             })
@@ -156,7 +157,7 @@ fn peer(spec: &str, size: (usize, usize), pixels: &[(u32, u32)]) -> Result<(Stri
     Ok((format!("peer {name}"), m))
 }
 
-const KEYS: [&str; 11] = [
+const KEYS: [&str; 13] = [
     "engine",
     "seconds",
     "iterations_per_second",
@@ -166,23 +167,27 @@ const KEYS: [&str; 11] = [
     "de_error_p50",
     "de_error_p99",
     "compared",
+    "nf_scored",
+    "de_scored",
     "ill_conditioned",
     "nf_ill_conditioned",
 ];
 
-fn fields(r: &Row) -> [String; 11] {
-    // Not measured (a peer's time and distance errors): "-".
+fn fields(r: &Row) -> [String; 13] {
+    // Not measured (a peer's time and distance errors, errors over no pixel): "-".
     let or_dash = |x: f64, s: String| if x.is_nan() { "-".to_string() } else { s };
     [
         r.engine.clone(),
         or_dash(r.seconds, format!("{:.4}", r.seconds)),
         or_dash(r.iterations_per_second, format!("{:.4e}", r.iterations_per_second)),
         format!("{:.6}", r.n_mismatch_fraction),
-        format!("{:.3e}", r.nf_error_p50),
-        format!("{:.3e}", r.nf_error_p99),
+        or_dash(r.nf_error_p50, format!("{:.3e}", r.nf_error_p50)),
+        or_dash(r.nf_error_p99, format!("{:.3e}", r.nf_error_p99)),
         or_dash(r.de_error_p50, format!("{:.3e}", r.de_error_p50)),
         or_dash(r.de_error_p99, format!("{:.3e}", r.de_error_p99)),
         r.compared.to_string(),
+        r.nf_scored.to_string(),
+        r.de_scored.to_string(),
         r.ill_conditioned.to_string(),
         r.nf_ill_conditioned.to_string(),
     ]
@@ -207,10 +212,12 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
         "DE p50",
         "DE p99",
         "pixels",
+        "NF px",
+        "DE px",
         "ill-cond.",
         "NF ill-cond.",
     ];
-    let cells: Vec<[String; 11]> = rows.iter().map(fields).collect();
+    let cells: Vec<[String; 13]> = rows.iter().map(fields).collect();
     let width: Vec<usize> =
         (0..heads.len()).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
     let line = |c: &[&str]| -> String {
@@ -226,6 +233,8 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
         out += &line(&c.iter().map(String::as_str).collect::<Vec<_>>());
     }
     out + "pixels: compared for N (orbits passing within 1e-9 of the escape circle left out); \
+           NF px, DE px: the pixels the NF and distance errors are taken over (escaped, N right; \
+           \"-\": none); \
            ill-cond.: wrong N where the true N changes within 1e-9 pixel, or the orbit spreads 1e-9 pixel \
            to 1 while |z| <= 2 (left out); \
            NF ill-cond.: NF more than 1e-4 off where the true NF changes by more than 1e-4 within 1e-9 pixel \

@@ -129,16 +129,17 @@ pub fn check(
         .map(|(v, m)| score(&v.name, m, &truth, scene.escape_radius, scene.transform))
         .collect();
     for r in &rows {
-        let mut fail = |what: &str, value: f64, limit: f64| {
-            // NaN fails too.
-            if value.is_nan() || value > limit {
+        // An error over no pixel is NaN and measures nothing (the row's `nf_scored` and
+        // `de_scored` say so); over any pixel, NaN fails.
+        let mut fail = |what: &str, value: f64, limit: f64, over: usize| {
+            if over > 0 && (value.is_nan() || value > limit) {
                 failures.push(format!("{}: {what} {value:.3e} > {limit:e}", r.engine));
             }
         };
-        fail("N mismatch", r.n_mismatch_fraction, bar.n_mismatch);
-        fail("NF p50", r.nf_error_p50, bar.nf_p50);
-        fail("NF p99", r.nf_error_p99, bar.nf_p99);
-        fail("DE p50", r.de_error_p50, bar.de_p50);
+        fail("N mismatch", r.n_mismatch_fraction, bar.n_mismatch, r.compared);
+        fail("NF p50", r.nf_error_p50, bar.nf_p50, r.nf_scored);
+        fail("NF p99", r.nf_error_p99, bar.nf_p99, r.nf_scored);
+        fail("DE p50", r.de_error_p50, bar.de_p50, r.de_scored);
     }
     Ok(Verdict { rows, failures })
 }

@@ -124,6 +124,12 @@ pub struct Row {
     /// Pixels compared (sampled minus those near the escape circle and the ill-conditioned
     /// ones this variant got wrong).
     pub compared: usize,
+    /// Pixels the NF errors are taken over (escaped, N right, not left out); with none, the
+    /// NF quantiles are NaN (nothing measured), not 0.
+    pub nf_scored: usize,
+    /// Pixels the distance-estimate errors are taken over (those of `nf_scored` with a finite
+    /// true distance); with none, the DE quantiles are NaN.
+    pub de_scored: usize,
     /// Pixels whose N this variant got wrong where N is ill-conditioned (it changes within
     /// 1e-9 sample spacings, [`mark_ill_conditioned`]); not counted as mismatches.
     pub ill_conditioned: usize,
@@ -439,10 +445,10 @@ fn run_gpu(
     Ok(Measured { values: pick(&computed, pixels), iterations, seconds })
 }
 
-/// The value at fraction q of a sorted list (0 when empty).
+/// The `q` quantile of `sorted`; NaN for no values (an error nobody measured is not 0).
 fn quantile(sorted: &[f64], q: f64) -> f64 {
     if sorted.is_empty() {
-        return 0.0;
+        return f64::NAN;
     }
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
@@ -541,6 +547,8 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         de_error_p50: quantile(&de, 0.5),
         de_error_p99: quantile(&de, 0.99),
         compared,
+        nf_scored: nf.len(),
+        de_scored: de.len(),
         ill_conditioned: excused,
         nf_ill_conditioned: nf_excused,
     }
@@ -583,7 +591,25 @@ mod tests {
         let m = Measured { values, iterations: 20, seconds: 1.0 };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!(row.nf_ill_conditioned, 1, "{row:?}");
+        assert_eq!((row.nf_scored, row.de_scored), (1, 1), "{row:?}");
         assert_eq!(suspects(&[m], &truths, 2.0), vec![0, 1]);
+    }
+
+    /// Errors over no pixel are NaN, not 0: a view whose sampled pixels are all interior (or
+    /// all wrong in N) has its N scored and no NF or distance error to claim.
+    #[test]
+    fn errors_over_no_pixel_are_not_zero() {
+        let mut interior = truth(10);
+        interior.n = None;
+        let truths = vec![interior, interior, truth(10)];
+        // Right on the interior pixels, wrong N on the escaped one.
+        let values = vec![(INTERIOR, 0.0, 0.0, 0.0), (INTERIOR, 0.0, 0.0, 0.0), (12, 0.5, 0.0, 0.0)];
+        let m = Measured { values, iterations: 30, seconds: 1.0 };
+        let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
+        assert_eq!((row.compared, row.nf_scored, row.de_scored), (3, 0, 0), "{row:?}");
+        assert!(row.nf_error_p50.is_nan() && row.nf_error_p99.is_nan(), "{row:?}");
+        assert!(row.de_error_p50.is_nan() && row.de_error_p99.is_nan(), "{row:?}");
+        assert!((row.n_mismatch_fraction - 1.0 / 3.0).abs() < 1e-15, "{row:?}");
     }
 
     /// Pixel (506, 307) of julia-deep-e40 escapes at 702 in big floats and at 713 a

@@ -355,6 +355,10 @@ fn compare_measures_engines_against_the_truth() {
         ] {
             assert!(r[key].as_f64().is_some_and(f64::is_finite), "{key} in {r}");
         }
+        // The errors above are over escaped pixels, and say over how many.
+        for key in ["nf_scored", "de_scored"] {
+            assert!(r[key].as_u64().is_some_and(|n| n > 0 && n <= r["compared"].as_u64().unwrap()), "{key} in {r}");
+        }
     }
     let f64_row = rows.iter().find(|r| r["engine"] == "f64").unwrap();
     assert_eq!(f64_row["n_mismatch_fraction"], 0.0, "{f64_row}");

@@ -64,7 +64,7 @@ fn a_peers_values_are_scored_beside_the_engine_that_made_them() {
     // Every escaping sample one iteration late: every compared escaping pixel is wrong.
     assert!(late["n_mismatch_fraction"].as_f64().unwrap() > 0.5, "{late}");
     // No time and no distance estimate of a peer's: null in JSON, "-" in the table.
-    assert!(same["seconds"].is_null() && same["de_error_p99"].is_null(), "{same}");
+    assert!(same["seconds"].is_null() && same["de_error_p99"].is_null() && same["de_scored"] == 0, "{same}");
     let o = deepfield(&["compare", "scene.toml", "--samples", "5", "--only", "f64", "--peer", "same=peer.exr"], &dir);
     let text = String::from_utf8_lossy(&o.stdout);
     let line = text.lines().find(|l| l.starts_with("peer same")).unwrap_or_else(|| panic!("{text}"));
