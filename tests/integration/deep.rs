@@ -592,7 +592,7 @@ fn the_truths_nf_is_in_the_formulas_degree() {
     let mut cubic = super::util::scene(&std::fs::read_to_string(path).expect("shipped scene"));
     (cubic.width, cubic.height) = (80, 60);
     let quartic = super::util::scene(
-        "version = 1\n[formula]\nkind = \"mandelbrot\"\npower = 4\n[view]\ncenter = [\"0.36\", \"0.52\"]\nzoom = \"40\"\nwidth = 80\nheight = 60\n[iteration]\nmax = 2000\n",
+        "version = 1\n[formula]\nkind = \"mandelbrot\"\npower = 4\n[view]\ncenter = [\"0.5\", \"0.6\"]\nzoom = \"40\"\nwidth = 80\nheight = 60\n[iteration]\nmax = 2000\n",
     );
     let levels = [deepfield::simd_level::SimdLevel::detect()];
     for (name, scene) in [("mandelbrot^3 at 2e50", &cubic), ("mandelbrot^4 at 40", &quartic)] {
