@@ -28,12 +28,14 @@ while read -r scene samples; do
     "$bin" compare "scenes/$scene.toml" --sample-only --samples "$n" --csv -q "$@" |
         tail -n +2 |
         awk -F, -v s="$scene" '
+            # An error over no pixel is "-" in the CSV: keep it, not 0.
+            function g(x) { return x == "-" ? "-" : sprintf("%.2g", x) }
             { row[NR] = $0; if ($1 ~ /^perturb-f64/) f64 = 1 }
             END {
                 for (k = 1; k <= NR; k++) {
                     split(row[k], c, ",")
                     if (f64 && c[1] ~ /^perturb-floatexp/) continue
-                    printf "| %s | %s | %.5f | %d | %d, %d | %.2g | %.2g | %.2g | %.2g |\n", s, c[1], c[4], c[9], c[10], c[11], c[5], c[6], c[7], c[8]
+                    printf "| %s | %s | %.5f | %d | %d, %d | %s | %s | %s | %s |\n", s, c[1], c[4], c[9], c[12], c[13], g(c[5]), g(c[6]), g(c[7]), g(c[8])
                 }
             }'
 done <<'SCENES'

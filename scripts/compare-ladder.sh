@@ -24,5 +24,8 @@ for zoom in 1 1e10 1e14 1e16 1e50 1e300 1e320 1e1000; do
     "$bin" compare --center "$c" --zoom "$zoom" --size "$size" --max-iter 20000 \
         --samples "$samples" --csv -q |
         tail -n +2 |
-        awk -F, -v z="$zoom" '{ printf "| %s | %s | %.3f | %.3g | %.4f | %.2g | %.2g | %.2g | %.2g |\n", z, $1, $2, $3, $4, $5, $6, $7, $8 }'
+        awk -F, -v z="$zoom" '
+            # An error over no pixel is "-" in the CSV: keep it, not 0.
+            function g(x) { return x == "-" ? "-" : sprintf("%.2g", x) }
+            { printf "| %s | %s | %.3f | %.3g | %.4f | %s | %s | %s | %s |\n", z, $1, $2, $3, $4, g($5), g($6), g($7), g($8) }'
 done

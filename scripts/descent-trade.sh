@@ -39,7 +39,7 @@ for e in $(seq 3 20); do
         ratio="-"
     fi
     rows="$("$bin" compare "${common[@]}" --size 400x300 --samples "$samples" --only f64 --csv -q 2>/dev/null | tail -n +2)"
-    pick() { awk -F, -v e="$1" '$1 == e { printf "%.4f | %.2g", $4, $6 }' <<< "$rows"; }
+    pick() { awk -F, -v e="$1" '$1 == e { printf "%.4f | %s", $4, ($6 == "-" ? "-" : sprintf("%.2g", $6)) }' <<< "$rows"; }
     f64_acc="$(pick f64)"
     bla_acc="$(pick "perturb-f64 bla 1e-14")"
     echo "| $zoom | $engine | $auto_s | $f64_s | $ratio | ${f64_acc:-- | -} | ${bla_acc:-- | -} |"
