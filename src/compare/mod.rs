@@ -349,8 +349,11 @@ pub struct Measured {
     pub values: Vec<(u32, f32, f32, f32)>,
     /// Iterations the samples advanced.
     pub iterations: u64,
-    /// Wall-clock seconds.
+    /// Wall-clock seconds; NaN where not this process's to measure (a peer's).
     pub seconds: f64,
+    /// Whether `values` carry a distance estimate (DEX, DEY); a peer's do not, and
+    /// [`score`] then reports no distance error.
+    pub distance: bool,
 }
 
 /// Runs a variant over the whole sample grid (or only the rows holding `pixels`), its CPU
@@ -386,7 +389,7 @@ pub fn run(
         .collect::<Result<_, _>>()?;
     let seconds = start.elapsed().as_secs_f64();
     let iterations = computed.iter().map(|c| c.2).sum();
-    Ok(Measured { values: pick(&computed, pixels), iterations, seconds })
+    Ok(Measured { values: pick(&computed, pixels), iterations, seconds, distance: true })
 }
 
 /// Rows of the sample grid to compute: all, or those holding `pixels`, in bands of up to
@@ -442,7 +445,7 @@ fn run_gpu(
     }
     let seconds = start.elapsed().as_secs_f64();
     let iterations = computed.iter().map(|c| c.2).sum();
-    Ok(Measured { values: pick(&computed, pixels), iterations, seconds })
+    Ok(Measured { values: pick(&computed, pixels), iterations, seconds, distance: true })
 }
 
 /// The `q` quantile of `sorted`; NaN for no values (an error nobody measured is not 0).
@@ -528,7 +531,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         let d_true = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
         let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
         let w = wx.hypot(wy);
-        if d_true.is_finite() && d_true > 0.0 && w > 0.0 {
+        if measured.distance && d_true.is_finite() && d_true > 0.0 && w > 0.0 {
             // The engines report the vector in image terms: the view's transform undone.
             let [tx, ty] = transform.gradient_to_image([d_true * wx / w, d_true * wy / w]);
             let err = (dx as f64 - tx).hypot(dy as f64 - ty) / d_true;
@@ -540,7 +543,12 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
     Row {
         engine: name.to_string(),
         seconds: measured.seconds,
-        iterations_per_second: if measured.seconds > 0.0 { measured.iterations as f64 / measured.seconds } else { 0.0 },
+        // NaN for a time not measured (a peer's), 0 for none spent.
+        iterations_per_second: if measured.seconds == 0.0 {
+            0.0
+        } else {
+            measured.iterations as f64 / measured.seconds
+        },
         n_mismatch_fraction: if compared > 0 { mismatched as f64 / compared as f64 } else { 0.0 },
         nf_error_p50: quantile(&nf, 0.5),
         nf_error_p99: quantile(&nf, 0.99),
@@ -579,7 +587,7 @@ mod tests {
         // Wrong on every pixel but the last, whose NF is the truth's too.
         let nf = true_nf(&truths[3], 2f64.ln()) as f32;
         let values = vec![(11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (10, nf, 0.0, 0.0)];
-        let m = Measured { values, iterations: 40, seconds: 1.0 };
+        let m = Measured { values, iterations: 40, seconds: 1.0, distance: true };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!((row.compared, row.ill_conditioned), (2, 1), "{row:?}");
         assert_eq!(row.n_mismatch_fraction, 0.5, "{row:?}");
@@ -588,7 +596,7 @@ mod tests {
         let mut truths = vec![truth(10), truth(10)];
         truths[0].nf_ill_conditioned = true;
         let values = vec![(10, 0.3, 0.0, 0.0), (10, 0.3, 0.0, 0.0)];
-        let m = Measured { values, iterations: 20, seconds: 1.0 };
+        let m = Measured { values, iterations: 20, seconds: 1.0, distance: true };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!(row.nf_ill_conditioned, 1, "{row:?}");
         assert_eq!((row.nf_scored, row.de_scored), (1, 1), "{row:?}");
@@ -604,12 +612,30 @@ mod tests {
         let truths = vec![interior, interior, truth(10)];
         // Right on the interior pixels, wrong N on the escaped one.
         let values = vec![(INTERIOR, 0.0, 0.0, 0.0), (INTERIOR, 0.0, 0.0, 0.0), (12, 0.5, 0.0, 0.0)];
-        let m = Measured { values, iterations: 30, seconds: 1.0 };
+        let m = Measured { values, iterations: 30, seconds: 1.0, distance: true };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!((row.compared, row.nf_scored, row.de_scored), (3, 0, 0), "{row:?}");
         assert!(row.nf_error_p50.is_nan() && row.nf_error_p99.is_nan(), "{row:?}");
         assert!(row.de_error_p50.is_nan() && row.de_error_p99.is_nan(), "{row:?}");
         assert!((row.n_mismatch_fraction - 1.0 / 3.0).abs() < 1e-15, "{row:?}");
+    }
+
+    /// Values without a distance estimate or a time of ours (a peer's) are scored on N and
+    /// NF alone: no distance error, no rate, where the same values with them have both.
+    #[test]
+    fn a_peers_values_have_no_distance_error_and_no_rate() {
+        let truths = vec![truth(10), truth(10)];
+        let nf = true_nf(&truths[0], 2f64.ln()) as f32;
+        let values = vec![(10, nf, 0.0, 0.0), (10, nf, 0.0, 0.0)];
+        let ours = Measured { values: values.clone(), iterations: 20, seconds: 1.0, distance: true };
+        let row = score("ours", &ours, &truths, 2.0, Transform::IDENTITY);
+        assert_eq!((row.nf_scored, row.de_scored), (2, 2), "{row:?}");
+        assert!(row.de_error_p99.is_finite() && row.iterations_per_second == 20.0, "{row:?}");
+        let peer = Measured { values, iterations: 0, seconds: f64::NAN, distance: false };
+        let row = score("peer", &peer, &truths, 2.0, Transform::IDENTITY);
+        assert_eq!((row.compared, row.nf_scored, row.de_scored), (2, 2, 0), "{row:?}");
+        assert!(row.de_error_p50.is_nan() && row.de_error_p99.is_nan(), "{row:?}");
+        assert!(row.iterations_per_second.is_nan() && row.nf_error_p99 < 1e-6, "{row:?}");
     }
 
     /// Pixel (506, 307) of julia-deep-e40 escapes at 702 in big floats and at 713 a

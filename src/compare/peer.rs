@@ -58,7 +58,7 @@ pub fn measured(
             (unbiased(n[k], bias), nf[k], 0.0, 0.0)
         })
         .collect();
-    Ok(Measured { values, iterations: 0, seconds: f64::NAN })
+    Ok(Measured { values, iterations: 0, seconds: f64::NAN, distance: false })
 }
 
 #[cfg(test)]
