@@ -18,8 +18,9 @@
 //! views' Julia forms come from `julia-boundary`), `--list-formulas` (print every family at
 //! every power, one a line, and stop; `scripts/fuzz-deep.sh --formulas` loops over them).
 //!
-//! Boundary descents sample the view at every step of the way down, so the any-formula kinds
-//! go no deeper than 1e100 (`ANY_FORMULA_DEPTH`).
+//! Boundary descents sample the view at every step of the way down (by perturbation about
+//! one big-float orbit a step past zoom 1e9), so the any-formula kinds go no deeper than
+//! 1e400 (`ANY_FORMULA_DEPTH`).
 #![allow(clippy::print_stdout)] // printing the findings is the point
 
 use std::sync::atomic::AtomicBool;
@@ -31,7 +32,7 @@ use deepfield::formula::Formula;
 use deepfield::formula::kind::KINDS;
 
 /// The deepest zoom (log10) the boundary-descent kinds are drawn at.
-const ANY_FORMULA_DEPTH: f64 = 100.0;
+const ANY_FORMULA_DEPTH: f64 = 400.0;
 use deepfield::simd_level::SimdLevel;
 
 struct Flags {

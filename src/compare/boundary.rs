@@ -15,6 +15,10 @@
 //! after p steps (the centre of a minibrot or "miniship") by Newton's method on
 //! z_p(c) = 0 with the real 2×2 Jacobian, where it is invertible.
 //!
+//! Past zoom 1e9 a grid is sampled by perturbation about one big-float orbit of its centre
+//! ([`escape_times`]), not one big-float orbit a sample: that is what takes the descents
+//! to 1e300 and beyond in seconds to a minute.
+//!
 //! The orbits here use the engines' maps (`formula::Stepper`): this only chooses where to
 //! look; the truth the views are checked against is [`super::kf_maps`].
 
@@ -95,6 +99,87 @@ pub fn escape_time(formula: Formula, julia: Option<&BigC>, point: &BigC, limit: 
     None
 }
 
+/// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
+/// perturbation about one big-float orbit of `center`: the offsets' orbits are iterated as
+/// FloatExp deltas from it, and a delta is moved onto the orbit's start where the point's
+/// orbit comes nearer 0 than the delta is large, or where the centre's orbit ended (Zhuoran's
+/// rebasing; on a hybrid, onto the start of the phase the point is in). A descent only
+/// chooses where to look, so this need not be exact; it costs one big-float orbit a grid
+/// instead of one a sample, which takes the descents to 1e300 and beyond in seconds.
+pub fn escape_times(
+    formula: Formula,
+    julia: Option<&BigC>,
+    center: &BigC,
+    offsets: &[[FloatExp; 2]],
+    limit: u32,
+) -> Vec<Option<u32>> {
+    let s = Cycle(formula);
+    let (mut z, c) = match julia {
+        Some(c) => (center.clone(), c.with_bits(center.bits)),
+        None => (BigC::zero(center.bits), center.clone()),
+    };
+    // Z_0 .. Z_last: up to the centre's escape (that value included) or the limit.
+    let mut orbit = Vec::new();
+    for n in 0..limit {
+        let zf = z.to_fe().map(FloatExp::to_f64);
+        orbit.push(zf);
+        if zf[0] * zf[0] + zf[1] * zf[1] > ESCAPE2 {
+            break;
+        }
+        z = s.apply_big(n, &z).add(&c);
+    }
+    let period = s.period() as usize;
+    if orbit.len() <= period {
+        // Too short an orbit to rebase onto (a Julia centre that escapes at once).
+        return offsets.iter().map(|&o| escape_time(formula, julia, &shifted(center, o), limit, false)).collect();
+    }
+    offsets
+        .iter()
+        .map(|&o| {
+            let dc = if julia.is_some() { [FloatExp::ZERO; 2] } else { o };
+            let mut d = if julia.is_some() { o } else { [FloatExp::ZERO; 2] };
+            let mut m = 0usize;
+            for n in 0..limit as usize {
+                let zm = orbit[m];
+                let full = [zm[0] + d[0].to_f64(), zm[1] + d[1].to_f64()];
+                let r2 = full[0] * full[0] + full[1] * full[1];
+                if r2 > ESCAPE2 {
+                    return Some(n as u32);
+                }
+                if m + 1 == orbit.len() || r2 < (d[0] * d[0] + d[1] * d[1]).to_f64() {
+                    // Onto Z_k, k the phase of iteration n (0 for a single family), which
+                    // leaves the orbit room for a step (it is longer than the cycle).
+                    let k = n % period;
+                    let zk = orbit[k];
+                    d = [FloatExp::from(zm[0] - zk[0]) + d[0], FloatExp::from(zm[1] - zk[1]) + d[1]];
+                    m = k;
+                }
+                let step = s.delta(m as u32, orbit[m], d);
+                d = [step[0] + dc[0], step[1] + dc[1]];
+                m += 1;
+            }
+            None
+        })
+        .collect()
+}
+
+/// The escape indices of `center` + `offsets[k]`: each in f64 where `shallow`, else by
+/// [`escape_times`].
+fn sample(
+    formula: Formula,
+    julia: Option<&BigC>,
+    center: &BigC,
+    offsets: &[[FloatExp; 2]],
+    limit: u32,
+    shallow: bool,
+) -> Vec<Option<u32>> {
+    if shallow {
+        offsets.iter().map(|&o| escape_time(formula, julia, &shifted(center, o), limit, true)).collect()
+    } else {
+        escape_times(formula, julia, center, offsets, limit)
+    }
+}
+
 /// Follows the boundary of `formula`'s set (Julia set of `julia` where given) down from
 /// the view (`center`, `radius`) to zoom 10^`log10_zoom`, with iteration limits up to
 /// `max_iter`; None when the boundary is lost (a Julia set that is dust, a limit too low).
@@ -116,11 +201,11 @@ pub fn descend(
         center = center.with_bits(bits);
         let step = radius.mul_f64(2.0 / (GRID - 1) as f64);
         let at = |i: usize, j: usize| [step.mul_f64(i as f64) - radius, step.mul_f64(j as f64) - radius];
+        let offsets: Vec<[FloatExp; 2]> = (0..GRID * GRID).map(|k| at(k / GRID, k % GRID)).collect();
+        let flat = sample(formula, julia, &center, &offsets, limit, d < F64_DEPTH);
         let mut n = [[None; GRID]; GRID];
-        for (i, row) in n.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v = escape_time(formula, julia, &shifted(&center, at(i, j)), limit, d < F64_DEPTH);
-            }
+        for (k, v) in flat.into_iter().enumerate() {
+            n[k / GRID][k % GRID] = v;
         }
         let max_n = n.iter().flatten().flatten().copied().max();
         if d >= log10_zoom {
@@ -173,8 +258,8 @@ pub fn descend_real(rng: &mut Rng, formula: Formula, log10_zoom: f64, max_iter: 
         center = center.with_bits(bits_for(d + 10.0).max(center.bits));
         let step = radius.mul_f64(2.0 / (LINE - 1) as f64);
         let at = |i: usize| [step.mul_f64(i as f64) - radius, FloatExp::ZERO];
-        let n: Vec<Option<u32>> =
-            (0..LINE).map(|i| escape_time(formula, None, &shifted(&center, at(i)), limit, d < F64_DEPTH)).collect();
+        let offsets: Vec<[FloatExp; 2]> = (0..LINE).map(at).collect();
+        let n = sample(formula, None, &center, &offsets, limit, d < F64_DEPTH);
         let max_n = n.iter().flatten().copied().max();
         if d >= log10_zoom {
             return Some(Found { center, radius, max_n: max_n.unwrap_or(limit) });
@@ -304,6 +389,49 @@ mod tests {
         let f = descend_real(&mut rng, ship(), 12.0, 20_000).expect("found");
         assert!(f.center.im.is_zero());
         assert!(depth(f.radius) >= 12.0);
+    }
+
+    /// The perturbed grid gives direct big-float iteration's escape indices on the views
+    /// descents end at past f64's depth, for a single family, its Julia form and a hybrid:
+    /// every sample of the 9×9 grid whose index is the same at the view's precision and 64
+    /// bits above it (the others are ill-conditioned) agrees.
+    #[test]
+    fn the_perturbed_grid_agrees_with_big_float_iteration() {
+        let julia_c = BigC::from_f64(-0.2, -0.5, 128);
+        let hybrid = Formula::parse("burning-ship,mandelbrot^3", None).expect("a hybrid");
+        for (formula, julia, depth) in [(ship(), None, 40.0), (ship(), Some(&julia_c), 18.0), (hybrid, None, 14.0)] {
+            let mut checked = 0;
+            for seed in 1..=6 {
+                let mut rng = Rng::new(seed);
+                let start = (BigC::zero(64), FloatExp::from(2.5));
+                let Some(f) = descend(&mut rng, formula, julia, start.0, start.1, depth, 5000) else { continue };
+                let limit = 2 * f.max_n + 100;
+                let step = f.radius.mul_f64(0.25);
+                let offsets: Vec<[FloatExp; 2]> =
+                    (0..81).map(|k| [step.mul_f64((k % 9) as f64 - 4.0), step.mul_f64((k / 9) as f64 - 4.0)]).collect();
+                let fast = escape_times(formula, julia, &f.center, &offsets, limit);
+                let tiny = step.mul_f64(1e-9);
+                let direct = |by: FloatExp| -> Vec<Option<u32>> {
+                    let at = |o: [FloatExp; 2]| shifted(&f.center, [o[0] + by, o[1] + by]);
+                    offsets.iter().map(|&o| escape_time(formula, julia, &at(o), limit, false)).collect()
+                };
+                let (slow, finer) = (direct(FloatExp::ZERO), direct(tiny));
+                if slow != finer {
+                    // A chaotic view (neighbours a billionth of a step apart disagree): no
+                    // sample in it is a test of the perturbation.
+                    continue;
+                }
+                let differ: Vec<usize> = (0..81).filter(|&k| fast[k] != slow[k]).collect();
+                assert!(differ.is_empty(), "{formula} seed {seed}: {differ:?} differ\n{fast:?}\n{slow:?}");
+                if slow.iter().any(Option::is_some) && slow.iter().any(Option::is_none) {
+                    checked += 1;
+                    if checked == 2 {
+                        break;
+                    }
+                }
+            }
+            assert!(checked > 0, "{formula}: no descent ended on a view with both kinds of sample");
+        }
     }
 
     /// The Burning Ship's period-3 miniship on the real axis near c = -1.7549 (the real
