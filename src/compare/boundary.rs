@@ -65,6 +65,15 @@ pub fn shifted(p: &BigC, d: [FloatExp; 2]) -> BigC {
     p.add(&BigC { re: big(d[0]), im: big(d[1]), bits: p.bits })
 }
 
+/// z_0 and c of `point`'s orbit in big floats at its precision: (0, point) in the
+/// Mandelbrot form, (point, `julia`) in the Julia form.
+fn orbit_start(julia: Option<&BigC>, point: &BigC) -> (BigC, BigC) {
+    match julia {
+        Some(c) => (point.clone(), c.with_bits(point.bits)),
+        None => (BigC::zero(point.bits), point.clone()),
+    }
+}
+
 /// The escape index of `point`'s orbit under `formula` within `limit` (Mandelbrot form:
 /// c = point, z_0 = 0; Julia form: z_0 = point), or None; in f64 where `shallow`.
 pub fn escape_time(formula: Formula, julia: Option<&BigC>, point: &BigC, limit: u32, shallow: bool) -> Option<u32> {
@@ -85,10 +94,7 @@ pub fn escape_time(formula: Formula, julia: Option<&BigC>, point: &BigC, limit: 
         }
         return None;
     }
-    let (mut z, c) = match julia {
-        Some(c) => (point.clone(), c.with_bits(point.bits)),
-        None => (BigC::zero(point.bits), point.clone()),
-    };
+    let (mut z, c) = orbit_start(julia, point);
     for n in 0..limit {
         let [x, y] = z.to_fe();
         if (x * x + y * y).to_f64() > ESCAPE2 {
@@ -114,10 +120,7 @@ pub fn escape_times(
     limit: u32,
 ) -> Vec<Option<u32>> {
     let s = Cycle(formula);
-    let (mut z, c) = match julia {
-        Some(c) => (center.clone(), c.with_bits(center.bits)),
-        None => (BigC::zero(center.bits), center.clone()),
-    };
+    let (mut z, c) = orbit_start(julia, center);
     // Z_0 .. Z_last: up to the centre's escape (that value included) or the limit.
     let mut orbit = Vec::new();
     for n in 0..limit {
