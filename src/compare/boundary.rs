@@ -15,17 +15,20 @@
 //! after p steps (the centre of a minibrot or "miniship") by Newton's method on
 //! z_p(c) = 0 with the real 2×2 Jacobian, where it is invertible.
 //!
-//! Past zoom 1e9 a grid is sampled by perturbation about one big-float orbit of its centre
-//! ([`escape_times`]), not one big-float orbit a sample: that is what takes the descents
-//! to 1e300 and beyond in seconds to a minute.
+//! Past zoom 1e9 a grid is sampled by perturbation about a big-float orbit of a point near
+//! it ([`escape_times_about`]: one orbit for the grids of four decades, not one a sample),
+//! with f64 deltas down to 1e-250 and FloatExp ones below: that is what takes the descents
+//! to 1e300 and beyond in seconds to minutes.
 //!
 //! The orbits here use the engines' maps (`formula::Stepper`): this only chooses where to
 //! look; the truth the views are checked against is [`super::kf_maps`].
 
+use rayon::prelude::*;
+
 use super::views::Rng;
 use crate::formula::{Cycle, Formula, Stepper};
-use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
+use crate::num::{FloatExp, Real};
 
 /// |z|² beyond which the descent counts an orbit escaped (every family's set lies in |c| <= 2).
 const ESCAPE2: f64 = 16.0;
@@ -105,13 +108,56 @@ pub fn escape_time(formula: Formula, julia: Option<&BigC>, point: &BigC, limit: 
     None
 }
 
+/// How far (in grid radii) from the point of a [`Reference`] a grid may lie and still be
+/// sampled about it: an offset that large keeps 16 - 4 digits of a grid step in f64.
+const REUSE: f64 = 1e4;
+
+/// A big-float orbit of one point, rounded to f64, that grids near it are sampled about
+/// ([`escape_times_about`]); a descent keeps one for the grids of the next four decades of zoom,
+/// which spares a big-float orbit a grid.
+pub struct Reference {
+    /// The orbit's point (its z_0 in the Julia form, its c in the Mandelbrot form).
+    center: BigC,
+    /// Z_0 .. Z_last: up to the orbit's escape (that value included) or the limit.
+    orbit: Vec<[f64; 2]>,
+    /// Whether the orbit escaped (else it holds the limit's iterations).
+    escaped: bool,
+}
+
+impl Reference {
+    /// `center`'s orbit to `limit` iterations, at precision `bits`.
+    pub fn new(formula: Formula, julia: Option<&BigC>, center: &BigC, bits: u64, limit: u32) -> Reference {
+        let s = Cycle(formula);
+        let center = center.with_bits(bits);
+        let (mut z, c) = orbit_start(julia, &center);
+        let mut orbit = Vec::new();
+        for n in 0..limit {
+            let zf = z.to_fe().map(FloatExp::to_f64);
+            orbit.push(zf);
+            if zf[0] * zf[0] + zf[1] * zf[1] > ESCAPE2 {
+                return Reference { center, orbit, escaped: true };
+            }
+            z = s.apply_big(n, &z).add(&c);
+        }
+        Reference { center, orbit, escaped: false }
+    }
+
+    /// Whether grids about `center` of radius `radius` can be sampled about this orbit to
+    /// `limit` iterations.
+    fn serves(&self, center: &BigC, radius: FloatExp, limit: u32) -> bool {
+        let far = center.sub(&self.center).to_fe().iter().fold(FloatExp::ZERO, |m, x| m.max(x.abs()));
+        (self.escaped || self.orbit.len() >= limit as usize) && far <= radius.mul_f64(REUSE)
+    }
+}
+
+/// Offsets this small or smaller (log10) are iterated as FloatExp deltas, larger ones as
+/// f64: the f64 range then holds every offset, and the deltas that shrink from one where
+/// the orbit passes near a critical point, with 50 decades to spare.
+const FLOATEXP_DEPTH: f64 = 250.0;
+
 /// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
-/// perturbation about one big-float orbit of `center`: the offsets' orbits are iterated as
-/// FloatExp deltas from it, and a delta is moved onto the orbit's start where the point's
-/// orbit comes nearer 0 than the delta is large, or where the centre's orbit ended (Zhuoran's
-/// rebasing; on a hybrid, onto the start of the phase the point is in). A descent only
-/// chooses where to look, so this need not be exact; it costs one big-float orbit a grid
-/// instead of one a sample, which takes the descents to 1e300 and beyond in seconds.
+/// perturbation about one big-float orbit of `center` ([`Reference`]): see
+/// [`escape_times_about`].
 pub fn escape_times(
     formula: Formula,
     julia: Option<&BigC>,
@@ -119,28 +165,58 @@ pub fn escape_times(
     offsets: &[[FloatExp; 2]],
     limit: u32,
 ) -> Vec<Option<u32>> {
-    let s = Cycle(formula);
-    let (mut z, c) = orbit_start(julia, center);
-    // Z_0 .. Z_last: up to the centre's escape (that value included) or the limit.
-    let mut orbit = Vec::new();
-    for n in 0..limit {
-        let zf = z.to_fe().map(FloatExp::to_f64);
-        orbit.push(zf);
-        if zf[0] * zf[0] + zf[1] * zf[1] > ESCAPE2 {
-            break;
-        }
-        z = s.apply_big(n, &z).add(&c);
-    }
-    let period = s.period() as usize;
-    if orbit.len() <= period {
+    let reference = Reference::new(formula, julia, center, center.bits, limit);
+    escape_times_about(formula, julia, &reference, center, offsets, limit)
+}
+
+/// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
+/// perturbation about `reference` (an orbit to `limit` at least, or to its escape): the
+/// points' orbits are iterated as deltas from it (f64 where the offsets are larger than
+/// 10^-[`FLOATEXP_DEPTH`], FloatExp where they are not), and a delta is moved onto the
+/// orbit's start where the point's orbit comes nearer 0 than the delta is large, or where
+/// the reference ended (Zhuoran's rebasing; on a hybrid, onto the start of the phase the
+/// point is in). A descent only chooses where to look, so this need not be exact; it
+/// takes the descents to 1e300 and beyond.
+pub fn escape_times_about(
+    formula: Formula,
+    julia: Option<&BigC>,
+    reference: &Reference,
+    center: &BigC,
+    offsets: &[[FloatExp; 2]],
+    limit: u32,
+) -> Vec<Option<u32>> {
+    let period = formula.phases().len();
+    if reference.orbit.len() <= period {
         // Too short an orbit to rebase onto (a Julia centre that escapes at once).
         return offsets.iter().map(|&o| escape_time(formula, julia, &shifted(center, o), limit, false)).collect();
     }
+    let from = center.sub(&reference.center).to_fe();
+    let offsets: Vec<[FloatExp; 2]> = offsets.iter().map(|o| [from[0] + o[0], from[1] + o[1]]).collect();
+    let largest = offsets.iter().flatten().fold(FloatExp::ZERO, |m, x| m.max(x.abs()));
+    if largest.log2() * std::f64::consts::LOG10_2 > -FLOATEXP_DEPTH {
+        perturbed::<f64>(formula, julia, &reference.orbit, &offsets, limit)
+    } else {
+        perturbed::<FloatExp>(formula, julia, &reference.orbit, &offsets, limit)
+    }
+}
+
+/// The escape indices of the points `offsets` away from the point of `orbit` (longer than
+/// the formula's cycle), with deltas in `R`, the points shared among the threads.
+fn perturbed<R: Real>(
+    formula: Formula,
+    julia: Option<&BigC>,
+    orbit: &[[f64; 2]],
+    offsets: &[[FloatExp; 2]],
+    limit: u32,
+) -> Vec<Option<u32>> {
+    let s = Cycle(formula);
+    let period = s.period() as usize;
     offsets
-        .iter()
+        .par_iter()
         .map(|&o| {
-            let dc = if julia.is_some() { [FloatExp::ZERO; 2] } else { o };
-            let mut d = if julia.is_some() { o } else { [FloatExp::ZERO; 2] };
+            let o = o.map(R::from_fe);
+            let dc = if julia.is_some() { [R::ZERO; 2] } else { o };
+            let mut d = if julia.is_some() { o } else { [R::ZERO; 2] };
             let mut m = 0usize;
             for n in 0..limit as usize {
                 let zm = orbit[m];
@@ -154,7 +230,7 @@ pub fn escape_times(
                     // leaves the orbit room for a step (it is longer than the cycle).
                     let k = n % period;
                     let zk = orbit[k];
-                    d = [FloatExp::from(zm[0] - zk[0]) + d[0], FloatExp::from(zm[1] - zk[1]) + d[1]];
+                    d = [R::from_f64(zm[0] - zk[0]) + d[0], R::from_f64(zm[1] - zk[1]) + d[1]];
                     m = k;
                 }
                 let step = s.delta(m as u32, orbit[m], d);
@@ -166,21 +242,33 @@ pub fn escape_times(
         .collect()
 }
 
-/// The escape indices of `center` + `offsets[k]`: each in f64 where `shallow`, else by
-/// [`escape_times`].
+/// The escape indices of `center` + `offsets[k]` for a grid of radius `radius`: each in f64
+/// where `shallow`, else by perturbation about `reference`, replaced by an orbit of `center`
+/// (at precision `bits`) where it does not serve the grid.
+#[allow(clippy::too_many_arguments)]
 fn sample(
     formula: Formula,
     julia: Option<&BigC>,
+    reference: &mut Option<Reference>,
     center: &BigC,
+    radius: FloatExp,
     offsets: &[[FloatExp; 2]],
     limit: u32,
     shallow: bool,
 ) -> Vec<Option<u32>> {
     if shallow {
-        offsets.iter().map(|&o| escape_time(formula, julia, &shifted(center, o), limit, true)).collect()
-    } else {
-        escape_times(formula, julia, center, offsets, limit)
+        return offsets.iter().map(|&o| escape_time(formula, julia, &shifted(center, o), limit, true)).collect();
     }
+    let r = match reference.take() {
+        Some(r) if r.serves(center, radius, limit) => r,
+        _ => {
+            let bits = bits_for(depth(radius) + 10.0 + REUSE.log10()).max(center.bits);
+            Reference::new(formula, julia, center, bits, limit)
+        }
+    };
+    let n = escape_times_about(formula, julia, &r, center, offsets, limit);
+    *reference = Some(r);
+    n
 }
 
 /// Follows the boundary of `formula`'s set (Julia set of `julia` where given) down from
@@ -198,6 +286,7 @@ pub fn descend(
     let (mut center, mut radius) = (center, radius);
     let mut limit = FIRST_LIMIT.min(max_iter);
     let mut misses = 0;
+    let mut reference = None;
     for _ in 0..(60.0 + 4.0 * log10_zoom) as usize {
         let d = depth(radius);
         let bits = bits_for(d + 10.0).max(center.bits);
@@ -205,7 +294,7 @@ pub fn descend(
         let step = radius.mul_f64(2.0 / (GRID - 1) as f64);
         let at = |i: usize, j: usize| [step.mul_f64(i as f64) - radius, step.mul_f64(j as f64) - radius];
         let offsets: Vec<[FloatExp; 2]> = (0..GRID * GRID).map(|k| at(k / GRID, k % GRID)).collect();
-        let flat = sample(formula, julia, &center, &offsets, limit, d < F64_DEPTH);
+        let flat = sample(formula, julia, &mut reference, &center, radius, &offsets, limit, d < F64_DEPTH);
         let mut n = [[None; GRID]; GRID];
         for (k, v) in flat.into_iter().enumerate() {
             n[k / GRID][k % GRID] = v;
@@ -256,13 +345,14 @@ pub fn descend_real(rng: &mut Rng, formula: Formula, log10_zoom: f64, max_iter: 
     let mut radius = FloatExp::from(2.5);
     let mut limit = FIRST_LIMIT.min(max_iter);
     let mut misses = 0;
+    let mut reference = None;
     for _ in 0..(60.0 + 4.0 * log10_zoom) as usize {
         let d = depth(radius);
         center = center.with_bits(bits_for(d + 10.0).max(center.bits));
         let step = radius.mul_f64(2.0 / (LINE - 1) as f64);
         let at = |i: usize| [step.mul_f64(i as f64) - radius, FloatExp::ZERO];
         let offsets: Vec<[FloatExp; 2]> = (0..LINE).map(at).collect();
-        let n = sample(formula, None, &center, &offsets, limit, d < F64_DEPTH);
+        let n = sample(formula, None, &mut reference, &center, radius, &offsets, limit, d < F64_DEPTH);
         let max_n = n.iter().flatten().copied().max();
         if d >= log10_zoom {
             return Some(Found { center, radius, max_n: max_n.unwrap_or(limit) });
@@ -394,25 +484,34 @@ mod tests {
         assert!(depth(f.radius) >= 12.0);
     }
 
-    /// The perturbed grid gives direct big-float iteration's escape indices on the views
-    /// descents end at past f64's depth, for a single family, its Julia form and a hybrid:
+    /// The perturbed grid, with f64 deltas and with FloatExp ones, about its centre and
+    /// about a point hundreds of radii away, gives direct big-float iteration's escape
+    /// indices on the views descents end at past f64's depth, for a single family, its
+    /// Julia form and a hybrid:
     /// every sample of the 9×9 grid whose index is the same at the view's precision and 64
     /// bits above it (the others are ill-conditioned) agrees.
     #[test]
     fn the_perturbed_grid_agrees_with_big_float_iteration() {
         let julia_c = BigC::from_f64(-0.2, -0.5, 128);
         let hybrid = Formula::parse("burning-ship,mandelbrot^3", None).expect("a hybrid");
-        for (formula, julia, depth) in [(ship(), None, 40.0), (ship(), Some(&julia_c), 18.0), (hybrid, None, 14.0)] {
+        for (formula, julia, zoom) in [(ship(), None, 40.0), (ship(), Some(&julia_c), 18.0), (hybrid, None, 14.0)] {
             let mut checked = 0;
             for seed in 1..=6 {
                 let mut rng = Rng::new(seed);
                 let start = (BigC::zero(64), FloatExp::from(2.5));
-                let Some(f) = descend(&mut rng, formula, julia, start.0, start.1, depth, 5000) else { continue };
+                let Some(f) = descend(&mut rng, formula, julia, start.0, start.1, zoom, 5000) else { continue };
                 let limit = 2 * f.max_n + 100;
                 let step = f.radius.mul_f64(0.25);
                 let offsets: Vec<[FloatExp; 2]> =
                     (0..81).map(|k| [step.mul_f64((k % 9) as f64 - 4.0), step.mul_f64((k / 9) as f64 - 4.0)]).collect();
-                let fast = escape_times(formula, julia, &f.center, &offsets, limit);
+                let at_center = Reference::new(formula, julia, &f.center, f.center.bits, limit);
+                let fast = perturbed::<f64>(formula, julia, &at_center.orbit, &offsets, limit);
+                let wide = perturbed::<FloatExp>(formula, julia, &at_center.orbit, &offsets, limit);
+                // About a point 760 radii away, as a descent reuses an orbit.
+                let away = shifted(&f.center, [f.radius.mul_f64(-700.0), f.radius.mul_f64(300.0)]);
+                let far = Reference::new(formula, julia, &away, bits_for(depth(f.radius) + 14.0), limit);
+                assert!(far.serves(&f.center, f.radius, limit));
+                let reused = escape_times_about(formula, julia, &far, &f.center, &offsets, limit);
                 let tiny = step.mul_f64(1e-9);
                 let direct = |by: FloatExp| -> Vec<Option<u32>> {
                     let at = |o: [FloatExp; 2]| shifted(&f.center, [o[0] + by, o[1] + by]);
@@ -424,8 +523,10 @@ mod tests {
                     // sample in it is a test of the perturbation.
                     continue;
                 }
-                let differ: Vec<usize> = (0..81).filter(|&k| fast[k] != slow[k]).collect();
-                assert!(differ.is_empty(), "{formula} seed {seed}: {differ:?} differ\n{fast:?}\n{slow:?}");
+                for (name, got) in [("f64", &fast), ("floatexp", &wide), ("reused", &reused)] {
+                    let differ: Vec<usize> = (0..81).filter(|&k| got[k] != slow[k]).collect();
+                    assert!(differ.is_empty(), "{formula} seed {seed}, {name}: {differ:?} differ\n{got:?}\n{slow:?}");
+                }
                 if slow.iter().any(Option::is_some) && slow.iter().any(Option::is_none) {
                     checked += 1;
                     if checked == 2 {
