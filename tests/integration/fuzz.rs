@@ -9,12 +9,17 @@ use std::sync::atomic::AtomicBool;
 
 use deepfield::compare::fuzz::{self, BAR};
 use deepfield::compare::views::{self, ViewKind, ViewSpec};
+use deepfield::formula::Formula;
 use deepfield::simd_level::SimdLevel;
 
 /// Generates a view of `kind` (the first of a few draws that finds one) and checks it;
 /// returns the configurations checked.
 fn fuzz(kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) -> Vec<String> {
-    let formula = deepfield::formula::Formula::default();
+    fuzz_formula(Formula::default(), kind, seed, log10_zoom, max_iter)
+}
+
+/// [`fuzz`] for any formula.
+fn fuzz_formula(formula: Formula, kind: ViewKind, seed: u64, log10_zoom: f64, max_iter: u32) -> Vec<String> {
     let spec = ViewSpec { kind, log10_zoom, max_iter, width: 32, height: 24, formula };
     let view = (0..16).find_map(|d| views::generate(seed, d, &spec)).unwrap_or_else(|| panic!("no {kind:?} view"));
     let verdict =
@@ -61,4 +66,14 @@ fn generated_views_at_the_f64_floatexp_line_and_julia_sets() {
 fn generated_boundary_descent_views_of_z2_plus_c() {
     fuzz(ViewKind::JuliaBoundary, 33, 20.0, 100_000);
     fuzz(ViewKind::RealAxis, 34, 20.0, 100_000);
+}
+
+/// Other formulas' kinds, views nobody tuned to: a Burning Ship boundary descent past the
+/// f64 exponent range (FloatExp deltas, folds), and a hybrid's Julia set.
+#[test]
+fn generated_views_of_other_formulas() {
+    let ship = Formula::parse("burning-ship", None).expect("a family");
+    fuzz_formula(ship, ViewKind::Boundary, 51, 320.0, 30_000);
+    let hybrid = Formula::parse("burning-ship,mandelbrot^3", None).expect("a hybrid");
+    fuzz_formula(hybrid, ViewKind::JuliaBoundary, 52, 40.0, 30_000);
 }
