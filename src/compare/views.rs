@@ -363,10 +363,14 @@ fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, O
     let (formula, depth, tau) = (spec.formula, spec.log10_zoom, std::f64::consts::TAU);
     let whole = || (BigC::zero(64), FloatExp::from(2.5));
     let limit = |max_n: u32| max_n.saturating_mul(3).saturating_add(1000);
+    // The descents' own limit, low enough that a view's (above) fits under the spec's: a
+    // descent held at the spec's limit ends where the samples escape near it, and the
+    // view, at that same limit, then has few or no escaping samples to score NF on.
+    let cap = (spec.max_iter.saturating_sub(1000) / 3).max(100);
     Some(match spec.kind {
         ViewKind::Boundary => {
             let (c, r) = whole();
-            let f = boundary::descend(rng, formula, None, c, r, depth, spec.max_iter)?;
+            let f = boundary::descend(rng, formula, None, c, r, depth, cap)?;
             (f.center, f.radius, None, limit(f.max_n))
         }
         ViewKind::JuliaBoundary => {
@@ -378,12 +382,12 @@ fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, O
             let c = at.center.to_rationals().map(|r| Decimal::from_rational(&r, 20));
             let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
             let (z, r) = whole();
-            let f = boundary::descend(rng, formula, Some(&big), z, r, depth, spec.max_iter)?;
+            let f = boundary::descend(rng, formula, Some(&big), z, r, depth, cap)?;
             (f.center, f.radius, Some(c), limit(f.max_n))
         }
         ViewKind::Mini => {
             let (c, r) = whole();
-            let f = boundary::descend(rng, formula, None, c, r, depth, spec.max_iter)?;
+            let f = boundary::descend(rng, formula, None, c, r, depth, cap)?;
             let near = f.center.with_bits(bits_for(depth + 20.0));
             let (nucleus, period) = boundary::periodic_point(formula, &near, f.radius, limit(f.max_n))?;
             let radius = f.radius.mul_f64(rng.uniform(0.3, 3.0));
@@ -391,7 +395,7 @@ fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, O
             (center, radius, None, limit(f.max_n).max(period.saturating_mul(50)))
         }
         _ => {
-            let f = boundary::descend_real(rng, formula, depth, spec.max_iter)?;
+            let f = boundary::descend_real(rng, formula, depth, cap)?;
             // Half the views centred exactly on the axis, half just off it.
             let center = if rng.next_u64() & 1 == 0 {
                 f.center
