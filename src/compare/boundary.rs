@@ -33,7 +33,7 @@ use crate::num::{FloatExp, Real};
 /// |z|² beyond which the descent counts an orbit escaped (every family's set lies in |c| <= 2).
 const ESCAPE2: f64 = 16.0;
 /// Samples per side of the descent's grid.
-const GRID: usize = 8;
+pub const GRID: usize = 8;
 /// Samples along the real axis in [`descend_real`].
 const LINE: usize = 33;
 /// The first iteration limit of a descent.
@@ -172,7 +172,7 @@ pub fn escape_times(
 /// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
 /// perturbation about `reference` (an orbit to `limit` at least, or to its escape): the
 /// points' orbits are iterated as deltas from it (f64 where the offsets are larger than
-/// 10^-[`FLOATEXP_DEPTH`], FloatExp where they are not), and a delta is moved onto the
+/// 1e-250, FloatExp where they are not), and a delta is moved onto the
 /// orbit's start where the point's orbit comes nearer 0 than the delta is large, or where
 /// the reference ended (Zhuoran's rebasing; on a hybrid, onto the start of the phase the
 /// point is in). A descent only chooses where to look, so this need not be exact; it

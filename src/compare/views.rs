@@ -361,7 +361,16 @@ pub fn generate(seed: u64, draw: u32, spec: &ViewSpec) -> Option<GeneratedView> 
 /// A view of a kind that works for any formula: (centre, radius, Julia c, iteration limit).
 fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, Option<[Decimal; 2]>, u32)> {
     let (formula, depth, tau) = (spec.formula, spec.log10_zoom, std::f64::consts::TAU);
-    let whole = || (BigC::zero(64), FloatExp::from(2.5));
+    // A descent from the whole plane (radius 2.5 about 0), and where the first grid holds
+    // no point of the set (the Mandelbar's points near 0 fall between the samples of a grid
+    // about 0), again from the view moved by half a grid step, whose grid has a sample on 0.
+    let from_whole = |rng: &mut Rng, julia: Option<&BigC>, depth: f64, limit: u32| {
+        let r = FloatExp::from(2.5);
+        boundary::descend(rng, formula, julia, BigC::zero(64), r, depth, limit).or_else(|| {
+            let half = 2.5 / (boundary::GRID - 1) as f64;
+            boundary::descend(rng, formula, julia, BigC::from_f64(half, half, 64), r, depth, limit)
+        })
+    };
     let limit = |max_n: u32| max_n.saturating_mul(3).saturating_add(1000);
     // The descents' own limit, low enough that a view's (above) fits under the spec's: a
     // descent held at the spec's limit ends where the samples escape near it, and the
@@ -369,25 +378,21 @@ fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, O
     let cap = (spec.max_iter.saturating_sub(1000) / 3).max(100);
     Some(match spec.kind {
         ViewKind::Boundary => {
-            let (c, r) = whole();
-            let f = boundary::descend(rng, formula, None, c, r, depth, cap)?;
+            let f = from_whole(rng, None, depth, cap)?;
             (f.center, f.radius, None, limit(f.max_n))
         }
         ViewKind::JuliaBoundary => {
             // c on the boundary of the Mandelbrot-form set, as the scene states it (20
             // decimals) and exactly that value in big floats; then the Julia set's boundary.
-            let (c, r) = whole();
             let c_depth = rng.uniform(1.0, 4.0);
-            let at = boundary::descend(rng, formula, None, c, r, c_depth, 20_000)?;
+            let at = from_whole(rng, None, c_depth, 20_000)?;
             let c = at.center.to_rationals().map(|r| Decimal::from_rational(&r, 20));
             let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
-            let (z, r) = whole();
-            let f = boundary::descend(rng, formula, Some(&big), z, r, depth, cap)?;
+            let f = from_whole(rng, Some(&big), depth, cap)?;
             (f.center, f.radius, Some(c), limit(f.max_n))
         }
         ViewKind::Mini => {
-            let (c, r) = whole();
-            let f = boundary::descend(rng, formula, None, c, r, depth, cap)?;
+            let f = from_whole(rng, None, depth, cap)?;
             let near = f.center.with_bits(bits_for(depth + 20.0));
             let (nucleus, period) = boundary::periodic_point(formula, &near, f.radius, limit(f.max_n))?;
             let radius = f.radius.mul_f64(rng.uniform(0.3, 3.0));
