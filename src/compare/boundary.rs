@@ -156,20 +156,6 @@ impl Reference {
 const FLOATEXP_DEPTH: f64 = 250.0;
 
 /// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
-/// perturbation about one big-float orbit of `center` ([`Reference`]): see
-/// [`escape_times_about`].
-pub fn escape_times(
-    formula: Formula,
-    julia: Option<&BigC>,
-    center: &BigC,
-    offsets: &[[FloatExp; 2]],
-    limit: u32,
-) -> Vec<Option<u32>> {
-    let reference = Reference::new(formula, julia, center, center.bits, limit);
-    escape_times_about(formula, julia, &reference, center, offsets, limit)
-}
-
-/// The escape indices (as [`escape_time`]) of the points `center` + `offsets[k]`, by
 /// perturbation about `reference` (an orbit to `limit` at least, or to its escape): the
 /// points' orbits are iterated as deltas from it (f64 where the offsets are larger than
 /// 1e-250, FloatExp where they are not), and a delta is moved onto the
