@@ -245,13 +245,11 @@ fn generic_strip(
                 .try_reduce(|| 0, |a, b| Ok(a + b))?
         }, unreachable!("a validated formula has compiled code"))
     } else if traps.iter().all(|t| !t.observes_orbit()) {
-        crate::with_stepper!(params.orbit.formula, s => {
-            points
-                .par_chunks(GENERIC_CHUNK)
-                .zip(orbits.par_chunks_mut(GENERIC_CHUNK))
-                .map(|(p, o)| generic::iterate(s, &params.orbit, &[], p, o, &mut [], cancel))
-                .try_reduce(|| 0, |a, b| Ok(a + b))?
-        })
+        points
+            .par_chunks(GENERIC_CHUNK)
+            .zip(orbits.par_chunks_mut(GENERIC_CHUNK))
+            .map(|(p, o)| generic_lanes::iterate_cycle(&params.orbit, formula, p, o, cancel))
+            .try_reduce(|| 0, |a, b| Ok(a + b))?
     } else {
         crate::with_stepper!(params.orbit.formula, s => {
             generic::iterate(s, &params.orbit, traps, points, &mut orbits, &mut planes.traps, cancel)?

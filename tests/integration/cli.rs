@@ -455,8 +455,14 @@ fn same_bytes_on_every_simd_level_this_cpu_has() {
     let layers = "[[layer]]\nkind = \"smooth\"\n[[layer]]\nkind = \"distance\"\nblend = \"multiply\"\n";
     let trap = "[[layer]]\nkind = \"trap\"\nshape = \"circle\"\nradius = 0.5\nblend = \"screen\"\n";
     let deep = "version = 1\n[view]\ncenter = [\"-1.99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999837485382669331911167033522316925\", \"1.3717805209060941414572912854135e-211\"]\nzoom = \"1e120\"\nwidth = 61\nheight = 37\n[iteration]\nmax = 5000\n";
+    // A hybrid in the direct kernel's lanes (no trap: a trap sends it to the scalar kernel).
+    let hybrid = "version = 1\n[formula]\nkind = \"burning-ship,mandelbrot^3\"\n[view]\ncenter = [\"-0.5\", \"-0.3\"]\nzoom = \"0.8\"\nwidth = 64\nheight = 48\n";
     let levels = deepfield::simd_level::SimdLevel::usable();
-    for (name, scene) in [("shallow", format!("{SMALL}{layers}{trap}")), ("deep", format!("{deep}{layers}"))] {
+    for (name, scene) in [
+        ("shallow", format!("{SMALL}{layers}{trap}")),
+        ("deep", format!("{deep}{layers}")),
+        ("hybrid", format!("{hybrid}{layers}")),
+    ] {
         let dir = scratch(&format!("cli-simd-{name}"));
         write(&dir, "scene.toml", &scene);
         let mut pngs = Vec::new();
