@@ -238,11 +238,99 @@ struct Lanes<const L: usize> {
 
 const IDLE: usize = usize::MAX;
 
-/// [`run`] for a hybrid: the same loop, its lanes in step (see the module doc). Kept apart
-/// from `run`, so that the single families' loop compiles to the instructions it had before
-/// hybrids came into the lanes (a version sharing one loop compiled differently, and the
-/// timings of this loop move by a fifth with where it lands in the binary alone, which
-/// made the two impossible to tell apart: docs/performance.md).
+/// What every sample's orbit starts from: its first index, the Julia parameter (None: c is
+/// the sample), what the Jacobian's step adds, and the iteration limit.
+struct Start {
+    n0: u32,
+    julia_c: Option<[f64; 2]>,
+    add: f64,
+    max_iter: u32,
+}
+
+impl Start {
+    fn of(params: &OrbitParams) -> Start {
+        let (n0, julia_c, add) = match params.family {
+            Family::Mandelbrot => (1u32, None, 1.0),
+            Family::Julia { c } => (0u32, Some(c), 0.0),
+        };
+        Start { n0, julia_c, add, max_iter: params.max_iter }
+    }
+}
+
+impl<const L: usize> Lanes<L> {
+    /// Every lane idle.
+    #[inline(always)]
+    fn new() -> Self {
+        Lanes {
+            x: [0.0; L],
+            y: [0.0; L],
+            cx: [0.0; L],
+            cy: [0.0; L],
+            j: [[[1.0; L], [0.0; L]], [[0.0; L], [1.0; L]]],
+            n: [0; L],
+            limit: [u32::MAX; L],
+            sx: [f64::NAN; L],
+            sy: [f64::NAN; L],
+            save_at: [u32::MAX; L],
+            sg: [0; L],
+            pixel: [IDLE; L],
+        }
+    }
+
+    /// Loads the sample `points[*next]` into lane `k` and moves `next` on; with none left,
+    /// idles the lane and returns false.
+    #[inline(always)]
+    fn load(&mut self, k: usize, points: &[[f64; 2]], next: &mut usize, st: &Start) -> bool {
+        if *next >= points.len() {
+            self.pixel[k] = IDLE;
+            // An idle lane iterates a harmless value that never ends anything.
+            self.x[k] = 0.0;
+            self.y[k] = 0.0;
+            self.cx[k] = 0.0;
+            self.cy[k] = 0.0;
+            self.n[k] = 0;
+            self.limit[k] = u32::MAX;
+            self.save_at[k] = u32::MAX;
+            return false;
+        }
+        let p = points[*next];
+        self.pixel[k] = *next;
+        *next += 1;
+        let c = st.julia_c.unwrap_or(p);
+        (self.x[k], self.y[k], self.cx[k], self.cy[k]) = (p[0], p[1], c[0], c[1]);
+        self.j[0][0][k] = 1.0;
+        self.j[0][1][k] = 0.0;
+        self.j[1][0][k] = 0.0;
+        self.j[1][1][k] = 1.0;
+        self.n[k] = st.n0;
+        self.limit[k] = st.max_iter;
+        self.sx[k] = f64::NAN;
+        self.sy[k] = f64::NAN;
+        self.save_at[k] = st.n0 + 1;
+        true
+    }
+
+    /// The orbit lane `k` ends with: escaped (with the derivative where `DE`), or interior.
+    #[inline(always)]
+    fn end<const DE: bool>(&self, k: usize, escaped: bool) -> Orbit {
+        if !escaped {
+            return Orbit::interior();
+        }
+        let z = [self.x[k], self.y[k]];
+        let dz = if DE {
+            let j: Mat2 = [[self.j[0][0][k], self.j[0][1][k]], [self.j[1][0][k], self.j[1][1][k]]];
+            gradient_dz(z, j)
+        } else {
+            [0.0; 2]
+        };
+        Orbit { n: self.n[k], z, dz }
+    }
+}
+
+/// [`run`] for a hybrid: the same loop, its lanes in step (see the module doc). A loop of
+/// its own, so that the phases' bookkeeping (the pass's phase, the phase of each save, lanes
+/// waiting for a first phase) is not in the single families' loop at all; the two share
+/// the lanes' loads, ends and steps ([`Lanes`], [`step_lanes`]).
 #[inline(always)]
 fn run_cycle<S: Simd, const L: usize, const DE: bool>(
     t: Phases<S, L>,
@@ -251,26 +339,10 @@ fn run_cycle<S: Simd, const L: usize, const DE: bool>(
     out: &mut [Orbit],
     cancel: &AtomicBool,
 ) -> Result<u64, Cancelled> {
-    let (n0, julia_c, add) = match params.family {
-        Family::Mandelbrot => (1u32, None, 1.0),
-        Family::Julia { c } => (0u32, Some(c), 0.0),
-    };
+    let st = Start::of(params);
+    let (n0, add) = (st.n0, st.add);
     let r2 = params.escape_radius * params.escape_radius;
-    let max_iter = params.max_iter;
-    let mut s = Lanes::<L> {
-        x: [0.0; L],
-        y: [0.0; L],
-        cx: [0.0; L],
-        cy: [0.0; L],
-        j: [[[1.0; L], [0.0; L]], [[0.0; L], [1.0; L]]],
-        n: [0; L],
-        limit: [u32::MAX; L],
-        sx: [f64::NAN; L],
-        sy: [f64::NAN; L],
-        save_at: [u32::MAX; L],
-        sg: [0; L],
-        pixel: [IDLE; L],
-    };
+    let mut s = Lanes::<L>::new();
     // The cycle's length, the phase of every live lane's index, and that of a sample's
     // first index (a lane takes a sample only when the two agree).
     let period = t.len;
@@ -279,36 +351,7 @@ fn run_cycle<S: Simd, const L: usize, const DE: bool>(
     let mut next = 0usize;
     let mut active = 0usize;
     let mut iterations = 0u64;
-    // Loads the next sample into lane k (or idles it).
-    let load = |s: &mut Lanes<L>, k: usize, next: &mut usize| -> bool {
-        if *next >= points.len() {
-            s.pixel[k] = IDLE;
-            // An idle lane iterates a harmless value that never ends anything.
-            s.x[k] = 0.0;
-            s.y[k] = 0.0;
-            s.cx[k] = 0.0;
-            s.cy[k] = 0.0;
-            s.n[k] = 0;
-            s.limit[k] = u32::MAX;
-            s.save_at[k] = u32::MAX;
-            return false;
-        }
-        let p = points[*next];
-        s.pixel[k] = *next;
-        *next += 1;
-        let c = julia_c.unwrap_or(p);
-        (s.x[k], s.y[k], s.cx[k], s.cy[k]) = (p[0], p[1], c[0], c[1]);
-        s.j[0][0][k] = 1.0;
-        s.j[0][1][k] = 0.0;
-        s.j[1][0][k] = 0.0;
-        s.j[1][1][k] = 1.0;
-        s.n[k] = n0;
-        s.limit[k] = max_iter;
-        s.sx[k] = f64::NAN;
-        s.sy[k] = f64::NAN;
-        s.save_at[k] = n0 + 1;
-        true
-    };
+    let load = |s: &mut Lanes<L>, k: usize, next: &mut usize| s.load(k, points, next, &st);
     for k in 0..L {
         active += load(&mut s, k, &mut next) as usize;
     }
@@ -339,18 +382,7 @@ fn run_cycle<S: Simd, const L: usize, const DE: bool>(
                 if !(escaped || s.n[k] >= s.limit[k] || repeat) {
                     continue;
                 }
-                let z = [s.x[k], s.y[k]];
-                out[s.pixel[k]] = if escaped {
-                    let dz = if DE {
-                        let j: Mat2 = [[s.j[0][0][k], s.j[0][1][k]], [s.j[1][0][k], s.j[1][1][k]]];
-                        gradient_dz(z, j)
-                    } else {
-                        [0.0; 2]
-                    };
-                    Orbit { n: s.n[k], z, dz }
-                } else {
-                    Orbit::interior()
-                };
+                out[s.pixel[k]] = s.end::<DE>(k, escaped);
                 iterations += (s.n[k] - n0) as u64;
                 active -= 1;
                 ended += 1;
@@ -397,59 +429,14 @@ fn run<M: Map, const L: usize, const DE: bool>(
     out: &mut [Orbit],
     cancel: &AtomicBool,
 ) -> Result<u64, Cancelled> {
-    let (n0, julia_c, add) = match params.family {
-        Family::Mandelbrot => (1u32, None, 1.0),
-        Family::Julia { c } => (0u32, Some(c), 0.0),
-    };
+    let st = Start::of(params);
+    let (n0, add) = (st.n0, st.add);
     let r2 = params.escape_radius * params.escape_radius;
-    let max_iter = params.max_iter;
-    let mut s = Lanes::<L> {
-        x: [0.0; L],
-        y: [0.0; L],
-        cx: [0.0; L],
-        cy: [0.0; L],
-        j: [[[1.0; L], [0.0; L]], [[0.0; L], [1.0; L]]],
-        n: [0; L],
-        limit: [u32::MAX; L],
-        sx: [f64::NAN; L],
-        sy: [f64::NAN; L],
-        save_at: [u32::MAX; L],
-        sg: [0; L],
-        pixel: [IDLE; L],
-    };
+    let mut s = Lanes::<L>::new();
     let mut next = 0usize;
     let mut active = 0usize;
     let mut iterations = 0u64;
-    // Loads the next sample into lane k (or idles it).
-    let load = |s: &mut Lanes<L>, k: usize, next: &mut usize| -> bool {
-        if *next >= points.len() {
-            s.pixel[k] = IDLE;
-            // An idle lane iterates a harmless value that never ends anything.
-            s.x[k] = 0.0;
-            s.y[k] = 0.0;
-            s.cx[k] = 0.0;
-            s.cy[k] = 0.0;
-            s.n[k] = 0;
-            s.limit[k] = u32::MAX;
-            s.save_at[k] = u32::MAX;
-            return false;
-        }
-        let p = points[*next];
-        s.pixel[k] = *next;
-        *next += 1;
-        let c = julia_c.unwrap_or(p);
-        (s.x[k], s.y[k], s.cx[k], s.cy[k]) = (p[0], p[1], c[0], c[1]);
-        s.j[0][0][k] = 1.0;
-        s.j[0][1][k] = 0.0;
-        s.j[1][0][k] = 0.0;
-        s.j[1][1][k] = 1.0;
-        s.n[k] = n0;
-        s.limit[k] = max_iter;
-        s.sx[k] = f64::NAN;
-        s.sy[k] = f64::NAN;
-        s.save_at[k] = n0 + 1;
-        true
-    };
+    let load = |s: &mut Lanes<L>, k: usize, next: &mut usize| s.load(k, points, next, &st);
     for k in 0..L {
         active += load(&mut s, k, &mut next) as usize;
     }
@@ -471,18 +458,7 @@ fn run<M: Map, const L: usize, const DE: bool>(
                 if !(escaped || s.n[k] >= s.limit[k] || repeat) {
                     continue;
                 }
-                let z = [s.x[k], s.y[k]];
-                out[s.pixel[k]] = if escaped {
-                    let dz = if DE {
-                        let j: Mat2 = [[s.j[0][0][k], s.j[0][1][k]], [s.j[1][0][k], s.j[1][1][k]]];
-                        gradient_dz(z, j)
-                    } else {
-                        [0.0; 2]
-                    };
-                    Orbit { n: s.n[k], z, dz }
-                } else {
-                    Orbit::interior()
-                };
+                out[s.pixel[k]] = s.end::<DE>(k, escaped);
                 iterations += (s.n[k] - n0) as u64;
                 active -= 1;
                 ended += 1;
@@ -502,24 +478,7 @@ fn run<M: Map, const L: usize, const DE: bool>(
             let later = s.save_at[k].saturating_mul(2).saturating_sub(n0);
             s.save_at[k] = if save { later } else { s.save_at[k] };
         }
-        if DE {
-            let z = [s.x, s.y];
-            let a = M::jacobian_n(z);
-            let b = s.j;
-            // The scalar kernel's `mat_mul`, then the identity added (Mandelbrot form).
-            let m00 = a[0][0].mul(b[0][0]).add(a[0][1].mul(b[1][0]));
-            let m01 = a[0][0].mul(b[0][1]).add(a[0][1].mul(b[1][1]));
-            let m10 = a[1][0].mul(b[0][0]).add(a[1][1].mul(b[1][0]));
-            let m11 = a[1][0].mul(b[0][1]).add(a[1][1].mul(b[1][1]));
-            if add != 0.0 {
-                s.j = [[m00.add(<[f64; L]>::splat(add)), m01], [m10, m11.add(<[f64; L]>::splat(add))]];
-            } else {
-                s.j = [[m00, m01], [m10, m11]];
-            }
-        }
-        let f = M::apply_n([s.x, s.y]);
-        s.x = f[0].add(s.cx);
-        s.y = f[1].add(s.cy);
+        step_lanes::<M, L, DE>(&mut s, add);
         for k in 0..L {
             s.n[k] = s.n[k].wrapping_add(1);
         }
