@@ -46,9 +46,10 @@ use super::Engine;
 use super::bla::Table;
 use super::der::Jac;
 use super::perturb::{Exit, LEAST, Sample, max_exp};
-use crate::formula::Single;
 use crate::formula::end::Orbit;
-use crate::formula::map::{Map, Num};
+use crate::formula::map::{Map, Num, Ops};
+use crate::formula::phase::MAX_PHASES;
+use crate::formula::{Cycle, Single, Stepper};
 use crate::num::FloatExp;
 use crate::orbit::{Counters, Numbers};
 use crate::simd_level::SimdLevel;
@@ -58,6 +59,15 @@ const CANCEL_EVERY: u64 = 1 << 12;
 
 /// The sample in an idle lane.
 const IDLE: usize = usize::MAX;
+
+/// Most reference orbits a view has: the orbits of 0 of a hybrid's phases, and a Julia
+/// set's centre.
+const TRACKS: usize = MAX_PHASES + 1;
+
+/// Scalar passes a hybrid's sample may take to reach the lanes' phase before it is
+/// finished in the scalar loop instead (single steps reach it in fewer than the cycle's
+/// length; only BLA steps whose lengths keep missing it could take more).
+const ALIGN_TRIES: u32 = 64;
 
 /// `a` where the mask `r` is all ones, `b` where it is zero: a select of values by their
 /// bits. Written as `if`, the compiler selected the addresses of the two arrays and
@@ -117,9 +127,9 @@ struct Lanes<const L: usize> {
     jm: [[[f64; L]; 2]; 2],
     jadd: [f64; L],
     /// Each track's Z_0, as an address.
-    base: [i64; 2],
+    base: [i64; TRACKS],
     /// Each track's gate.
-    gates: [f64; 2],
+    gates: [f64; TRACKS],
 }
 
 impl<const L: usize> Lanes<L> {
@@ -170,7 +180,85 @@ impl<const L: usize> Lanes<L> {
     }
 }
 
-/// One call of the lanes, run by pulp under the level's target features.
+/// The loop's constants.
+struct Consts {
+    escape2: f64,
+    max_iter: i64,
+    /// `rebase_delta_f64`'s bound on the parts of a full value (`Engine::rebase_low`).
+    low: f64,
+    /// True where deltas may move to FloatExp.
+    fe_numbers: bool,
+    /// A Jacobian's start (I × spacing), the placeholder of lanes without the derivative.
+    start: Jac,
+}
+
+/// Where a lane that rebases lands: index 1 of the orbit of 0 of the pass's phase
+/// (`Engine::rebase_step`), as the lanes hold it.
+#[derive(Clone, Copy)]
+struct Landing {
+    track: u64,
+    at1: i64,
+    stop1: i64,
+    gate: f64,
+    /// All ones where that orbit has an index 1 (else the rebase is the scalar pass's).
+    here: u64,
+}
+
+/// The samples not yet taken, the results, and the scalar passes' counts.
+struct Run<'a> {
+    offsets: &'a [[f64; 2]],
+    out: &'a mut [Orbit],
+    /// The next sample to take.
+    next: usize,
+    local: Counters,
+    cancel: &'a AtomicBool,
+}
+
+/// What every pass updates, apart from [`Run`] so that a single family's loop keeps it in
+/// registers (nothing out of line sees it).
+struct Tally<const L: usize> {
+    /// Lanes with a sample.
+    active: usize,
+    /// Single steps taken in the lanes.
+    steps: u64,
+    /// Rebases taken in each lane (counted apart, so that the count stays a vector).
+    rebases: [u64; L],
+}
+
+/// How a pass hands the lanes that meet an event to the scalar loop ([`Engine::events`]).
+trait Events<const DER: bool, const L: usize> {
+    fn take(&self, engine: &Engine, s: &mut Lanes<L>, event: &[u64; L], tally: &mut Tally<L>, run: &mut Run<'_>);
+}
+
+/// A single family's events, compiled into its pass.
+struct InLine<'a, S> {
+    st: S,
+    consts: &'a Consts,
+}
+
+impl<S: Stepper, const DER: bool, const L: usize> Events<DER, L> for InLine<'_, S> {
+    #[inline(always)]
+    fn take(&self, engine: &Engine, s: &mut Lanes<L>, event: &[u64; L], tally: &mut Tally<L>, run: &mut Run<'_>) {
+        engine.events::<S, DER, L>(&self.st, s, event, self.consts, 0, tally, run);
+    }
+}
+
+/// A hybrid's events, out of line (one function for every phase's pass), `then` the phase
+/// of the next pass.
+struct OutOfLine<'a> {
+    consts: &'a Consts,
+    then: u32,
+}
+
+impl<const DER: bool, const L: usize> Events<DER, L> for OutOfLine<'_> {
+    #[inline(always)]
+    fn take(&self, engine: &Engine, s: &mut Lanes<L>, event: &[u64; L], tally: &mut Tally<L>, run: &mut Run<'_>) {
+        engine.events_cycle::<DER, L>(s, event, self.consts, self.then, tally, run);
+    }
+}
+
+/// One call of the lanes for a single family, run by pulp under the level's target
+/// features.
 struct Job<'a, M: Map, const DER: bool> {
     engine: &'a Engine,
     offsets: &'a [[f64; 2]],
@@ -195,10 +283,69 @@ impl<M: Map, const DER: bool> WithSimd for Job<'_, M, DER> {
     }
 }
 
+/// One call of the lanes for a hybrid at one level and width: its table of passes is
+/// built under the level.
+struct CycleJob<'a, const DER: bool, const L: usize> {
+    engine: &'a Engine,
+    offsets: &'a [[f64; 2]],
+    out: &'a mut [Orbit],
+    counters: &'a mut Counters,
+    cancel: &'a AtomicBool,
+}
+
+impl<const DER: bool, const L: usize> WithSimd for CycleJob<'_, DER, L> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
+        let CycleJob { engine, offsets, out, counters, cancel } = self;
+        engine.lanes_cycle::<S, DER, L>(simd, offsets, out, counters, cancel);
+    }
+}
+
+/// A hybrid's pass of one phase over the lanes ([`Engine::pass`] with that phase's family).
+type PassFn<S, const L: usize> = fn(S, &Engine, &mut Lanes<L>, &Consts, Landing, u32, &mut Tally<L>, &mut Run<'_>);
+
+/// One phase's pass, out of line (one function per family in the table, so that no loop
+/// holds every family's code), its body compiled under the level's target features by
+/// pulp's `vectorize`.
+#[inline(never)]
+fn cycle_pass<S: Simd, M: Map, const DER: bool, const L: usize>(
+    simd: S,
+    engine: &Engine,
+    s: &mut Lanes<L>,
+    consts: &Consts,
+    land: Landing,
+    then: u32,
+    tally: &mut Tally<L>,
+    run: &mut Run<'_>,
+) {
+    struct Op<'a, 'b, M, const DER: bool, const L: usize> {
+        engine: &'a Engine,
+        s: &'a mut Lanes<L>,
+        consts: &'a Consts,
+        land: Landing,
+        then: u32,
+        tally: &'a mut Tally<L>,
+        run: &'a mut Run<'b>,
+        _map: M,
+    }
+    impl<M: Map, const DER: bool, const L: usize> WithSimd for Op<'_, '_, M, DER, L> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, _: S) {
+            let Op { engine, s, consts, land, then, tally, run, .. } = self;
+            engine.pass::<M, DER, L>(s, consts, land, tally, run, &OutOfLine { consts, then });
+        }
+    }
+    simd.vectorize(Op::<M, DER, L> { engine, s, consts, land, then, tally, run, _map: M::default() });
+}
+
 impl Engine {
-    /// Iterates many samples of the single family `M` in vector lanes at `simd` (no traps;
-    /// the Jacobian where `DER`): the results of [`Engine::orbit`], bit for bit.
-    pub(super) fn orbits_lanes<M: Map, const DER: bool>(
+    /// Iterates many samples in vector lanes at `simd` (no traps; the Jacobian where
+    /// `DER`): the results of [`Engine::orbit`], bit for bit. A single family's lanes run
+    /// its one map; a hybrid's lanes all step the same phase at each pass.
+    pub(super) fn orbits_lanes<const DER: bool>(
         &self,
         simd: SimdLevel,
         offsets: &[[f64; 2]],
@@ -208,34 +355,81 @@ impl Engine {
     ) {
         // Two vectors' worth of lanes, interleaved to hide the latency of each step.
         let lanes = simd.f64_lanes() * 2;
-        simd.arch().dispatch(Job::<M, DER> { engine: self, offsets, out, counters, cancel, lanes, _map: M::default() });
+        let phases = self.formula.phases();
+        if phases.len() > 1 {
+            return self.orbits_cycle::<DER>(simd, offsets, out, counters, cancel);
+        }
+        crate::with_map!(phases[0], M => simd.arch().dispatch(
+            Job::<M, DER> { engine: self, offsets, out, counters, cancel, lanes, _map: M::default() }
+        ), unreachable!("a validated formula has compiled code"))
     }
 
-    /// Loads the next sample that needs the lanes into lane `k` (samples that start below
-    /// f64's range, or end at once, are finished here); false when none is left (the lane
-    /// is idle).
-    #[allow(clippy::too_many_arguments)]
-    fn refill<M: Map, const DER: bool, const L: usize>(
+    /// [`Engine::orbits_lanes`] for a hybrid. Each level compiles one width (two vectors'
+    /// worth of lanes), so that the table's functions, one per family, are compiled once
+    /// per level and derivative, not per width; a level without lanes runs the scalar loop.
+    fn orbits_cycle<const DER: bool>(
         &self,
-        s: &mut Lanes<L>,
-        k: usize,
-        next: &mut usize,
+        simd: SimdLevel,
         offsets: &[[f64; 2]],
         out: &mut [Orbit],
-        local: &mut Counters,
+        counters: &mut Counters,
         cancel: &AtomicBool,
+    ) {
+        #[allow(unused_macros)]
+        macro_rules! on {
+            ($simd:expr, $lanes:literal) => {
+                pulp::Simd::vectorize($simd, CycleJob::<DER, $lanes> { engine: self, offsets, out, counters, cancel })
+            };
+        }
+        #[cfg(target_arch = "x86_64")]
+        match simd {
+            SimdLevel::Avx2 => {
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    return on!(simd, 8);
+                }
+            }
+            SimdLevel::Avx512 => {
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    return on!(simd, 16);
+                }
+            }
+            _ => {}
+        }
+        #[cfg(target_arch = "aarch64")]
+        if simd == SimdLevel::Neon
+            && let Some(simd) = pulp::aarch64::Neon::try_new()
+        {
+            return on!(simd, 4);
+        }
+        self.each::<_, DER>(&Cycle(self.formula), offsets, out, counters, cancel);
+    }
+
+    /// Loads the next sample that needs the lanes into lane `k`, its next iteration of
+    /// phase `then` (samples that start below f64's range, or end first, are finished
+    /// here); false when none is left (the lane is idle).
+    fn refill<S: Stepper, const DER: bool, const L: usize>(
+        &self,
+        st: &S,
+        s: &mut Lanes<L>,
+        k: usize,
+        then: u32,
+        run: &mut Run<'_>,
     ) -> bool {
-        while *next < offsets.len() {
-            let p = *next;
-            *next += 1;
-            let Some((smp, dc_fe)) = self.start(offsets[p]) else {
-                out[p] = Orbit::interior();
+        while run.next < run.offsets.len() {
+            let p = run.next;
+            run.next += 1;
+            let Some((smp, dc_fe)) = self.start(run.offsets[p]) else {
+                run.out[p] = Orbit::interior();
                 continue;
             };
             // Each sample's Jacobian starts at I × spacing.
             let mut der = Jac::new(self.spacing, self.mandelbrot);
-            match self.first(smp, dc_fe) {
-                Exit::F64(f) => {
+            let on = match self.first(smp, dc_fe) {
+                Exit::F64(f) => self.align::<S, DER>(st, f, &mut der, dc_fe, then, &mut run.local, run.cancel),
+                e => Err(self.finish::<S, DER>(st, e, &mut der, dc_fe, &mut run.local, run.cancel)),
+            };
+            match on {
+                Ok(f) => {
                     s.set(k, &f);
                     if DER {
                         s.set_jac(k, der);
@@ -245,7 +439,7 @@ impl Engine {
                     s.live[k] = mask(true);
                     return true;
                 }
-                e => out[p] = self.finish::<M, DER>(e, &mut der, dc_fe, local, cancel),
+                Err(o) => run.out[p] = o,
             }
         }
         s.pixel[k] = IDLE;
@@ -256,41 +450,63 @@ impl Engine {
 
     /// Runs a sample from `e` to its end in the scalar loop (f64 and FloatExp as its delta
     /// asks): a sample that leaves the lanes' number type.
-    fn finish<M: Map, const DER: bool>(
+    fn finish<S: Stepper, const DER: bool>(
         &self,
+        st: &S,
         e: Exit,
         der: &mut Jac,
         dc_fe: [FloatExp; 2],
         local: &mut Counters,
         cancel: &AtomicBool,
     ) -> Orbit {
-        let st = Single(M::default());
-        self.drive::<_, DER>(&st, e, der, dc_fe, &self.t64, &self.tfe, &[], &mut [], local, cancel)
+        self.drive::<_, DER>(st, e, der, dc_fe, &self.t64, &self.tfe, &[], &mut [], local, cancel)
     }
 
+    /// Takes a hybrid's sample on with the scalar loop's passes until its next iteration
+    /// is of phase `then`, the phase the lanes step next (a BLA step or an out-of-line
+    /// step moves a sample's phase; single steps and rebases keep it in step with the
+    /// lanes'). Every pass is one the scalar loop takes too, so nothing is lost or changed.
+    /// Err: the sample ended (a sample that has not reached the phase after
+    /// [`ALIGN_TRIES`] passes is finished in the scalar loop). A single family's phase is
+    /// always the lanes'.
     #[inline(always)]
-    fn lanes<M: Map, const DER: bool, const L: usize>(
+    #[allow(clippy::too_many_arguments)]
+    fn align<S: Stepper, const DER: bool>(
         &self,
-        offsets: &[[f64; 2]],
-        out: &mut [Orbit],
-        counters: &mut Counters,
+        st: &S,
+        mut f: Sample<f64>,
+        der: &mut Jac,
+        dc_fe: [FloatExp; 2],
+        then: u32,
+        local: &mut Counters,
         cancel: &AtomicBool,
-    ) {
-        if cancel.load(Ordering::Relaxed) {
-            return;
+    ) -> Result<Sample<f64>, Orbit> {
+        if st.period() == 1 {
+            return Ok(f);
         }
-        let st = Single(M::default());
-        let tables = &self.t64[..];
-        let start = Jac::new(self.spacing, self.mandelbrot);
-        let mut local = Counters::default();
-        // A single family has one track, or two for a Julia set (the centre's orbit and the
-        // orbit of 0).
-        debug_assert!(self.tracks.len() <= 2 && !self.tracks.is_empty());
+        for _ in 0..ALIGN_TRIES {
+            if f.n % self.period == then {
+                return Ok(f);
+            }
+            match self.iteration::<S, f64, DER>(st, &mut f, der, dc_fe, &self.t64, &[], &mut [], local) {
+                None => {}
+                Some(Exit::F64(g)) => f = g,
+                Some(Exit::Done(o)) => return Err(o),
+                Some(e @ Exit::Fe(_)) => return Err(self.finish::<S, DER>(st, e, der, dc_fe, local, cancel)),
+            }
+        }
+        Err(self.finish::<S, DER>(st, Exit::F64(f), der, dc_fe, local, cancel))
+    }
+
+    /// The lanes, empty, with the view's tracks.
+    fn empty_lanes<const L: usize>(&self) -> Lanes<L> {
+        debug_assert!(!self.tracks.is_empty() && self.tracks.len() <= TRACKS);
         let track = |t: usize| &self.tracks[t.min(self.tracks.len() - 1)];
-        let base = [0, 1].map(|t| track(t).z.as_ptr().expose_provenance() as i64);
+        let base: [i64; TRACKS] = std::array::from_fn(|t| track(t).z.as_ptr().expose_provenance() as i64);
         // The BLA tables' first look per track; -inf: no table, no step.
-        let gates = [0, 1].map(|t| tables.get(t).map_or(f64::NEG_INFINITY, Table::gate));
-        let mut s = Lanes::<L> {
+        let gates: [f64; TRACKS] = std::array::from_fn(|t| self.t64.get(t).map_or(f64::NEG_INFINITY, Table::gate));
+        let start = Jac::new(self.spacing, self.mandelbrot);
+        Lanes::<L> {
             dx: [0.0; L],
             dy: [0.0; L],
             cx: [0.0; L],
@@ -309,190 +525,328 @@ impl Engine {
             jadd: [0.0; L],
             base,
             gates,
-        };
-        let mut next = 0;
-        let mut active = 0;
-        for k in 0..L {
-            active += self.refill::<M, DER, L>(&mut s, k, &mut next, offsets, out, &mut local, cancel) as usize;
         }
-        let (escape2, max_iter) = (self.escape2, i64::from(self.max_iter));
-        // A rebase in the lanes (see the module doc): where it lands, and the bounds under
-        // which its f64 step has the scalar loop's bits (`rebase_delta_f64`). It lands on
-        // index 1, so the orbit of 0 must have one.
-        let (zero_track, low) = (self.zeros as u64, self.rebase_low);
-        let (at1, stop1) = (base[self.zeros] + 16, base[self.zeros] + 16 * i64::from(self.tracks[self.zeros].stop(1)));
-        let gate0 = gates[self.zeros];
-        let rebase_here = mask(self.tracks[self.zeros].last() >= 1);
-        let fe_numbers = self.numbers == Numbers::FloatExp;
+    }
+
+    /// Where a lane that rebases before an iteration of phase `g` lands: index 1 of that
+    /// phase's orbit of 0.
+    fn landing(&self, base: &[i64; TRACKS], gates: &[f64; TRACKS], g: u32) -> Landing {
+        let t = self.zeros + g as usize;
+        Landing {
+            track: t as u64,
+            at1: base[t] + 16,
+            stop1: base[t] + 16 * i64::from(self.tracks[t].stop(1)),
+            gate: gates[t],
+            here: mask(self.tracks[t].last() >= 1),
+        }
+    }
+
+    fn consts(&self) -> Consts {
+        Consts {
+            escape2: self.escape2,
+            max_iter: i64::from(self.max_iter),
+            low: self.rebase_low,
+            fe_numbers: self.numbers == Numbers::FloatExp,
+            start: Jac::new(self.spacing, self.mandelbrot),
+        }
+    }
+
+    /// Adds the loop's counts to `counters`.
+    fn close<const L: usize>(tally: &Tally<L>, run: Run<'_>, counters: &mut Counters) {
+        let mut local = run.local;
+        local.steps += tally.steps;
+        local.iterations += tally.steps;
+        local.rebases += tally.rebases.iter().sum::<u64>();
+        counters.add(&local);
+    }
+
+    /// A single family's lanes: every pass steps its map.
+    #[inline(always)]
+    fn lanes<M: Map, const DER: bool, const L: usize>(
+        &self,
+        offsets: &[[f64; 2]],
+        out: &mut [Orbit],
+        counters: &mut Counters,
+        cancel: &AtomicBool,
+    ) {
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        // A single family has one track, or two for a Julia set (the centre's orbit and the
+        // orbit of 0).
+        debug_assert!(self.tracks.len() <= 2);
+        let st = Single(M::default());
+        let mut s = self.empty_lanes::<L>();
+        let mut run = Run { offsets, out, next: 0, local: Counters::default(), cancel };
+        let mut tally = Tally { active: 0, steps: 0, rebases: [0; L] };
+        for k in 0..L {
+            tally.active += self.refill::<_, DER, L>(&st, &mut s, k, 0, &mut run) as usize;
+        }
+        let consts = self.consts();
+        let events = InLine { st, consts: &consts };
+        let land = self.landing(&s.base, &s.gates, 0);
         let mut passes = 0u64;
-        let mut steps = 0u64;
-        let mut rebases = [0u64; L];
-        while active > 0 {
-            // Every live lane that meets no event below takes a single step.
-            steps += active as u64;
-            let mut zx = [0.0; L];
-            let mut zy = [0.0; L];
-            for k in 0..L {
-                debug_assert!(s.index(k, s.at[k]) <= self.tracks[s.t[k] as usize].last());
-                // SAFETY: every lane's address is its track's Z_m with m at most the track's
-                // last index (m <= stop <= last for a live lane, which `Track::stop` and the
-                // rebase onto index 1 of an orbit that has it keep; an idle lane reads Z_0 of
-                // track 0), exposed above from the track's values.
-                let z = unsafe { *std::ptr::with_exposed_provenance::<[f64; 2]>(s.at[k] as usize) };
-                (zx[k], zy[k]) = (z[0], z[1]);
-            }
-            // The scalar pass's values: z = Z + δ, |z|², |δ|², and the single step; a lane
-            // nearer 0 than its delta steps from Z_0 = 0 with its full value as the delta.
-            let fx = zx.add(s.dx);
-            let fy = zy.add(s.dy);
-            let r2 = fx.mul(fx).add(fy.mul(fy));
-            let d2 = s.dx.mul(s.dx).add(s.dy.mul(s.dy));
-            let mut near = [0u64; L];
-            let (mut ax, mut ay, mut bx, mut by) = (zx, zy, s.dx, s.dy);
-            for k in 0..L {
-                let r = mask(r2[k] < d2[k]);
-                near[k] = r;
-                ax[k] = pick(r, 0.0, zx[k]);
-                ay[k] = pick(r, 0.0, zy[k]);
-                bx[k] = pick(r, fx[k], s.dx[k]);
-                by[k] = pick(r, fy[k], s.dy[k]);
-            }
-            let step = M::delta_n([ax, ay], [bx, by]);
-            let nx = step[0].add(s.cx);
-            let ny = step[1].add(s.cy);
-            // With the derivative, `Jac::step` at z = Z + δ (the rebase's step too): J' = Jf J
-            // + I (times the spacing), as `mat_mul` computes it; a lane whose J' leaves the
-            // f64 range `Jac::step` keeps (or is NaN) is an event, for the scalar pass.
-            let mut jn = [[[0.0; L]; 2]; 2];
-            let mut jac_ok = [!0u64; L];
-            if DER {
-                let jf = M::jacobian_n([fx, fy]);
-                let (lo, hi) = Jac::RANGE;
-                for k in 0..L {
-                    let e = |r: usize, c: usize| jf[r][0][k] * s.jm[0][c][k] + jf[r][1][k] * s.jm[1][c][k];
-                    let m = [[e(0, 0) + s.jadd[k], e(0, 1)], [e(1, 0), e(1, 1) + s.jadd[k]]];
-                    let a = [m[0][0].abs(), m[0][1].abs(), m[1][0].abs(), m[1][1].abs()];
-                    let within = (a[0] <= hi) & (a[1] <= hi) & (a[2] <= hi) & (a[3] <= hi);
-                    let big = (a[0] >= lo) | (a[1] >= lo) | (a[2] >= lo) | (a[3] >= lo);
-                    jac_ok[k] = mask(within & big);
-                    for r in 0..2 {
-                        for c in 0..2 {
-                            jn[r][c][k] = m[r][c];
-                        }
-                    }
-                }
-            }
-            let mut event = [0u64; L];
-            let mut rebased = [0u64; L];
-            let mut any = 0u64;
-            for k in 0..L {
-                let f64_rebase =
-                    mask((fx[k].abs() >= low) & (fy[k].abs() >= low) & (nx[k].abs() >= LEAST) & (ny[k].abs() >= LEAST))
-                        & s.normal_c[k]
-                        & rebase_here;
-                let end = mask((s.at[k] >= s.stop[k]) | (r2[k] > escape2) | (s.n[k] >= max_iter));
-                let e = (end | (near[k] & !f64_rebase) | !jac_ok[k]) & s.live[k];
-                event[k] = e;
-                rebased[k] = near[k] & !e & s.live[k];
-                any |= e;
-            }
-            if fe_numbers {
-                // Below the switch to FloatExp deltas the scalar loop's rebase moves there.
-                for k in 0..L {
-                    if rebased[k] != 0 && max_exp([nx[k], ny[k]]) < self.down_exp {
-                        (event[k], rebased[k], any) = (!0, 0, !0);
-                    }
-                }
-            }
-            // The BLA test: the table's first look (`Table::gate`) in the lanes, the rest
-            // only for the lanes that pass it.
-            let mut maybe = [0u64; L];
-            let mut look = 0u64;
-            for k in 0..L {
-                maybe[k] = !event[k] & !near[k] & s.live[k] & mask(d2[k] < s.gate[k]);
-                look |= maybe[k];
-            }
-            if look != 0 {
-                for k in 0..L {
-                    if maybe[k] != 0
-                        && tables[s.t[k] as usize].can_step(s.index(k, s.at[k]), d2[k], self.max_iter - s.n[k] as u32)
-                    {
-                        event[k] = !0;
-                        any = !0;
-                    }
-                }
-            }
-            if any != 0 {
-                for k in 0..L {
-                    if event[k] == 0 {
-                        continue;
-                    }
-                    steps -= 1;
-                    let mut smp = s.get(k);
-                    let mut der = if DER { s.jac(k) } else { start };
-                    let dc_fe = s.dc_fe[k];
-                    let on = match self.iteration::<_, f64, DER>(
-                        &st,
-                        &mut smp,
-                        &mut der,
-                        dc_fe,
-                        tables,
-                        &[],
-                        &mut [],
-                        &mut local,
-                    ) {
-                        None => Ok(smp),
-                        Some(Exit::F64(f)) => Ok(f),
-                        Some(Exit::Done(o)) => Err(o),
-                        Some(e @ Exit::Fe(_)) => Err(self.finish::<M, DER>(e, &mut der, dc_fe, &mut local, cancel)),
-                    };
-                    let done = match on {
-                        Ok(f) => {
-                            s.set(k, &f);
-                            if DER {
-                                s.set_jac(k, der);
-                            }
-                            continue;
-                        }
-                        Err(o) => o,
-                    };
-                    out[s.pixel[k]] = done;
-                    if !self.refill::<M, DER, L>(&mut s, k, &mut next, offsets, out, &mut local, cancel) {
-                        active -= 1;
-                    }
-                }
-            }
-            // Every other live lane takes its single step (from Z_0 of the orbit of 0 where
-            // it rebased, on to index 1 there), by masks: as `if`, the updates were compiled
-            // to masked stores that the next pass's loads of the same arrays waited on.
-            for k in 0..L {
-                let go = !event[k] & s.live[k];
-                let r = rebased[k];
-                s.dx[k] = pick(go, nx[k], s.dx[k]);
-                s.dy[k] = pick(go, ny[k], s.dy[k]);
-                if DER {
-                    for r in 0..2 {
-                        for c in 0..2 {
-                            s.jm[r][c][k] = pick(go, jn[r][c][k], s.jm[r][c][k]);
-                        }
-                    }
-                }
-                s.at[k] = pick_i(r, at1, s.at[k] + (go & 16) as i64);
-                s.n[k] += (go & 1) as i64;
-                s.stop[k] = pick_i(r, stop1, s.stop[k]);
-                s.t[k] = (s.t[k] & !r) | (zero_track & r);
-                s.gate[k] = pick(r, gate0, s.gate[k]);
-                rebases[k] = rebases[k].wrapping_sub(r);
-            }
+        while tally.active > 0 {
+            self.pass::<M, DER, L>(&mut s, &consts, land, &mut tally, &mut run, &events);
             passes += 1;
             if passes.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
                 break;
             }
         }
-        let rebases: u64 = rebases.iter().sum();
-        local.steps += steps;
-        local.iterations += steps;
-        local.rebases += rebases;
-        counters.add(&local);
+        Self::close(&tally, run, counters);
+    }
+
+    /// A hybrid's lanes: at each pass every lane's next iteration has the same phase, and
+    /// the pass steps that phase's family (each a function of its own, called through a
+    /// table). A sample joins the lanes, or comes back from a scalar pass, at the phase of
+    /// the pass after ([`Engine::align`]).
+    #[inline(always)]
+    fn lanes_cycle<S: Simd, const DER: bool, const L: usize>(
+        &self,
+        simd: S,
+        offsets: &[[f64; 2]],
+        out: &mut [Orbit],
+        counters: &mut Counters,
+        cancel: &AtomicBool,
+    ) {
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let st = Cycle(self.formula);
+        let phases = self.formula.phases();
+        let mut passes = [cycle_pass::<S, Ops<0, 2, 0, 0>, DER, L> as PassFn<S, L>; MAX_PHASES];
+        for (pass, &phase) in passes.iter_mut().zip(phases) {
+            *pass = crate::with_map!(phase, M => cycle_pass::<S, M, DER, L> as PassFn<S, L>,
+                unreachable!("a validated formula has compiled code"));
+        }
+        let mut s = self.empty_lanes::<L>();
+        let lands: [Landing; MAX_PHASES] =
+            std::array::from_fn(|g| self.landing(&s.base, &s.gates, (g as u32) % self.period));
+        let mut run = Run { offsets, out, next: 0, local: Counters::default(), cancel };
+        let mut tally = Tally { active: 0, steps: 0, rebases: [0; L] };
+        for k in 0..L {
+            tally.active += self.refill::<_, DER, L>(&st, &mut s, k, 0, &mut run) as usize;
+        }
+        let consts = self.consts();
+        let (mut g, mut count) = (0u32, 0u64);
+        while tally.active > 0 {
+            let then = if g + 1 == self.period { 0 } else { g + 1 };
+            (passes[g as usize])(simd, self, &mut s, &consts, lands[g as usize], then, &mut tally, &mut run);
+            g = then;
+            count += 1;
+            if count.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
+                break;
+            }
+        }
+        Self::close(&tally, run, counters);
+    }
+
+    /// The lanes that meet an event (where `event` is all ones) each run the scalar
+    /// loop's pass once ([`Engine::iteration`], with `st` the formula), then, for a hybrid,
+    /// the passes that bring them to phase `then`, the lanes' next; a sample that ends is
+    /// written out and its lane takes the next.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn events<S: Stepper, const DER: bool, const L: usize>(
+        &self,
+        st: &S,
+        s: &mut Lanes<L>,
+        event: &[u64; L],
+        consts: &Consts,
+        then: u32,
+        tally: &mut Tally<L>,
+        run: &mut Run<'_>,
+    ) {
+        let tables = &self.t64[..];
+        for j in 0..L {
+            if event[j] == 0 {
+                continue;
+            }
+            tally.steps -= 1;
+            let mut smp = s.get(j);
+            let mut der = if DER { s.jac(j) } else { consts.start };
+            let dc_fe = s.dc_fe[j];
+            let on = match self.iteration::<S, f64, DER>(
+                st,
+                &mut smp,
+                &mut der,
+                dc_fe,
+                tables,
+                &[],
+                &mut [],
+                &mut run.local,
+            ) {
+                None => Ok(smp),
+                Some(Exit::F64(f)) => Ok(f),
+                Some(Exit::Done(o)) => Err(o),
+                Some(e @ Exit::Fe(_)) => Err(self.finish::<S, DER>(st, e, &mut der, dc_fe, &mut run.local, run.cancel)),
+            };
+            let on = on.and_then(|f| self.align::<S, DER>(st, f, &mut der, dc_fe, then, &mut run.local, run.cancel));
+            let done = match on {
+                Ok(f) => {
+                    s.set(j, &f);
+                    if DER {
+                        s.set_jac(j, der);
+                    }
+                    continue;
+                }
+                Err(o) => o,
+            };
+            run.out[s.pixel[j]] = done;
+            if !self.refill::<S, DER, L>(st, s, j, then, run) {
+                tally.active -= 1;
+            }
+        }
+    }
+
+    /// [`Engine::events`] for a hybrid, out of line: one function for every phase's pass.
+    #[inline(never)]
+    fn events_cycle<const DER: bool, const L: usize>(
+        &self,
+        s: &mut Lanes<L>,
+        event: &[u64; L],
+        consts: &Consts,
+        then: u32,
+        tally: &mut Tally<L>,
+        run: &mut Run<'_>,
+    ) {
+        self.events::<Cycle, DER, L>(&Cycle(self.formula), s, event, consts, then, tally, run);
+    }
+
+    /// One pass over the lanes with family `M` (the map of every live lane's next
+    /// iteration); `events` takes the lanes that meet an event ([`Engine::events`]).
+    #[inline(always)]
+    fn pass<M: Map, const DER: bool, const L: usize>(
+        &self,
+        s: &mut Lanes<L>,
+        consts: &Consts,
+        land: Landing,
+        tally: &mut Tally<L>,
+        run: &mut Run<'_>,
+        events: &impl Events<DER, L>,
+    ) {
+        let tables = &self.t64[..];
+        // Every live lane that meets no event below takes a single step.
+        tally.steps += tally.active as u64;
+        let mut zx = [0.0; L];
+        let mut zy = [0.0; L];
+        for k in 0..L {
+            debug_assert!(s.index(k, s.at[k]) <= self.tracks[s.t[k] as usize].last());
+            // SAFETY: every lane's address is its track's Z_m with m at most the track's
+            // last index (m <= stop <= last for a live lane, which `Track::stop` and the
+            // rebase onto index 1 of an orbit that has it keep; an idle lane reads Z_0 of
+            // track 0), exposed in `empty_lanes` from the track's values.
+            let z = unsafe { *std::ptr::with_exposed_provenance::<[f64; 2]>(s.at[k] as usize) };
+            (zx[k], zy[k]) = (z[0], z[1]);
+        }
+        // The scalar pass's values: z = Z + δ, |z|², |δ|², and the single step; a lane
+        // nearer 0 than its delta steps from Z_0 = 0 with its full value as the delta.
+        let fx = zx.add(s.dx);
+        let fy = zy.add(s.dy);
+        let r2 = fx.mul(fx).add(fy.mul(fy));
+        let d2 = s.dx.mul(s.dx).add(s.dy.mul(s.dy));
+        let mut near = [0u64; L];
+        let (mut ax, mut ay, mut bx, mut by) = (zx, zy, s.dx, s.dy);
+        for k in 0..L {
+            let r = mask(r2[k] < d2[k]);
+            near[k] = r;
+            ax[k] = pick(r, 0.0, zx[k]);
+            ay[k] = pick(r, 0.0, zy[k]);
+            bx[k] = pick(r, fx[k], s.dx[k]);
+            by[k] = pick(r, fy[k], s.dy[k]);
+        }
+        let step = M::delta_n([ax, ay], [bx, by]);
+        let nx = step[0].add(s.cx);
+        let ny = step[1].add(s.cy);
+        // With the derivative, `Jac::step` at z = Z + δ (the rebase's step too): J' = Jf J
+        // + I (times the spacing), as `mat_mul` computes it; a lane whose J' leaves the
+        // f64 range `Jac::step` keeps (or is NaN) is an event, for the scalar pass.
+        let mut jn = [[[0.0; L]; 2]; 2];
+        let mut jac_ok = [!0u64; L];
+        if DER {
+            let jf = M::jacobian_n([fx, fy]);
+            let (lo, hi) = Jac::RANGE;
+            for k in 0..L {
+                let e = |r: usize, c: usize| jf[r][0][k] * s.jm[0][c][k] + jf[r][1][k] * s.jm[1][c][k];
+                let m = [[e(0, 0) + s.jadd[k], e(0, 1)], [e(1, 0), e(1, 1) + s.jadd[k]]];
+                let a = [m[0][0].abs(), m[0][1].abs(), m[1][0].abs(), m[1][1].abs()];
+                let within = (a[0] <= hi) & (a[1] <= hi) & (a[2] <= hi) & (a[3] <= hi);
+                let big = (a[0] >= lo) | (a[1] >= lo) | (a[2] >= lo) | (a[3] >= lo);
+                jac_ok[k] = mask(within & big);
+                for r in 0..2 {
+                    for c in 0..2 {
+                        jn[r][c][k] = m[r][c];
+                    }
+                }
+            }
+        }
+        let mut event = [0u64; L];
+        let mut rebased = [0u64; L];
+        let mut any = 0u64;
+        for j in 0..L {
+            let f64_rebase = mask(
+                (fx[j].abs() >= consts.low)
+                    & (fy[j].abs() >= consts.low)
+                    & (nx[j].abs() >= LEAST)
+                    & (ny[j].abs() >= LEAST),
+            ) & s.normal_c[j]
+                & land.here;
+            let end = mask((s.at[j] >= s.stop[j]) | (r2[j] > consts.escape2) | (s.n[j] >= consts.max_iter));
+            let e = (end | (near[j] & !f64_rebase) | !jac_ok[j]) & s.live[j];
+            event[j] = e;
+            rebased[j] = near[j] & !e & s.live[j];
+            any |= e;
+        }
+        if consts.fe_numbers {
+            // Below the switch to FloatExp deltas the scalar loop's rebase moves there.
+            for j in 0..L {
+                if rebased[j] != 0 && max_exp([nx[j], ny[j]]) < self.down_exp {
+                    (event[j], rebased[j], any) = (!0, 0, !0);
+                }
+            }
+        }
+        // The BLA test: the table's first look (`Table::gate`) in the lanes, the rest
+        // only for the lanes that pass it.
+        let mut maybe = [0u64; L];
+        let mut look = 0u64;
+        for j in 0..L {
+            maybe[j] = !event[j] & !near[j] & s.live[j] & mask(d2[j] < s.gate[j]);
+            look |= maybe[j];
+        }
+        if look != 0 {
+            for j in 0..L {
+                if maybe[j] != 0
+                    && tables[s.t[j] as usize].can_step(s.index(j, s.at[j]), d2[j], self.max_iter - s.n[j] as u32)
+                {
+                    event[j] = !0;
+                    any = !0;
+                }
+            }
+        }
+        if any != 0 {
+            events.take(self, s, &event, tally, run);
+        }
+        // Every other live lane takes its single step (from Z_0 of the orbit of 0 where
+        // it rebased, on to index 1 there), by masks: as `if`, the updates were compiled
+        // to masked stores that the next pass's loads of the same arrays waited on.
+        for j in 0..L {
+            let go = !event[j] & s.live[j];
+            let r = rebased[j];
+            s.dx[j] = pick(go, nx[j], s.dx[j]);
+            s.dy[j] = pick(go, ny[j], s.dy[j]);
+            if DER {
+                for r in 0..2 {
+                    for c in 0..2 {
+                        s.jm[r][c][j] = pick(go, jn[r][c][j], s.jm[r][c][j]);
+                    }
+                }
+            }
+            s.at[j] = pick_i(r, land.at1, s.at[j] + (go & 16) as i64);
+            s.n[j] += (go & 1) as i64;
+            s.stop[j] = pick_i(r, land.stop1, s.stop[j]);
+            s.t[j] = (s.t[j] & !r) | (land.track & r);
+            s.gate[j] = pick(r, land.gate, s.gate[j]);
+            tally.rebases[j] = tally.rebases[j].wrapping_sub(r);
+        }
     }
 }

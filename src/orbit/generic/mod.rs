@@ -17,7 +17,7 @@
 //! | `mod.rs` | [`Engine`], [`prepare`] and what the engine reports |
 //! | `reference.rs` | the reference orbits (one orbit of 0 per phase of a hybrid), f64 with FloatExp for wide values |
 //! | `perturb.rs` | the loop: single steps, rebasing, BLA steps, f64/FloatExp switching |
-//! | `lanes.rs` | the loop's single steps for many samples of one family in vector lanes, events in `perturb.rs`'s pass |
+//! | `lanes.rs` | the loop's single steps for many samples in vector lanes (a hybrid's lanes in phase, one family a pass), events in `perturb.rs`'s pass |
 //! | `wide.rs` | the step from a reference value f64 cannot stand for, in FloatExp |
 //! | `der.rs` | the Jacobian times the spacing, with its own exponent |
 //! | `bla.rs` | BLA tables: 2×2 steps merged in a tree, radii from the nonlinear terms and the fold lines |
@@ -174,8 +174,8 @@ impl Engine {
     }
 
     /// Iterates many samples without traps, on this thread; the same results as
-    /// [`Engine::orbit`], bit for bit, at every `simd` level (a single family runs in vector
-    /// lanes at levels above scalar). Once `cancel` is raised
+    /// [`Engine::orbit`], bit for bit, at every `simd` level (samples run in vector lanes at
+    /// levels above scalar). Once `cancel` is raised
     /// the rest are left as they are.
     pub fn orbits(
         &self,
@@ -185,18 +185,13 @@ impl Engine {
         simd: SimdLevel,
         cancel: &AtomicBool,
     ) {
-        if simd != SimdLevel::Scalar && self.formula.phases().len() == 1 {
-            let lanes = crate::with_map!(self.formula.phases()[0], M => {
-                if self.derivative {
-                    self.orbits_lanes::<M, true>(simd, offsets, out, counters, cancel);
-                } else {
-                    self.orbits_lanes::<M, false>(simd, offsets, out, counters, cancel);
-                }
-                true
-            }, false);
-            if lanes {
-                return;
+        if simd != SimdLevel::Scalar {
+            if self.derivative {
+                self.orbits_lanes::<true>(simd, offsets, out, counters, cancel);
+            } else {
+                self.orbits_lanes::<false>(simd, offsets, out, counters, cancel);
             }
+            return;
         }
         crate::with_stepper!(self.formula, st => if self.derivative {
             self.each::<_, true>(&st, offsets, out, counters, cancel)
@@ -205,7 +200,7 @@ impl Engine {
         })
     }
 
-    fn each<S: Stepper, const DER: bool>(
+    pub(super) fn each<S: Stepper, const DER: bool>(
         &self,
         st: &S,
         offsets: &[[f64; 2]],

@@ -456,10 +456,10 @@ fn floatexp_views_beyond_1e_320() {
 
 /// Every SIMD level gives the scalar loop's N and z_n, bit for bit, and takes the same
 /// steps (the counters agree), with and without BLA, with and without the derivative (dz
-/// to the bit as well): single families run in vector lanes
+/// to the bit as well): samples run in vector lanes
 /// above the scalar level, on views with f64 and with FloatExp deltas, wide reference
-/// values (the Burning Ship's real axis), Julia sets, and a hybrid (the scalar loop at
-/// every level).
+/// values (the Burning Ship's real axis), Julia sets, and hybrids of two and three phases
+/// (whose lanes step in phase), in both forms and past 1e-300.
 #[test]
 fn every_simd_level_gives_the_scalar_loops_bits() {
     let axis = View {
@@ -480,6 +480,12 @@ fn every_simd_level_gives_the_scalar_loops_bits() {
         ("buffalo julia 1e-40", preperiodic_view("buffalo", Some(["-0.2", "0.1"]), 40, 2000)),
         ("burning-ship at -2 + 3e-335 i", axis),
         ("burning-ship,mandelbrot^3 1e-45", preperiodic_view("burning-ship,mandelbrot^3", None, 45, 2000)),
+        ("celtic^3,buffalo,mandelbar 1e-30", preperiodic_view("celtic^3,buffalo,mandelbar", None, 30, 2000)),
+        (
+            "mandelbrot,perpendicular-burning-ship julia 1e-40",
+            preperiodic_view("mandelbrot,perpendicular-burning-ship", Some(["-0.1", "0.1"]), 40, 2000),
+        ),
+        ("burning-ship,mandelbrot^3 1e-330", preperiodic_view("burning-ship,mandelbrot^3", None, 330, 3000)),
     ];
     let mut rebases = 0;
     for (name, view) in &views {
