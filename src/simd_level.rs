@@ -154,6 +154,54 @@ impl SimdLevel {
     }
 }
 
+/// A computation over lanes of f64 compiled for one level at that level's width: two
+/// vectors' worth of lanes, `L` (the hybrids' kernels, whose tables of per-family functions
+/// are compiled once per level, not once per width).
+pub trait LaneJob {
+    /// What the job returns.
+    type Output;
+    /// Runs the job under `simd`'s target features with `L` lanes.
+    fn run<S: pulp::Simd, const L: usize>(self, simd: S) -> Self::Output;
+}
+
+impl SimdLevel {
+    /// Runs `job` under this level's target features with two vectors' worth of lanes
+    /// (AVX2: 8, AVX-512: 16, NEON: 4); gives the job back at the scalar level, or where
+    /// this CPU lacks the level.
+    pub fn run_lanes<J: LaneJob>(self, job: J) -> Result<J::Output, J> {
+        /// The job at width `L`, as pulp's dispatch takes it.
+        struct On<J, const L: usize>(J);
+        impl<J: LaneJob, const L: usize> pulp::WithSimd for On<J, L> {
+            type Output = J::Output;
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, simd: S) -> J::Output {
+                self.0.run::<S, L>(simd)
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        match self {
+            SimdLevel::Avx2 => {
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    return Ok(pulp::Simd::vectorize(simd, On::<J, 8>(job)));
+                }
+            }
+            SimdLevel::Avx512 => {
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    return Ok(pulp::Simd::vectorize(simd, On::<J, 16>(job)));
+                }
+            }
+            _ => {}
+        }
+        #[cfg(target_arch = "aarch64")]
+        if self == SimdLevel::Neon
+            && let Some(simd) = pulp::aarch64::Neon::try_new()
+        {
+            return Ok(pulp::Simd::vectorize(simd, On::<J, 4>(job)));
+        }
+        Err(job)
+    }
+}
+
 impl Default for SimdLevel {
     /// The widest level this CPU runs.
     fn default() -> Self {

@@ -28,7 +28,7 @@ use crate::formula::end::Orbit;
 use crate::formula::map::{Map, Mat2, Num, Ops, gradient_dz};
 use crate::formula::phase::MAX_PHASES;
 use crate::formula::{Family, Formula};
-use crate::simd_level::SimdLevel;
+use crate::simd_level::{LaneJob, SimdLevel};
 
 /// Steps between two looks at the cancel flag.
 const CANCEL_EVERY: u64 = 1 << 16;
@@ -97,43 +97,17 @@ pub fn iterate_cycle(
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
     assert!(formula.phases().len() > 1, "a single family runs `iterate`");
-    // Each level compiles one width (two vectors' worth of lanes), so that the table's
-    // functions, one per family, are compiled once per level and derivative, not per width.
-    macro_rules! on {
-        ($simd:expr, $lanes:literal) => {
-            match params.derivative {
-                false => {
-                    pulp::Simd::vectorize($simd, CycleJob::<$lanes, false> { params, formula, points, out, cancel })
-                }
-                true => pulp::Simd::vectorize($simd, CycleJob::<$lanes, true> { params, formula, points, out, cancel }),
-            }
-        };
-    }
-    #[cfg(target_arch = "x86_64")]
-    match params.simd {
-        SimdLevel::Avx2 => {
-            if let Some(simd) = pulp::x86::V3::try_new() {
-                return on!(simd, 8);
-            }
+    let job = CycleJob { params, formula, points, out, cancel };
+    match params.simd.run_lanes(job) {
+        Ok(done) => done,
+        Err(CycleJob { params, formula, points, out, cancel }) => {
+            crate::with_stepper!(formula, s => super::generic::iterate(s, params, &[], points, out, &mut [], cancel))
         }
-        SimdLevel::Avx512 => {
-            if let Some(simd) = pulp::x86::V4::try_new() {
-                return on!(simd, 16);
-            }
-        }
-        _ => {}
     }
-    #[cfg(target_arch = "aarch64")]
-    if params.simd == SimdLevel::Neon
-        && let Some(simd) = pulp::aarch64::Neon::try_new()
-    {
-        return on!(simd, 4);
-    }
-    crate::with_stepper!(formula, s => super::generic::iterate(s, params, &[], points, out, &mut [], cancel))
 }
 
 /// One call of the hybrid kernel under a level's target features.
-struct CycleJob<'a, const L: usize, const DE: bool> {
+struct CycleJob<'a> {
     params: &'a OrbitParams,
     formula: Formula,
     points: &'a [[f64; 2]],
@@ -141,11 +115,21 @@ struct CycleJob<'a, const L: usize, const DE: bool> {
     cancel: &'a AtomicBool,
 }
 
-impl<const L: usize, const DE: bool> WithSimd for CycleJob<'_, L, DE> {
+impl LaneJob for CycleJob<'_> {
     type Output = Result<u64, Cancelled>;
 
     #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
+    fn run<S: Simd, const L: usize>(self, simd: S) -> Self::Output {
+        match self.params.derivative {
+            false => self.cycle::<S, L, false>(simd),
+            true => self.cycle::<S, L, true>(simd),
+        }
+    }
+}
+
+impl CycleJob<'_> {
+    #[inline(always)]
+    fn cycle<S: Simd, const L: usize, const DE: bool>(self, simd: S) -> Result<u64, Cancelled> {
         let CycleJob { params, formula, points, out, cancel } = self;
         // The table of passes, one per phase, chosen once.
         let mut steps = [pass::<S, Ops<0, 2, 0, 0>, L, DE> as PassFn<S, L>; MAX_PHASES];

@@ -52,7 +52,7 @@ use crate::formula::phase::MAX_PHASES;
 use crate::formula::{Cycle, Single, Stepper};
 use crate::num::FloatExp;
 use crate::orbit::{Counters, Numbers};
-use crate::simd_level::SimdLevel;
+use crate::simd_level::{LaneJob, SimdLevel};
 
 /// Vector passes between two looks at the cancel flag.
 const CANCEL_EVERY: u64 = 1 << 12;
@@ -283,9 +283,9 @@ impl<M: Map, const DER: bool> WithSimd for Job<'_, M, DER> {
     }
 }
 
-/// One call of the lanes for a hybrid at one level and width: its table of passes is
-/// built under the level.
-struct CycleJob<'a, const DER: bool, const L: usize> {
+/// One call of the lanes for a hybrid ([`LaneJob`]: one width per level, so that the
+/// table's functions, one per family, are compiled once per level and derivative).
+struct CycleJob<'a, const DER: bool> {
     engine: &'a Engine,
     offsets: &'a [[f64; 2]],
     out: &'a mut [Orbit],
@@ -293,11 +293,11 @@ struct CycleJob<'a, const DER: bool, const L: usize> {
     cancel: &'a AtomicBool,
 }
 
-impl<const DER: bool, const L: usize> WithSimd for CycleJob<'_, DER, L> {
+impl<const DER: bool> LaneJob for CycleJob<'_, DER> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
+    fn run<S: Simd, const L: usize>(self, simd: S) {
         let CycleJob { engine, offsets, out, counters, cancel } = self;
         engine.lanes_cycle::<S, DER, L>(simd, offsets, out, counters, cancel);
     }
@@ -364,9 +364,7 @@ impl Engine {
         ), unreachable!("a validated formula has compiled code"))
     }
 
-    /// [`Engine::orbits_lanes`] for a hybrid. Each level compiles one width (two vectors'
-    /// worth of lanes), so that the table's functions, one per family, are compiled once
-    /// per level and derivative, not per width; a level without lanes runs the scalar loop.
+    /// [`Engine::orbits_lanes`] for a hybrid; a level without lanes runs the scalar loop.
     fn orbits_cycle<const DER: bool>(
         &self,
         simd: SimdLevel,
@@ -375,33 +373,10 @@ impl Engine {
         counters: &mut Counters,
         cancel: &AtomicBool,
     ) {
-        #[allow(unused_macros)]
-        macro_rules! on {
-            ($simd:expr, $lanes:literal) => {
-                pulp::Simd::vectorize($simd, CycleJob::<DER, $lanes> { engine: self, offsets, out, counters, cancel })
-            };
+        let job = CycleJob::<DER> { engine: self, offsets, out, counters, cancel };
+        if let Err(CycleJob { offsets, out, counters, cancel, .. }) = simd.run_lanes(job) {
+            self.each::<_, DER>(&Cycle(self.formula), offsets, out, counters, cancel);
         }
-        #[cfg(target_arch = "x86_64")]
-        match simd {
-            SimdLevel::Avx2 => {
-                if let Some(simd) = pulp::x86::V3::try_new() {
-                    return on!(simd, 8);
-                }
-            }
-            SimdLevel::Avx512 => {
-                if let Some(simd) = pulp::x86::V4::try_new() {
-                    return on!(simd, 16);
-                }
-            }
-            _ => {}
-        }
-        #[cfg(target_arch = "aarch64")]
-        if simd == SimdLevel::Neon
-            && let Some(simd) = pulp::aarch64::Neon::try_new()
-        {
-            return on!(simd, 4);
-        }
-        self.each::<_, DER>(&Cycle(self.formula), offsets, out, counters, cancel);
     }
 
     /// Loads the next sample that needs the lanes into lane `k`, its next iteration of
@@ -551,6 +526,24 @@ impl Engine {
         }
     }
 
+    /// The lanes filled with the first samples (whose next iteration is of phase 0), and
+    /// the loop's state.
+    fn begin<'a, S: Stepper, const DER: bool, const L: usize>(
+        &self,
+        st: &S,
+        offsets: &'a [[f64; 2]],
+        out: &'a mut [Orbit],
+        cancel: &'a AtomicBool,
+    ) -> (Lanes<L>, Run<'a>, Tally<L>) {
+        let mut s = self.empty_lanes::<L>();
+        let mut run = Run { offsets, out, next: 0, local: Counters::default(), cancel };
+        let mut tally = Tally { active: 0, steps: 0, rebases: [0; L] };
+        for k in 0..L {
+            tally.active += self.refill::<_, DER, L>(st, &mut s, k, 0, &mut run) as usize;
+        }
+        (s, run, tally)
+    }
+
     /// Adds the loop's counts to `counters`.
     fn close<const L: usize>(tally: &Tally<L>, run: Run<'_>, counters: &mut Counters) {
         let mut local = run.local;
@@ -576,12 +569,7 @@ impl Engine {
         // orbit of 0).
         debug_assert!(self.tracks.len() <= 2);
         let st = Single(M::default());
-        let mut s = self.empty_lanes::<L>();
-        let mut run = Run { offsets, out, next: 0, local: Counters::default(), cancel };
-        let mut tally = Tally { active: 0, steps: 0, rebases: [0; L] };
-        for k in 0..L {
-            tally.active += self.refill::<_, DER, L>(&st, &mut s, k, 0, &mut run) as usize;
-        }
+        let (mut s, mut run, mut tally) = self.begin::<_, DER, L>(&st, offsets, out, cancel);
         let consts = self.consts();
         let events = InLine { st, consts: &consts };
         let land = self.landing(&s.base, &s.gates, 0);
@@ -619,14 +607,9 @@ impl Engine {
             *pass = crate::with_map!(phase, M => cycle_pass::<S, M, DER, L> as PassFn<S, L>,
                 unreachable!("a validated formula has compiled code"));
         }
-        let mut s = self.empty_lanes::<L>();
+        let (mut s, mut run, mut tally) = self.begin::<_, DER, L>(&st, offsets, out, cancel);
         let lands: [Landing; MAX_PHASES] =
             std::array::from_fn(|g| self.landing(&s.base, &s.gates, (g as u32) % self.period));
-        let mut run = Run { offsets, out, next: 0, local: Counters::default(), cancel };
-        let mut tally = Tally { active: 0, steps: 0, rebases: [0; L] };
-        for k in 0..L {
-            tally.active += self.refill::<_, DER, L>(&st, &mut s, k, 0, &mut run) as usize;
-        }
         let consts = self.consts();
         let (mut g, mut count) = (0u32, 0u64);
         while tally.active > 0 {
