@@ -28,7 +28,7 @@ use crate::formula::end::Orbit;
 use crate::formula::map::{Map, Mat2, Num, Ops, gradient_dz};
 use crate::formula::phase::MAX_PHASES;
 use crate::formula::{Family, Formula};
-use crate::simd_level::{LaneJob, SimdLevel};
+use crate::simd_level::LaneJob;
 
 /// Steps between two looks at the cancel flag.
 const CANCEL_EVERY: u64 = 1 << 16;
@@ -42,45 +42,37 @@ pub fn iterate<M: Map>(
     cancel: &AtomicBool,
 ) -> Result<u64, Cancelled> {
     assert_eq!(points.len(), out.len());
-    match (params.simd, params.derivative) {
-        (SimdLevel::Scalar, false) => run::<M, 1, false>(params, points, out, cancel),
-        (SimdLevel::Scalar, true) => run::<M, 1, true>(params, points, out, cancel),
-        // Two vectors' worth of lanes, interleaved to hide the latency of each step.
-        (level, _) => level.arch().dispatch(Job::<M> {
-            params,
-            points,
-            out,
-            cancel,
-            lanes: level.f64_lanes() * 2,
-            _map: M::default(),
-        }),
+    // Two vectors' worth of lanes, interleaved to hide the latency of each step; one lane
+    // at the scalar level (or a level this CPU lacks).
+    match params.simd.run_lanes(Job::<M> { params, points, out, cancel, _map: M::default() }) {
+        Ok(done) => done,
+        Err(Job { params, points, out, cancel, .. }) => match params.derivative {
+            false => run::<M, 1, false>(params, points, out, cancel),
+            true => run::<M, 1, true>(params, points, out, cancel),
+        },
     }
 }
 
-/// One call of the kernel, run by pulp under the level's target features (`with_simd`
-/// is inlined into pulp's feature-enabled entry, and everything below it into that).
+/// One call of the kernel, run by pulp under the level's target features (`run` is
+/// inlined into pulp's feature-enabled entry, and everything below it into that), at the
+/// level's one width.
 struct Job<'a, M: Map> {
     params: &'a OrbitParams,
     points: &'a [[f64; 2]],
     out: &'a mut [Orbit],
     cancel: &'a AtomicBool,
-    lanes: usize,
     _map: M,
 }
 
-impl<M: Map> WithSimd for Job<'_, M> {
+impl<M: Map> LaneJob for Job<'_, M> {
     type Output = Result<u64, Cancelled>;
 
     #[inline(always)]
-    fn with_simd<S: Simd>(self, _: S) -> Self::Output {
-        let Job { params, points, out, cancel, lanes, .. } = self;
-        match (lanes, params.derivative) {
-            (16, false) => run::<M, 16, false>(params, points, out, cancel),
-            (16, true) => run::<M, 16, true>(params, points, out, cancel),
-            (8, false) => run::<M, 8, false>(params, points, out, cancel),
-            (8, true) => run::<M, 8, true>(params, points, out, cancel),
-            (_, false) => run::<M, 4, false>(params, points, out, cancel),
-            (_, true) => run::<M, 4, true>(params, points, out, cancel),
+    fn run<S: Simd, const L: usize>(self, _: S) -> Self::Output {
+        let Job { params, points, out, cancel, .. } = self;
+        match params.derivative {
+            false => run::<M, L, false>(params, points, out, cancel),
+            true => run::<M, L, true>(params, points, out, cancel),
         }
     }
 }
@@ -478,6 +470,7 @@ fn run<M: Map, const L: usize, const DE: bool>(
 mod tests {
     use super::*;
     use crate::formula::{Cycle, Single};
+    use crate::simd_level::SimdLevel;
 
     fn check<M: Map>(family: Family, center: [f64; 2], radius: f64) {
         let points: Vec<[f64; 2]> = (0..1500)

@@ -257,29 +257,24 @@ impl<const DER: bool, const L: usize> Events<DER, L> for OutOfLine<'_> {
     }
 }
 
-/// One call of the lanes for a single family, run by pulp under the level's target
-/// features.
+/// One call of the lanes for a single family ([`LaneJob`]: under the level's target
+/// features, at its one width).
 struct Job<'a, M: Map, const DER: bool> {
     engine: &'a Engine,
     offsets: &'a [[f64; 2]],
     out: &'a mut [Orbit],
     counters: &'a mut Counters,
     cancel: &'a AtomicBool,
-    lanes: usize,
     _map: M,
 }
 
-impl<M: Map, const DER: bool> WithSimd for Job<'_, M, DER> {
+impl<M: Map, const DER: bool> LaneJob for Job<'_, M, DER> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: Simd>(self, _: S) -> Self::Output {
-        let Job { engine, offsets, out, counters, cancel, lanes, .. } = self;
-        match lanes {
-            16 => engine.lanes::<M, DER, 16>(offsets, out, counters, cancel),
-            8 => engine.lanes::<M, DER, 8>(offsets, out, counters, cancel),
-            _ => engine.lanes::<M, DER, 4>(offsets, out, counters, cancel),
-        }
+    fn run<S: Simd, const L: usize>(self, _: S) {
+        let Job { engine, offsets, out, counters, cancel, .. } = self;
+        engine.lanes::<M, DER, L>(offsets, out, counters, cancel);
     }
 }
 
@@ -353,15 +348,16 @@ impl Engine {
         counters: &mut Counters,
         cancel: &AtomicBool,
     ) {
-        // Two vectors' worth of lanes, interleaved to hide the latency of each step.
-        let lanes = simd.f64_lanes() * 2;
         let phases = self.formula.phases();
         if phases.len() > 1 {
             return self.orbits_cycle::<DER>(simd, offsets, out, counters, cancel);
         }
-        crate::with_map!(phases[0], M => simd.arch().dispatch(
-            Job::<M, DER> { engine: self, offsets, out, counters, cancel, lanes, _map: M::default() }
-        ), unreachable!("a validated formula has compiled code"))
+        crate::with_map!(phases[0], M => {
+            let job = Job::<M, DER> { engine: self, offsets, out, counters, cancel, _map: M::default() };
+            if let Err(Job { offsets, out, counters, cancel, .. }) = simd.run_lanes(job) {
+                self.each::<_, DER>(&Single(M::default()), offsets, out, counters, cancel);
+            }
+        }, unreachable!("a validated formula has compiled code"))
     }
 
     /// [`Engine::orbits_lanes`] for a hybrid; a level without lanes runs the scalar loop.
