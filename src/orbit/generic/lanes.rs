@@ -459,14 +459,30 @@ impl Engine {
             if f.n % self.period == then {
                 return Ok(f);
             }
-            match self.iteration::<S, f64, DER>(st, &mut f, der, dc_fe, &self.t64, &[], &mut [], local) {
-                None => {}
-                Some(Exit::F64(g)) => f = g,
-                Some(Exit::Done(o)) => return Err(o),
-                Some(e @ Exit::Fe(_)) => return Err(self.finish::<S, DER>(st, e, der, dc_fe, local, cancel)),
-            }
+            f = self.once::<S, DER>(st, f, der, dc_fe, local, cancel)?;
         }
         Err(self.finish::<S, DER>(st, Exit::F64(f), der, dc_fe, local, cancel))
+    }
+
+    /// One pass of the scalar loop ([`Engine::iteration`]) for a sample of the lanes:
+    /// Ok, the sample after it, still in f64; Err, the sample ended (a sample whose delta
+    /// left f64's range is finished in the scalar loop first).
+    #[inline(always)]
+    fn once<S: Stepper, const DER: bool>(
+        &self,
+        st: &S,
+        mut f: Sample<f64>,
+        der: &mut Jac,
+        dc_fe: [FloatExp; 2],
+        local: &mut Counters,
+        cancel: &AtomicBool,
+    ) -> Result<Sample<f64>, Orbit> {
+        match self.iteration::<S, f64, DER>(st, &mut f, der, dc_fe, &self.t64, &[], &mut [], local) {
+            None => Ok(f),
+            Some(Exit::F64(g)) => Ok(g),
+            Some(Exit::Done(o)) => Err(o),
+            Some(e @ Exit::Fe(_)) => Err(self.finish::<S, DER>(st, e, der, dc_fe, local, cancel)),
+        }
     }
 
     /// The lanes, empty, with the view's tracks.
@@ -636,31 +652,16 @@ impl Engine {
         tally: &mut Tally<L>,
         run: &mut Run<'_>,
     ) {
-        let tables = &self.t64[..];
         for j in 0..L {
             if event[j] == 0 {
                 continue;
             }
             tally.steps -= 1;
-            let mut smp = s.get(j);
             let mut der = if DER { s.jac(j) } else { consts.start };
             let dc_fe = s.dc_fe[j];
-            let on = match self.iteration::<S, f64, DER>(
-                st,
-                &mut smp,
-                &mut der,
-                dc_fe,
-                tables,
-                &[],
-                &mut [],
-                &mut run.local,
-            ) {
-                None => Ok(smp),
-                Some(Exit::F64(f)) => Ok(f),
-                Some(Exit::Done(o)) => Err(o),
-                Some(e @ Exit::Fe(_)) => Err(self.finish::<S, DER>(st, e, &mut der, dc_fe, &mut run.local, run.cancel)),
-            };
-            let on = on.and_then(|f| self.align::<S, DER>(st, f, &mut der, dc_fe, then, &mut run.local, run.cancel));
+            let on = self
+                .once::<S, DER>(st, s.get(j), &mut der, dc_fe, &mut run.local, run.cancel)
+                .and_then(|f| self.align::<S, DER>(st, f, &mut der, dc_fe, then, &mut run.local, run.cancel));
             let done = match on {
                 Ok(f) => {
                     s.set(j, &f);
