@@ -96,7 +96,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
         let names: Vec<String> =
             variants.iter().map(|v| v.name.clone()).chain(peers.iter().map(|p| p.0.clone())).collect();
         measured.extend(peers.into_iter().map(|p| p.1));
-        let suspects = compare::suspects(&measured, &truths, scene.escape_radius);
+        let suspects = compare::suspects(&measured, &truths, scene.escape_radius, scene.transform);
         if let Some(b) = &bar {
             b.set_message(format!("conditioning of {} disagreeing pixels", suspects.len()));
         }
@@ -148,7 +148,7 @@ fn peer(spec: &str, size: (usize, usize), pixels: &[(u32, u32)]) -> Result<(Stri
     Ok((format!("peer {name}"), m))
 }
 
-const KEYS: [&str; 13] = [
+const KEYS: [&str; 14] = [
     "engine",
     "seconds",
     "iterations_per_second",
@@ -162,9 +162,10 @@ const KEYS: [&str; 13] = [
     "de_scored",
     "ill_conditioned",
     "nf_ill_conditioned",
+    "de_ill_conditioned",
 ];
 
-fn fields(r: &Row) -> [String; 13] {
+fn fields(r: &Row) -> [String; 14] {
     // Not measured (a peer's time and distance errors, errors over no pixel): "-".
     let or_dash = |x: f64, s: String| if x.is_nan() { "-".to_string() } else { s };
     [
@@ -181,6 +182,7 @@ fn fields(r: &Row) -> [String; 13] {
         r.de_scored.to_string(),
         r.ill_conditioned.to_string(),
         r.nf_ill_conditioned.to_string(),
+        r.de_ill_conditioned.to_string(),
     ]
 }
 
@@ -207,8 +209,9 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
         "DE px",
         "ill-cond.",
         "NF ill-cond.",
+        "DE ill-cond.",
     ];
-    let cells: Vec<[String; 13]> = rows.iter().map(fields).collect();
+    let cells: Vec<[String; 14]> = rows.iter().map(fields).collect();
     let width: Vec<usize> =
         (0..heads.len()).map(|k| cells.iter().map(|c| c[k].len()).chain([heads[k].len()]).max().unwrap_or(0)).collect();
     let line = |c: &[&str]| -> String {
@@ -229,5 +232,7 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
            ill-cond.: wrong N where the true N changes within 1e-9 pixel, or the orbit spreads 1e-9 pixel \
            to 1 while |z| <= 2 (left out); \
            NF ill-cond.: NF more than 1e-4 off where the true NF changes by more than 1e-4 within 1e-9 pixel \
-           (left out of the NF and DE errors)\n"
+           (left out of the NF and DE errors); \
+           DE ill-cond.: distance estimate more than 1e-6 off where the true one moves by more than 1e-6 of itself \
+           within 1e-9 pixel (left out of the DE errors)\n"
 }

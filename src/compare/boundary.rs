@@ -324,6 +324,17 @@ pub fn descend(
     None
 }
 
+/// The first sample, row by row, of the [`GRID`] × [`GRID`] grid of radius `radius` about
+/// `center` (the grid a descent ending there sampled last) whose orbit in `formula`'s
+/// Mandelbrot form does not escape within `limit`; None when every sample escapes.
+pub fn inside_sample(formula: Formula, center: &BigC, radius: FloatExp, limit: u32) -> Option<BigC> {
+    let step = radius.mul_f64(2.0 / (GRID - 1) as f64);
+    let shallow = depth(radius) < F64_DEPTH;
+    (0..GRID * GRID)
+        .map(|k| shifted(center, [step.mul_f64((k / GRID) as f64) - radius, step.mul_f64((k % GRID) as f64) - radius]))
+        .find(|p| escape_time(formula, None, p, limit, shallow).is_none())
+}
+
 /// [`descend`] along the real axis of `formula`'s Mandelbrot form, from the segment
 /// [-2.5, 2.5]: every centre has imaginary part exactly 0.
 pub fn descend_real(rng: &mut Rng, formula: Formula, log10_zoom: f64, max_iter: u32) -> Option<Found> {

@@ -137,6 +137,10 @@ pub struct Row {
     /// than [`NF_CONDITION`] within 1e-9 sample spacings, where this variant's NF is that far
     /// off.
     pub nf_ill_conditioned: usize,
+    /// Pixels left out of the distance errors alone because the true distance-estimate
+    /// vector moves by more than [`DE_CONDITION`] of its length within 1e-9 sample spacings
+    /// (or N is ill-conditioned there), where this variant's is that far off.
+    pub de_ill_conditioned: usize,
 }
 
 /// Smallest f32/f64 ulps per sample at which a direct kernel is still listed.
@@ -283,17 +287,49 @@ pub const CONDITION_SHIFT: f64 = 1e-9;
 /// NF's 99th percentile).
 pub const NF_CONDITION: f64 = 1e-4;
 
-/// The sampled pixels (indices) whose N some variant got wrong, or whose NF some variant got
-/// more than [`NF_CONDITION`] wrong, near-circle ones left out: the only ones whose
-/// conditioning matters.
-pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64) -> Vec<usize> {
+/// A distance-estimate error above this (relative to the true distance), or a change of the
+/// true distance-estimate vector by more than this of its length within
+/// [`CONDITION_SHIFT`], makes a pixel's distance estimate suspect or ill-conditioned (the
+/// fuzzer's bar for the distance error's median).
+pub const DE_CONDITION: f64 = 1e-6;
+
+/// The sampled pixels (indices) whose N some variant got wrong, whose NF some variant got
+/// more than [`NF_CONDITION`] wrong, or whose distance estimate some variant got more than
+/// [`DE_CONDITION`] wrong, near-circle ones left out: the only ones whose conditioning
+/// matters.
+pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64, transform: Transform) -> Vec<usize> {
     let ln_r = escape_radius.ln();
     let wrong = |m: &Measured, k: usize| {
-        let (n, nf, _, _) = m.values[k];
+        let (n, nf, dx, dy) = m.values[k];
         let t = &truths[k];
-        escape_index(n) != t.n || (t.n.is_some() && (nf as f64 - true_nf(t, ln_r)).abs() > NF_CONDITION)
+        escape_index(n) != t.n
+            || (t.n.is_some() && (nf as f64 - true_nf(t, ln_r)).abs() > NF_CONDITION)
+            || (m.distance && de_error(t, [dx, dy], transform).is_some_and(|e| e > DE_CONDITION))
     };
     (0..truths.len()).filter(|&k| !truths[k].near_circle && measured.iter().any(|m| wrong(m, k))).collect()
+}
+
+/// The true distance-estimate vector of an escaped orbit, in the plane's terms (|z| ln |z|
+/// over |dz|, along the gradient of |z|): None where the orbit did not escape or the
+/// distance is not a positive finite number.
+fn true_de(t: &Truth) -> Option<[f64; 2]> {
+    t.n?;
+    let abs_z = t.z[0].hypot(t.z[1]);
+    let d = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
+    let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
+    let w = wx.hypot(wy);
+    (d.is_finite() && d > 0.0 && w > 0.0).then(|| [d * wx / w, d * wy / w])
+}
+
+/// The error of an engine's distance-estimate vector `de` (in image terms) against the
+/// truth's, relative to the true distance (infinite for a non-finite value); None where the
+/// truth has no distance estimate.
+fn de_error(t: &Truth, de: [f32; 2], transform: Transform) -> Option<f64> {
+    let v = true_de(t)?;
+    // The engines report the vector in image terms: the view's transform undone.
+    let [tx, ty] = transform.gradient_to_image(v);
+    let err = (de[0] as f64 - tx).hypot(de[1] as f64 - ty) / v[0].hypot(v[1]);
+    Some(if err.is_finite() { err } else { f64::INFINITY })
 }
 
 /// Marks the truths at `suspects` whose N changes when the pixel moves [`CONDITION_SHIFT`]
@@ -310,7 +346,10 @@ pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64) -> 
 /// shifted ones stay bounded: docs/testing.md). Where N holds but
 /// NF changes by more than [`NF_CONDITION`] under the same shifts, NF is ill-conditioned in
 /// the same sense (it varies by more than 1e5 per pixel: the pixel shows noise at any
-/// precision) and is marked so.
+/// precision) and is marked so; likewise the distance estimate where its vector moves by
+/// more than [`DE_CONDITION`] of its length (at a chaotic view's pixels whose distance is a
+/// small fraction of the pixel, the derivative of a long orbit turns within 1e-9 of a
+/// pixel, and an engine's rounding, worth about 1e-13 of a pixel, turns it too).
 pub fn mark_ill_conditioned(
     scene: &Scene,
     formula: Formula,
@@ -320,7 +359,7 @@ pub fn mark_ill_conditioned(
     cancel: &AtomicBool,
 ) -> Result<(), Cancelled> {
     let grid = TruthGrid::new(scene, formula);
-    let flags: Vec<(usize, bool, bool)> = suspects
+    let flags: Vec<(usize, bool, bool, bool)> = suspects
         .par_iter()
         .map(|&k| {
             if cancel.load(Ordering::Relaxed) {
@@ -332,12 +371,18 @@ pub fn mark_ill_conditioned(
             let shifted: Vec<Truth> = moved.iter().map(|&s| grid.truth(pixels[k], s)).collect();
             let n_ill = t.spreads(CONDITION_SHIFT) || shifted.iter().any(|m| m.n != t.n);
             let nf_ill = shifted.iter().any(|m| (true_nf(m, ln_r) - true_nf(t, ln_r)).abs() > NF_CONDITION);
-            Ok((k, n_ill, nf_ill))
+            let de_ill = true_de(t).is_some_and(|v| {
+                shifted.iter().any(|m| {
+                    true_de(m).is_none_or(|u| (u[0] - v[0]).hypot(u[1] - v[1]) > DE_CONDITION * v[0].hypot(v[1]))
+                })
+            });
+            Ok((k, n_ill, nf_ill, de_ill))
         })
         .collect::<Result<_, _>>()?;
-    for (k, n_ill, nf_ill) in flags {
+    for (k, n_ill, nf_ill, de_ill) in flags {
         truths[k].ill_conditioned = n_ill;
         truths[k].nf_ill_conditioned = !n_ill && nf_ill;
+        truths[k].de_ill_conditioned = !n_ill && de_ill;
     }
     Ok(())
 }
@@ -470,8 +515,9 @@ fn true_nf(t: &Truth, ln_r: f64) -> f64 {
 }
 
 /// One CSV line per sampled pixel: its position, the truth (N, empty for interior; NF;
-/// whether the orbit passes near the escape circle; whether N is ill-conditioned, which is
-/// checked only where some variant's N differs) and each variant's N and NF. `names` and
+/// whether the orbit passes near the escape circle; whether N, NF and the distance estimate
+/// are ill-conditioned, which is checked only where some variant's differs) and each
+/// variant's N and NF. `names` and
 /// `measured` are in the same order.
 pub fn pixel_csv(
     pixels: &[(u32, u32)],
@@ -481,15 +527,15 @@ pub fn pixel_csv(
     escape_radius: f64,
 ) -> String {
     let ln_r = escape_radius.ln();
-    let mut out = String::from("x,y,n_true,nf_true,near_circle,ill_conditioned,nf_ill_conditioned");
+    let mut out = String::from("x,y,n_true,nf_true,near_circle,ill_conditioned,nf_ill_conditioned,de_ill_conditioned");
     for name in names {
         out += &format!(",{name} n,{name} nf");
     }
     out.push('\n');
     let n_text = |n: Option<u32>| n.map(|n| n.to_string()).unwrap_or_default();
     for (k, (&(x, y), t)) in pixels.iter().zip(truths).enumerate() {
-        let (nc, ill, nf_ill) = (t.near_circle, t.ill_conditioned, t.nf_ill_conditioned);
-        out += &format!("{x},{y},{},{:.9},{nc},{ill},{nf_ill}", n_text(t.n), true_nf(t, ln_r));
+        let (nc, ill, nf_ill, de_ill) = (t.near_circle, t.ill_conditioned, t.nf_ill_conditioned, t.de_ill_conditioned);
+        out += &format!("{x},{y},{},{:.9},{nc},{ill},{nf_ill},{de_ill}", n_text(t.n), true_nf(t, ln_r));
         for m in measured {
             let (n, f, _, _) = m.values[k];
             out += &format!(",{},{f:.9}", n_text(escape_index(n)));
@@ -502,7 +548,7 @@ pub fn pixel_csv(
 /// Scores a variant's values against the truth.
 pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f64, transform: Transform) -> Row {
     let ln_r = escape_radius.ln();
-    let (mut compared, mut mismatched, mut excused, mut nf_excused) = (0usize, 0usize, 0usize, 0usize);
+    let (mut compared, mut mismatched, mut excused, mut nf_excused, mut de_excused) = (0usize, 0, 0, 0, 0);
     let (mut nf, mut de) = (Vec::new(), Vec::new());
     for (&(n, f, dx, dy), t) in measured.values.iter().zip(truths) {
         if t.near_circle {
@@ -527,15 +573,10 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
             continue;
         }
         nf.push(nf_err);
-        let abs_z = t.z[0].hypot(t.z[1]);
-        let d_true = abs_z * abs_z.ln() / t.dz[0].hypot(t.dz[1]);
-        let (wx, wy) = (t.dz[0] * t.z[0] + t.dz[1] * t.z[1], t.dz[0] * t.z[1] - t.dz[1] * t.z[0]);
-        let w = wx.hypot(wy);
-        if measured.distance && d_true.is_finite() && d_true > 0.0 && w > 0.0 {
-            // The engines report the vector in image terms: the view's transform undone.
-            let [tx, ty] = transform.gradient_to_image([d_true * wx / w, d_true * wy / w]);
-            let err = (dx as f64 - tx).hypot(dy as f64 - ty) / d_true;
-            de.push(if err.is_finite() { err } else { f64::INFINITY });
+        match de_error(t, [dx, dy], transform).filter(|_| measured.distance) {
+            Some(err) if (t.ill_conditioned || t.de_ill_conditioned) && err > DE_CONDITION => de_excused += 1,
+            Some(err) => de.push(err),
+            None => {}
         }
     }
     nf.sort_by(f64::total_cmp);
@@ -559,6 +600,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         de_scored: de.len(),
         ill_conditioned: excused,
         nf_ill_conditioned: nf_excused,
+        de_ill_conditioned: de_excused,
     }
 }
 
@@ -575,8 +617,15 @@ mod tests {
             spread_log2: 0,
             ill_conditioned: false,
             nf_ill_conditioned: false,
+            de_ill_conditioned: false,
             ln_degree: std::f64::consts::LN_2,
         }
+    }
+
+    /// The truth's distance-estimate vector as the engines report it, in f32.
+    fn engine_de(t: &Truth) -> (f32, f32) {
+        let [x, y] = Transform::IDENTITY.gradient_to_image(true_de(t).unwrap());
+        (x as f32, y as f32)
     }
 
     #[test]
@@ -586,21 +635,55 @@ mod tests {
         truths[2].near_circle = true;
         // Wrong on every pixel but the last, whose NF is the truth's too.
         let nf = true_nf(&truths[3], 2f64.ln()) as f32;
-        let values = vec![(11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (11, nf, 0.0, 0.0), (10, nf, 0.0, 0.0)];
+        let (dx, dy) = engine_de(&truths[3]);
+        let values = vec![(11, nf, dx, dy), (11, nf, dx, dy), (11, nf, dx, dy), (10, nf, dx, dy)];
         let m = Measured { values, iterations: 40, seconds: 1.0, distance: true };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!((row.compared, row.ill_conditioned), (2, 1), "{row:?}");
         assert_eq!(row.n_mismatch_fraction, 0.5, "{row:?}");
-        assert_eq!(suspects(std::slice::from_ref(&m), &truths, 2.0), vec![0, 1]);
+        assert_eq!(suspects(std::slice::from_ref(&m), &truths, 2.0, Transform::IDENTITY), vec![0, 1]);
         // NF: an ill-conditioned pixel's NF error is left out, an ordinary one's is not.
         let mut truths = vec![truth(10), truth(10)];
         truths[0].nf_ill_conditioned = true;
-        let values = vec![(10, 0.3, 0.0, 0.0), (10, 0.3, 0.0, 0.0)];
+        let values = vec![(10, 0.3, dx, dy), (10, 0.3, dx, dy)];
         let m = Measured { values, iterations: 20, seconds: 1.0, distance: true };
         let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
         assert_eq!(row.nf_ill_conditioned, 1, "{row:?}");
         assert_eq!((row.nf_scored, row.de_scored), (1, 1), "{row:?}");
-        assert_eq!(suspects(&[m], &truths, 2.0), vec![0, 1]);
+        assert_eq!(suspects(&[m], &truths, 2.0, Transform::IDENTITY), vec![0, 1]);
+    }
+
+    /// A distance estimate off by more than [`DE_CONDITION`] makes a pixel suspect; where
+    /// the true vector is ill-conditioned (or N is) it is left out of the distance errors
+    /// alone, and an error within [`DE_CONDITION`] is scored even there.
+    #[test]
+    fn score_leaves_out_only_ill_conditioned_distance_errors() {
+        let mut truths = vec![truth(10), truth(10), truth(10), truth(10), truth(10)];
+        truths[0].de_ill_conditioned = true;
+        truths[1].ill_conditioned = true;
+        truths[3].de_ill_conditioned = true;
+        let nf = true_nf(&truths[0], 2f64.ln()) as f32;
+        let (dx, dy) = engine_de(&truths[0]);
+        let off = (dx * 1.01, dy);
+        let near = (dx * (1.0 + 2e-7), dy);
+        let values = vec![
+            (10, nf, off.0, off.1),
+            (10, nf, off.0, off.1),
+            (10, nf, off.0, off.1),
+            (10, nf, near.0, near.1),
+            (10, nf, dx, dy),
+        ];
+        let m = Measured { values, iterations: 50, seconds: 1.0, distance: true };
+        let row = score("x", &m, &truths, 2.0, Transform::IDENTITY);
+        assert_eq!((row.compared, row.nf_scored, row.de_scored, row.de_ill_conditioned), (5, 5, 3, 2), "{row:?}");
+        assert!(row.nf_error_p99 < 1e-6, "{row:?}");
+        // Scored: the ordinary pixel 1% off, the ill-conditioned one within the bar, the exact one.
+        assert!((row.de_error_p99 - 0.01).abs() < 1e-4 && row.de_error_p50 < 1e-6, "{row:?}");
+        assert_eq!(suspects(&[m], &truths, 2.0, Transform::IDENTITY), vec![0, 1, 2]);
+        // Without a distance estimate (a peer's values) nothing is suspect for it.
+        let values = vec![(10, nf, 0.0, 0.0); 5];
+        let peer = Measured { values, iterations: 0, seconds: f64::NAN, distance: false };
+        assert!(suspects(&[peer], &truths, 2.0, Transform::IDENTITY).is_empty());
     }
 
     /// Errors over no pixel are NaN, not 0: a view whose sampled pixels are all interior (or
@@ -655,5 +738,35 @@ mod tests {
         mark_ill_conditioned(&scene, formula, &pixels, &mut truths, &[0, 1], &cancel).unwrap();
         assert!(truths[0].ill_conditioned);
         assert!(!truths[1].ill_conditioned, "{:?}", truths[1]);
+    }
+
+    /// A generated view of a hybrid's Julia set (the fuzzer's, seed 52 at 1e40): at pixel
+    /// (14, 7), whose distance is about 4e-9 of the spacing, the true distance-estimate
+    /// vector turns by a third of its length when the pixel moves a billionth of a spacing
+    /// while N holds; at (23, 14), a fifth of the spacing from the set, it moves by 4e-9.
+    #[test]
+    fn a_distance_that_turns_within_a_billionth_of_a_pixel_is_ill_conditioned() {
+        let text = r#"version = 1
+[formula]
+kind = "burning-ship,mandelbrot^3"
+c = ["0.04998218799091687565", "-1.00866719623781683399"]
+[view]
+center = ["-0.32400938307666017526151663656052141687155656723620156970430306016495366625472782557", "-0.22168865617848951279705264988041442196287253114792767178414093401619311851487929484"]
+radius = "6.485993187e-41"
+width = 32
+height = 24
+[iteration]
+max = 7996
+"#;
+        let file = Scene::parse_file("hybrid-julia", text).unwrap();
+        let dir = std::path::Path::new(".");
+        let scene = Scene::validate(file, "hybrid-julia", text, dir, crate::io::load_bitmap).unwrap();
+        let pixels = [(14, 7), (23, 14)];
+        let cancel = AtomicBool::new(false);
+        let mut truths = truths(&scene, scene.formula, &pixels, &cancel, &|_| {}).unwrap();
+        assert_eq!(truths.iter().map(|t| t.n).collect::<Vec<_>>(), [Some(1388), Some(1162)]);
+        mark_ill_conditioned(&scene, scene.formula, &pixels, &mut truths, &[0, 1], &cancel).unwrap();
+        assert!(truths[0].de_ill_conditioned && !truths[0].ill_conditioned, "{:?}", truths[0]);
+        assert!(!truths[1].de_ill_conditioned && !truths[1].ill_conditioned, "{:?}", truths[1]);
     }
 }

@@ -44,6 +44,10 @@ pub struct Truth {
     /// N holds but NF changes by more than [`super::NF_CONDITION`] when the point moves 1e-9
     /// sample spacings (set likewise, only where some engine's NF is that far off).
     pub nf_ill_conditioned: bool,
+    /// N holds but the distance-estimate vector changes by more than
+    /// [`super::DE_CONDITION`] of its length when the point moves 1e-9 sample spacings (set
+    /// likewise, only where some engine's distance estimate is that far off).
+    pub de_ill_conditioned: bool,
     /// ln of the escape rate of the formula iterated (ln 2 for z^2 + c): the base of the
     /// true NF's logarithm, as the engines' smooth fraction takes it.
     pub ln_degree: f64,
@@ -54,7 +58,17 @@ impl Truth {
     /// (None) interior; the conditioning flags are set later, where some engine disagrees
     /// ([`super::mark_ill_conditioned`]).
     fn found(n: Option<u32>, z: [f64; 2], dz: [f64; 2], near_circle: bool, spread_log2: i32, ln_degree: f64) -> Truth {
-        Truth { n, z, dz, near_circle, spread_log2, ill_conditioned: false, nf_ill_conditioned: false, ln_degree }
+        Truth {
+            n,
+            z,
+            dz,
+            near_circle,
+            spread_log2,
+            ill_conditioned: false,
+            nf_ill_conditioned: false,
+            de_ill_conditioned: false,
+            ln_degree,
+        }
     }
 
     /// Whether the orbit spreads a disk of `shift` sample spacings around the pixel to a

@@ -386,9 +386,19 @@ fn any_formula_view(rng: &mut Rng, spec: &ViewSpec) -> Option<(BigC, FloatExp, O
             // decimals) and exactly that value in big floats; then the Julia set's boundary.
             let c_depth = rng.uniform(1.0, 4.0);
             let at = from_whole(rng, None, c_depth, 20_000)?;
-            let c = at.center.to_rationals().map(|r| Decimal::from_rational(&r, 20));
-            let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
-            let f = from_whole(rng, Some(&big), depth, cap)?;
+            let julia_at = |rng: &mut Rng, p: &BigC| {
+                let c = p.to_rationals().map(|r| Decimal::from_rational(&r, 20));
+                let big = BigC::from_decimals(&c[0], &c[1], bits_for(depth));
+                from_whole(rng, Some(&big), depth, cap).map(|f| (f, c))
+            };
+            // The descent ends anywhere in a cell the boundary crosses, so c may lie just
+            // outside the set, where the Julia set is dust that a descent can lose (the
+            // Mandelbar's, at these depths, every time): then again with c the first sample
+            // of the last grid that did not escape.
+            let (f, c) = julia_at(rng, &at.center).or_else(|| {
+                let inside = boundary::inside_sample(formula, &at.center, at.radius, 20_000)?;
+                julia_at(rng, &inside)
+            })?;
             (f.center, f.radius, Some(c), limit(f.max_n))
         }
         ViewKind::Mini => {
@@ -472,6 +482,26 @@ mod tests {
             formula: ship,
         };
         assert!(generate(3, 0, &spec).is_none());
+    }
+
+    /// The Mandelbar's Julia sets: every c its descents gave lay just outside the set, whose
+    /// Julia set is dust a descent loses; c moved to a sample of the set gives views.
+    #[test]
+    fn mandelbar_julia_sets_are_drawn() {
+        let mandelbar = Formula::parse("mandelbar", None).unwrap();
+        let spec = ViewSpec {
+            kind: ViewKind::JuliaBoundary,
+            log10_zoom: 8.0,
+            max_iter: 20_000,
+            width: 16,
+            height: 12,
+            formula: mandelbar,
+        };
+        for draw in 1..4 {
+            let v = generate(3, draw, &spec).unwrap_or_else(|| panic!("draw {draw}: no view"));
+            assert!(v.toml.contains("c = ["), "{}", v.toml);
+            assert!(v.scene.log10_spacing() < -8.0, "draw {draw}: spacing 1e{}", v.scene.log10_spacing());
+        }
     }
 
     #[test]

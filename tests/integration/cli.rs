@@ -384,11 +384,21 @@ fn compare_measures_engines_against_the_truth() {
     let px = std::fs::read_to_string(dir.join("px.csv")).unwrap();
     let lines: Vec<Vec<&str>> = px.lines().map(|l| l.split(',').collect()).collect();
     assert_eq!(lines.len(), 11, "{px}");
-    let head = ["x", "y", "n_true", "nf_true", "near_circle", "ill_conditioned", "nf_ill_conditioned", "f32 n"];
-    assert_eq!(lines[0][..8], head, "{px}");
+    let head = [
+        "x",
+        "y",
+        "n_true",
+        "nf_true",
+        "near_circle",
+        "ill_conditioned",
+        "nf_ill_conditioned",
+        "de_ill_conditioned",
+        "f32 n",
+    ];
+    assert_eq!(lines[0][..9], head, "{px}");
     for l in &lines[1..] {
-        assert_eq!(l.len(), 13, "{px}");
-        assert!(l[9] == l[2] && l[11] == l[2], "{px}");
+        assert_eq!(l.len(), 14, "{px}");
+        assert!(l[10] == l[2] && l[12] == l[2], "{px}");
     }
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("engine,seconds,iterations_per_second,n_mismatch_fraction,"), "{text}");
