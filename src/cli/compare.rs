@@ -233,6 +233,6 @@ fn table(rows: &[Row], origin: &str, samples: usize) -> String {
            to 1 while |z| <= 2 (left out); \
            NF ill-cond.: NF more than 1e-4 off where the true NF changes by more than 1e-4 within 1e-9 pixel \
            (left out of the NF and DE errors); \
-           DE ill-cond.: distance estimate more than 1e-6 off where the true one moves by more than 1e-6 of itself \
+           DE ill-cond.: distance estimate more than 1e-6 off where the true one moves by more than 1e-4 of itself \
            within 1e-9 pixel (left out of the DE errors)\n"
 }

@@ -10,7 +10,7 @@
 //! pixels whose true N changes within 1e-9 of a pixel or whose orbit spreads 1e-9 of a pixel
 //! to a unit (chaotic), and, for NF and distance errors,
 //! pixels whose true NF changes by more than 1e-4 within 1e-9 of a pixel, and for distance
-//! errors alone, pixels whose true distance-estimate vector moves by more than 1e-6 of its
+//! errors alone, pixels whose true distance-estimate vector moves by more than 1e-4 of its
 //! length within 1e-9 of a pixel). The bar, per
 //! configuration: no N mismatch, NF error median <= 1e-6 and 99th percentile <= 1e-4,
 //! distance-estimate error median <= 1e-6, and no NaN or infinity in any value.

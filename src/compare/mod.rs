@@ -139,7 +139,8 @@ pub struct Row {
     pub nf_ill_conditioned: usize,
     /// Pixels left out of the distance errors alone because the true distance-estimate
     /// vector moves by more than [`DE_CONDITION`] of its length within 1e-9 sample spacings
-    /// (or N is ill-conditioned there), where this variant's is that far off.
+    /// (or N is ill-conditioned there), where this variant's is more than [`DE_SUSPECT`]
+    /// off.
     pub de_ill_conditioned: usize,
 }
 
@@ -287,15 +288,19 @@ pub const CONDITION_SHIFT: f64 = 1e-9;
 /// NF's 99th percentile).
 pub const NF_CONDITION: f64 = 1e-4;
 
-/// A distance-estimate error above this (relative to the true distance), or a change of the
-/// true distance-estimate vector by more than this of its length within
-/// [`CONDITION_SHIFT`], makes a pixel's distance estimate suspect or ill-conditioned (the
-/// fuzzer's bar for the distance error's median).
-pub const DE_CONDITION: f64 = 1e-6;
+/// A change of the true distance-estimate vector by more than this of its length within
+/// [`CONDITION_SHIFT`] makes a pixel's distance estimate ill-conditioned: as with
+/// [`NF_CONDITION`] and NF, it then varies by more than 1e5 times itself per pixel.
+pub const DE_CONDITION: f64 = 1e-4;
+
+/// A distance-estimate error above this (relative to the true distance; the fuzzer's bar
+/// for the distance error's median) makes a pixel suspect, and is left out of the distance
+/// errors where the pixel's distance estimate (or N) is ill-conditioned.
+pub const DE_SUSPECT: f64 = 1e-6;
 
 /// The sampled pixels (indices) whose N some variant got wrong, whose NF some variant got
 /// more than [`NF_CONDITION`] wrong, or whose distance estimate some variant got more than
-/// [`DE_CONDITION`] wrong, near-circle ones left out: the only ones whose conditioning
+/// [`DE_SUSPECT`] wrong, near-circle ones left out: the only ones whose conditioning
 /// matters.
 pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64, transform: Transform) -> Vec<usize> {
     let ln_r = escape_radius.ln();
@@ -304,7 +309,7 @@ pub fn suspects(measured: &[Measured], truths: &[Truth], escape_radius: f64, tra
         let t = &truths[k];
         escape_index(n) != t.n
             || (t.n.is_some() && (nf as f64 - true_nf(t, ln_r)).abs() > NF_CONDITION)
-            || (m.distance && de_error(t, [dx, dy], transform).is_some_and(|e| e > DE_CONDITION))
+            || (m.distance && de_error(t, [dx, dy], transform).is_some_and(|e| e > DE_SUSPECT))
     };
     (0..truths.len()).filter(|&k| !truths[k].near_circle && measured.iter().any(|m| wrong(m, k))).collect()
 }
@@ -574,7 +579,7 @@ pub fn score(name: &str, measured: &Measured, truths: &[Truth], escape_radius: f
         }
         nf.push(nf_err);
         match de_error(t, [dx, dy], transform).filter(|_| measured.distance) {
-            Some(err) if (t.ill_conditioned || t.de_ill_conditioned) && err > DE_CONDITION => de_excused += 1,
+            Some(err) if (t.ill_conditioned || t.de_ill_conditioned) && err > DE_SUSPECT => de_excused += 1,
             Some(err) => de.push(err),
             None => {}
         }
@@ -653,9 +658,9 @@ mod tests {
         assert_eq!(suspects(&[m], &truths, 2.0, Transform::IDENTITY), vec![0, 1]);
     }
 
-    /// A distance estimate off by more than [`DE_CONDITION`] makes a pixel suspect; where
+    /// A distance estimate off by more than [`DE_SUSPECT`] makes a pixel suspect; where
     /// the true vector is ill-conditioned (or N is) it is left out of the distance errors
-    /// alone, and an error within [`DE_CONDITION`] is scored even there.
+    /// alone, and an error within [`DE_SUSPECT`] is scored even there.
     #[test]
     fn score_leaves_out_only_ill_conditioned_distance_errors() {
         let mut truths = vec![truth(10), truth(10), truth(10), truth(10), truth(10)];

@@ -46,7 +46,8 @@ pub struct Truth {
     pub nf_ill_conditioned: bool,
     /// N holds but the distance-estimate vector changes by more than
     /// [`super::DE_CONDITION`] of its length when the point moves 1e-9 sample spacings (set
-    /// likewise, only where some engine's distance estimate is that far off).
+    /// likewise, only where some engine's distance estimate is more than
+    /// [`super::DE_SUSPECT`] off).
     pub de_ill_conditioned: bool,
     /// ln of the escape rate of the formula iterated (ln 2 for z^2 + c): the base of the
     /// true NF's logarithm, as the engines' smooth fraction takes it.
