@@ -354,7 +354,7 @@ fn de_error(t: &Truth, de: [f32; 2], transform: Transform) -> Option<f64> {
 /// precision) and is marked so; likewise the distance estimate where its vector moves by
 /// more than [`DE_CONDITION`] of its length (at a chaotic view's pixels whose distance is a
 /// small fraction of the pixel, the derivative of a long orbit turns within 1e-9 of a
-/// pixel, and an engine's rounding, worth about 1e-13 of a pixel, turns it too).
+/// pixel, and an engine's rounding, worth about 1e-14 of a pixel, turns it too).
 pub fn mark_ill_conditioned(
     scene: &Scene,
     formula: Formula,
