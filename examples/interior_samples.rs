@@ -8,34 +8,19 @@
 //! `scenes/minibrot-e102.toml`): one line per sample at the limit (pixel, iterations,
 //! seconds), the 30 slowest of those stopped early, and the sums of thread time.
 #![allow(clippy::print_stdout)] // printing the measurement is the point
-use deepfield::formula::end::{INTERIOR, Orbit};
-use deepfield::orbit::interior::Detection;
-use deepfield::orbit::{Counters, Perturbation};
-use deepfield::render::{self, Options};
-use deepfield::scene::Scene;
-use deepfield::simd_level::SimdLevel;
-use rayon::prelude::*;
-use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-fn scene(path: &str, detection: Detection) -> Scene {
-    let text = std::fs::read_to_string(path).expect("scene file");
-    let file = Scene::parse_file(path, &text).expect("parses");
-    let dir = std::path::Path::new(path).parent().unwrap_or(std::path::Path::new("."));
-    let mut s = Scene::validate(file, path, &text, dir, deepfield::io::load_bitmap).expect("valid");
-    s.interior_detection = detection;
-    s
-}
-/// The deep engine of `s`, every sample's offset and the grid's width.
-fn engine(s: &Scene) -> (Perturbation, Vec<[f64; 2]>, usize) {
-    let cancel = AtomicBool::new(false);
-    let plan = deepfield::render::engine::plan(s).expect("engine");
-    let (params, _) = render::prepare_field(s, &plan, Options::default(), &cancel, &|_| {}).expect("prepared");
-    let deep = params.deep.expect("a deep view");
-    let g = &params.grid;
-    let offsets = (0..g.height).flat_map(|j| (0..g.width).map(move |i| g.offset(i, j))).collect();
-    (std::sync::Arc::into_inner(deep).expect("one owner"), offsets, g.width as usize)
-}
+use deepfield::formula::end::{INTERIOR, Orbit};
+use deepfield::orbit::Counters;
+use deepfield::orbit::interior::Detection;
+use deepfield::simd_level::SimdLevel;
+use rayon::prelude::*;
+
+#[path = "support/deep_view.rs"]
+#[allow(dead_code)]
+mod deep_view;
+use deep_view::{engine, scene};
+
 fn main() {
     let path = std::env::args().nth(1).unwrap_or("scenes/minibrot-e102.toml".into());
     let (on, offsets, w) = engine(&scene(&path, Detection::On));
