@@ -425,7 +425,7 @@ pub fn disk_attracting(
     let Some((te, _)) = map([w[0] + edge.to_f64(), w[1]], [0.0; 2]) else { return false };
     let Some(d2_edge) = te.d2 else { return false };
     let moved = abs([te.d1[0] - t.d1[0], te.d1[1] - t.d1[1]]);
-    if moved > (lip * edge).mul_f64(0.75) || abs(d2_edge) > lip.mul_f64(0.75) {
+    if moved > (lip * edge).mul_f64(STEADY) || abs(d2_edge) > lip.mul_f64(STEADY) {
         return false;
     }
     // The disk's edge: what the first-order terms leave out within the margin.
