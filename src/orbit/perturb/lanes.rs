@@ -87,7 +87,7 @@ macro_rules! per_vector {
     }};
 }
 
-mod burst;
+pub(super) mod burst;
 
 use burst::{Rate, burst, settle};
 
@@ -592,7 +592,7 @@ fn run<U: Unit, const DER: bool, const INT: bool, F: FnMut(Option<Held>, &mut Co
     let rebase_in_burst = p.numbers != Numbers::FloatExp && p.refs[p.refs.len() - 1].last() >= 2;
     // Where the bursts hold the lanes' addresses follows how often they rebase (speed only:
     // both give the same bits).
-    let mut rate = Rate::default();
+    let mut rate = Rate::new();
     while lanes.iter().any(|l| l.act != 0) {
         // With interior detection, bursts only while every lane's sample has left it (its
         // |dz/dz|^2 is not followed; the bursts' steps are then exactly `step`'s).

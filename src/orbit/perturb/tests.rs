@@ -280,6 +280,17 @@ fn same_both_ways(
                 assert_eq!(counts(&c_disks), counts(&c_one), "{what} {simd} with disks");
                 disks += c_disks.disks;
                 let c_many = run(&each, "");
+                // Bursts that hold their addresses in vector registers and bursts that keep
+                // them in memory: whichever this CPU does not pick, forced.
+                if simd != SimdLevel::Scalar {
+                    let held = &lanes::burst::HELD_IN_TESTS;
+                    for choice in [false, true] {
+                        held.set(Some(choice));
+                        let c = run(&each, if choice { " addresses held" } else { " addresses in memory" });
+                        held.set(None);
+                        assert_eq!(c, c_many, "{what} {simd}: counts with addresses held {choice}");
+                    }
+                }
                 // A vector level runs its own lanes, never the scalar loop in their place
                 // (which would pass every comparison above without testing them).
                 let mut lanes_out = vec![Orbit::interior(); offsets.len()];

@@ -23,25 +23,61 @@ pub(super) struct Moved {
 
 /// How often the lanes have rebased inside bursts so far, which decides where the next
 /// burst holds its lanes' addresses (see [`retarget`]).
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub(super) struct Rate {
     rebases: u64,
     lane_steps: u64,
+    /// Whether this CPU takes addresses out of vector registers cheaply ([`held_pays`]).
+    held: bool,
 }
 
 impl Rate {
     /// A rebase in more than one lane step in this many: the addresses in vector registers.
     const OFTEN: u64 = 150;
 
+    pub(super) fn new() -> Rate {
+        Rate { rebases: 0, lane_steps: 0, held: held_pays() }
+    }
+
     pub(super) fn add(&mut self, moved: &Moved, lanes: usize) {
         self.rebases += moved.count;
         self.lane_steps += moved.steps * (lanes * G) as u64;
     }
 
-    /// Whether lanes rebase often enough that the burst holds the addresses in registers.
+    /// Whether lanes rebase often enough that the burst holds the addresses in registers,
+    /// on a CPU where that pays.
     pub(super) fn often(&self) -> bool {
-        self.rebases * Self::OFTEN > self.lane_steps
+        self.held && self.rebases * Self::OFTEN > self.lane_steps
     }
+}
+
+/// Whether holding a burst's addresses in vector registers ([`retarget`]) can pay on this
+/// CPU: on AMD's cores (measured on Zen 4, against [`retarget_apart`] when it was a call;
+/// not measured there since it is inlined), not on Intel's. A burst that holds them takes
+/// each lane's address out of a vector register for its load (`vmovq`, `vpextrq`,
+/// `vextracti32x4`: 22 operations every two steps of 16 lanes with AVX-512), and on Intel's
+/// cores those run on the port that also takes every 512-bit shuffle, every comparison into
+/// a mask and half of the 512-bit arithmetic, which the lanes already keep busy: on a Xeon
+/// of the Emerald Rapids generation the seahorse at zoom 1e6 took 1.05 s with them held and
+/// 0.96 s without (the call still in place), and 1.33 against 1.25 s with `--simd avx2`
+/// (docs/performance.md, "The 1e5–1e15 range"). Speed only: both places give the same
+/// bits, and the lanes' tests run both on every CPU.
+fn held_pays() -> bool {
+    #[cfg(test)]
+    if let Some(held) = HELD_IN_TESTS.get() {
+        return held;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        static AMD: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        *AMD.get_or_init(|| {
+            let id = std::arch::x86_64::__cpuid(0);
+            // "AuthenticAMD" in EBX, EDX, ECX.
+            [id.ebx, id.edx, id.ecx] == [0x6874_7541, 0x6974_6e65, 0x444d_4163]
+        })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    true
 }
 
 /// Plain steps of every vector while nothing can happen but a step: every lane active,
@@ -189,11 +225,20 @@ pub(super) fn burst<U: Unit, const DER: bool, const REBASE: bool, const HELD: bo
     moved
 }
 
+#[cfg(test)]
+thread_local! {
+    /// A test's choice for [`held_pays`] on its own thread, so that both places for the
+    /// addresses run on every CPU.
+    pub(in crate::orbit::perturb) static HELD_IN_TESTS: std::cell::Cell<Option<bool>> = const { std::cell::Cell::new(None) };
+}
+
 /// Sets `at[i]` to `to` in every lane of `mask`, without a branch per lane. Inlined, it
 /// lets the compiler keep the burst's addresses in vector registers and take each lane's
-/// out for its load: where lanes rebase often (about every 50 steps near zoom 1e6) that
-/// measured 9% faster than [`retarget_apart`], which keeps them in memory; where they
-/// rebase rarely (bench-e50: once in 450 steps) 4% slower. [`Rate`] picks between them.
+/// out for its load: on Zen 4, where lanes rebase often (about every 50 steps near zoom
+/// 1e6), that measured 9% faster than [`retarget_apart`] out of line (a call, and every
+/// vector register saved around it); where they rebase rarely (bench-e50: once in 450
+/// steps) 4% slower. [`Rate`] picks between them, and on Intel's cores always the other
+/// ([`held_pays`]).
 #[inline(always)]
 fn retarget(at: &mut [usize; MAX_W], mask: u32, to: usize) {
     for (i, a) in at.iter_mut().enumerate() {
@@ -202,9 +247,11 @@ fn retarget(at: &mut [usize; MAX_W], mask: u32, to: usize) {
     }
 }
 
-/// [`retarget`] out of line, over the mask's bits, so that the addresses stay in memory
-/// where the burst's loads read them as scalars.
-#[inline(never)]
+/// [`retarget`] over the mask's bits: indexed stores, so that the addresses stay in memory
+/// where the burst's loads read them as scalars. Inlined: out of line, the call and the
+/// vector registers saved around it cost the Emerald Rapids Xeon 10% of the seahorse at
+/// zoom 1e6 (0.91–1.02 s against 1.01–1.24 s; docs/performance.md, "The 1e5–1e15 range").
+#[inline(always)]
 fn retarget_apart(at: &mut [usize; MAX_W], mask: u32, to: usize) {
     let mut b = mask;
     while b != 0 {
