@@ -280,8 +280,9 @@ fn same_both_ways(
                 assert_eq!(counts(&c_disks), counts(&c_one), "{what} {simd} with disks");
                 disks += c_disks.disks;
                 let c_many = run(&each, "");
-                // Bursts that hold their addresses in vector registers and bursts that keep
-                // them in memory: whichever this CPU does not pick, forced.
+                // Bursts with their addresses in vector registers where lanes rebase often
+                // (as on AMD's cores) and in memory throughout (as on others): both forced,
+                // whichever this CPU picks.
                 if simd != SimdLevel::Scalar {
                     let held = &lanes::burst::HELD_IN_TESTS;
                     for choice in [false, true] {
