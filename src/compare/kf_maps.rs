@@ -138,7 +138,11 @@ pub fn defined(phase: Phase) -> bool {
         | K::PerpendicularBurningShip
         | K::PerpendicularCeltic
         | K::PerpendicularBuffalo => p == 2,
-        K::CubicQuasiBurningShip | K::CubicPartialBsReal | K::CubicPartialBsImag | K::CubicFlyingSquirrel => p == 3,
+        K::CubicQuasiBurningShip
+        | K::CubicPartialBsReal
+        | K::CubicPartialBsImag
+        | K::CubicFlyingSquirrel
+        | K::CubicQuasiPerpendicular => p == 3,
         K::BurningShip4PartialImag
         | K::BurningShip4PartialReal
         | K::BurningShip4PartialRealMbar
@@ -146,8 +150,23 @@ pub fn defined(phase: Phase) -> bool {
         | K::CelticBurningShip4PartialReal
         | K::CelticBurningShip4PartialRealMbar
         | K::Buffalo4PartialImag
-        | K::Celtic4Mbar => p == 4,
-        K::BurningShip5Partial | K::BurningShip5PartialMbar | K::Celtic5Mbar | K::QuasiBurningShip5 => p == 5,
+        | K::Celtic4Mbar
+        | K::FalseQuasiPerpendicular4
+        | K::FalseQuasiHeart4
+        | K::CelticFalseQuasiPerpendicular4
+        | K::CelticFalseQuasiHeart4
+        | K::ImagQuasiPerpendicular4
+        | K::RealQuasiPerpendicular4
+        | K::RealQuasiHeart4
+        | K::CelticImagQuasiPerpendicular4
+        | K::CelticRealQuasiPerpendicular4
+        | K::CelticRealQuasiHeart4 => p == 4,
+        K::BurningShip5Partial
+        | K::BurningShip5PartialMbar
+        | K::Celtic5Mbar
+        | K::QuasiBurningShip5
+        | K::QuasiPerpendicular5
+        | K::QuasiHeart5 => p == 5,
     }
 }
 
@@ -274,6 +293,39 @@ fn expand<T: Num>(ev: &mut Ev, phase: Phase, [x, y]: [&T; 2], [cr, ci]: [&T; 2])
         (K::BurningShip5PartialMbar, 5) => [plus(m(&ev.abs(x.clone()), &q5()), cr), from(ci, m(y, &s5()))],
         (K::Celtic5Mbar, 5) => [plus(ev.abs(m(x, &q5())), cr), from(ci, m(y, &s5()))],
         (K::QuasiBurningShip5, 5) => [plus(m(&ev.abs(x.clone()), &q5()), cr), from(ci, ev.abs(m(y, &s5())))],
+        // Type 14. Xrn = (Xr2 - Xi2 * 3) * abs(Xr) + Cr; Xin = Ci - abs(Xr2 * 3 - Xi2) * Xi.
+        (K::CubicQuasiPerpendicular, 3) => {
+            [plus(m(&sub(&xr2, &k(3, &xi2)), &ev.abs(x.clone())), cr), from(ci, m(&ev.abs(sub(&k(3, &xr2), &xi2)), y))]
+        }
+        // Types 23 to 26: 4 * Xr * Xi * abs(Xr2 - Xi2), subtracted from Ci, added, or times -4.
+        (K::FalseQuasiPerpendicular4, 4) => [plus(r4(), cr), from(ci, m(&m(&k(4, x), y), &ev.abs(d2())))],
+        (K::FalseQuasiHeart4, 4) => [plus(r4(), cr), plus(m(&m(&k(4, x), y), &ev.abs(d2())), ci)],
+        (K::CelticFalseQuasiPerpendicular4, 4) => {
+            [plus(ev.abs(r4()), cr), plus(m(&m(&k(4, x).neg(), y), &ev.abs(d2())), ci)]
+        }
+        (K::CelticFalseQuasiHeart4, 4) => [plus(ev.abs(r4()), cr), plus(m(&m(&k(4, x), y), &ev.abs(d2())), ci)],
+        // Types 31 and 32. Xrn = abs(Xr) * (Xr2 Xr2 - 10 Xr2 Xi2 + 5 Xi2 Xi2) + Cr;
+        // Xin = Ci - Xi * abs(5 Xr2 Xr2 - 10 Xr2 Xi2 + Xi2 Xi2), or that term + Ci.
+        (K::QuasiPerpendicular5, 5) => [plus(m(&ev.abs(x.clone()), &q5()), cr), from(ci, m(y, &ev.abs(s5())))],
+        (K::QuasiHeart5, 5) => [plus(m(&ev.abs(x.clone()), &q5()), cr), plus(m(y, &ev.abs(s5())), ci)],
+        // Types 34 to 39: 4 * Xr * abs(Xi * Xr2 - Xi * Xi2) or 4 * Xi * abs(Xr * Xr2 - Xr * Xi2),
+        // with Xrn = Xr2 Xr2 + Xi2 Xi2 - 6 Xr2 Xi2 + Cr or its abs (Celtic).
+        (K::ImagQuasiPerpendicular4, 4) => {
+            [plus(r4(), cr), plus(m(&k(4, x), &ev.abs(sub(&m(y, &xr2), &m(y, &xi2)))), ci)]
+        }
+        (K::RealQuasiPerpendicular4, 4) => {
+            [plus(r4(), cr), from(ci, m(&k(4, y), &ev.abs(sub(&m(x, &xr2), &m(x, &xi2)))))]
+        }
+        (K::RealQuasiHeart4, 4) => [plus(r4(), cr), plus(m(&k(4, y), &ev.abs(sub(&m(x, &xr2), &m(x, &xi2)))), ci)],
+        (K::CelticImagQuasiPerpendicular4, 4) => {
+            [plus(ev.abs(r4()), cr), plus(m(&k(4, x), &ev.abs(sub(&m(y, &xr2), &m(y, &xi2)))), ci)]
+        }
+        (K::CelticRealQuasiPerpendicular4, 4) => {
+            [plus(ev.abs(r4()), cr), from(ci, m(&k(4, y), &ev.abs(sub(&m(x, &xr2), &m(x, &xi2)))))]
+        }
+        (K::CelticRealQuasiHeart4, 4) => {
+            [plus(ev.abs(r4()), cr), plus(m(&k(4, y), &ev.abs(sub(&m(x, &xr2), &m(x, &xi2)))), ci)]
+        }
         _ => return None,
     })
 }

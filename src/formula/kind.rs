@@ -6,10 +6,13 @@
 //! lines), rewritten as a composition: for instance KF's Burning Ship power 3,
 //! `Xrn = (Xr2 - 3 Xi2) |Xr| + Cr; Xin = (3 Xr2 - Xi2) |Xi| + Ci`, is (|x| + i|y|)³ + c, a
 //! fold of both parts before the power. Kalles Fraktaler's Mandelbar of power 3 negates the
-//! real part of z³ where its other powers conjugate: the table keeps that.
+//! real part of z³ where its other powers conjugate: the table keeps that. Its "quasi"
+//! families fold a factor of the imaginary part, `Xin = Ci - |3 Xr2 - Xi2| Xi`: since
+//! Im w = y (3x² - y²) there, that is -sgn(y) |Im w|, a fold of Im w that gives it back the
+//! sign of y (`IM_BY_Y`; of x or xy in others).
 //! `tests/integration/formula_kf.rs` checks every row against KF's expanded formulas.
 
-use super::map::{FOLD_BOTH, FOLD_IM, FOLD_NONE, FOLD_RE, SIGN_IM, SIGN_NONE, SIGN_RE};
+use super::map::{FOLD_BOTH, FOLD_IM, FOLD_NONE, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_NONE, SIGN_RE};
 
 /// A formula family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -42,6 +45,8 @@ pub enum Kind {
     CubicPartialBsImag,
     /// Re z³ + i|Im z³| + c (type 13).
     CubicFlyingSquirrel,
+    /// Re w - i sgn(y)|Im w| + c, w = (|x| + iy)³ (type 14).
+    CubicQuasiPerpendicular,
     /// (x + i|y|)⁴ + c (type 15).
     BurningShip4PartialImag,
     /// (|x| + iy)⁴ + c (type 16).
@@ -58,6 +63,14 @@ pub enum Kind {
     Buffalo4PartialImag,
     /// |Re z⁴| - i Im z⁴ + c (type 22).
     Celtic4Mbar,
+    /// Re z⁴ - i sgn(xy)|Im z⁴| + c (type 23).
+    FalseQuasiPerpendicular4,
+    /// Re z⁴ + i sgn(xy)|Im z⁴| + c (type 24).
+    FalseQuasiHeart4,
+    /// |Re z⁴| - i sgn(xy)|Im z⁴| + c (type 25).
+    CelticFalseQuasiPerpendicular4,
+    /// |Re z⁴| + i sgn(xy)|Im z⁴| + c (type 26).
+    CelticFalseQuasiHeart4,
     /// (|x| + iy)⁵ + c (type 27).
     BurningShip5Partial,
     /// conj((|x| + iy)⁵) + c (type 28).
@@ -66,6 +79,22 @@ pub enum Kind {
     Celtic5Mbar,
     /// Re w - i|Im w| + c, w = (|x| + iy)⁵ (type 30).
     QuasiBurningShip5,
+    /// Re w - i sgn(y)|Im w| + c, w = (|x| + iy)⁵ (type 31).
+    QuasiPerpendicular5,
+    /// Re w + i sgn(y)|Im w| + c, w = (|x| + iy)⁵ (type 32).
+    QuasiHeart5,
+    /// Re z⁴ + i sgn(x)|Im z⁴| + c (type 34).
+    ImagQuasiPerpendicular4,
+    /// Re z⁴ - i sgn(y)|Im z⁴| + c (type 35).
+    RealQuasiPerpendicular4,
+    /// Re z⁴ + i sgn(y)|Im z⁴| + c (type 36).
+    RealQuasiHeart4,
+    /// |Re z⁴| + i sgn(x)|Im z⁴| + c (type 37).
+    CelticImagQuasiPerpendicular4,
+    /// |Re z⁴| - i sgn(y)|Im z⁴| + c (type 38).
+    CelticRealQuasiPerpendicular4,
+    /// |Re z⁴| + i sgn(y)|Im z⁴| + c (type 39).
+    CelticRealQuasiHeart4,
 }
 
 /// What one family is: the facts every part of the tool reads from.
@@ -119,8 +148,13 @@ const fn row(
 
 use Kind as K;
 
+/// The imaginary part folded after the power and given the sign of x, of y, or of xy.
+const BY_X: u8 = FOLD_IM | IM_BY_X;
+const BY_Y: u8 = FOLD_IM | IM_BY_Y;
+const BY_XY: u8 = FOLD_IM | IM_BY_X | IM_BY_Y;
+
 /// Every family, in Kalles Fraktaler's order.
-pub const KINDS: [KindInfo; 26] = [
+pub const KINDS: [KindInfo; 39] = [
     row(K::Mandelbrot, "mandelbrot", "Mandelbrot", 0, (2, 10), FOLD_NONE, FOLD_NONE, SIGN_NONE),
     row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
     row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
@@ -202,6 +236,16 @@ pub const KINDS: [KindInfo; 26] = [
         SIGN_NONE,
     ),
     row(
+        K::CubicQuasiPerpendicular,
+        "cubic-quasi-perpendicular",
+        "Cubic Quasi Perpendicular",
+        14,
+        (3, 3),
+        FOLD_RE,
+        BY_Y,
+        SIGN_IM,
+    ),
+    row(
         K::BurningShip4PartialImag,
         "4th-burning-ship-partial-imag",
         "4th Burning Ship Partial Imag",
@@ -273,6 +317,37 @@ pub const KINDS: [KindInfo; 26] = [
     ),
     row(K::Celtic4Mbar, "4th-celtic-mbar", "4th Celtic Mbar", 22, (4, 4), FOLD_NONE, FOLD_RE, SIGN_IM),
     row(
+        K::FalseQuasiPerpendicular4,
+        "4th-false-quasi-perpendicular",
+        "4th False Quasi Perpendicular",
+        23,
+        (4, 4),
+        FOLD_NONE,
+        BY_XY,
+        SIGN_IM,
+    ),
+    row(K::FalseQuasiHeart4, "4th-false-quasi-heart", "4th False Quasi Heart", 24, (4, 4), FOLD_NONE, BY_XY, SIGN_NONE),
+    row(
+        K::CelticFalseQuasiPerpendicular4,
+        "4th-celtic-false-quasi-perpendicular",
+        "4th Celtic False Quasi Perpendicular",
+        25,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_RE | BY_XY,
+        SIGN_IM,
+    ),
+    row(
+        K::CelticFalseQuasiHeart4,
+        "4th-celtic-false-quasi-heart",
+        "4th Celtic False Quasi Heart",
+        26,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_RE | BY_XY,
+        SIGN_NONE,
+    ),
+    row(
         K::BurningShip5Partial,
         "5th-burning-ship-partial",
         "5th Burning Ship Partial",
@@ -302,6 +377,68 @@ pub const KINDS: [KindInfo; 26] = [
         FOLD_RE,
         FOLD_IM,
         SIGN_IM,
+    ),
+    row(
+        K::QuasiPerpendicular5,
+        "5th-quasi-perpendicular",
+        "5th Quasi Perpendicular",
+        31,
+        (5, 5),
+        FOLD_RE,
+        BY_Y,
+        SIGN_IM,
+    ),
+    row(K::QuasiHeart5, "5th-quasi-heart", "5th Quasi Heart", 32, (5, 5), FOLD_RE, BY_Y, SIGN_NONE),
+    row(
+        K::ImagQuasiPerpendicular4,
+        "4th-imag-quasi-perpendicular",
+        "4th Imag Quasi Perpendicular / Heart",
+        34,
+        (4, 4),
+        FOLD_NONE,
+        BY_X,
+        SIGN_NONE,
+    ),
+    row(
+        K::RealQuasiPerpendicular4,
+        "4th-real-quasi-perpendicular",
+        "4th Real Quasi Perpendicular",
+        35,
+        (4, 4),
+        FOLD_NONE,
+        BY_Y,
+        SIGN_IM,
+    ),
+    row(K::RealQuasiHeart4, "4th-real-quasi-heart", "4th Real Quasi Heart", 36, (4, 4), FOLD_NONE, BY_Y, SIGN_NONE),
+    row(
+        K::CelticImagQuasiPerpendicular4,
+        "4th-celtic-imag-quasi-perpendicular",
+        "4th Celtic Imag Quasi Perpendicular / Heart",
+        37,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_RE | BY_X,
+        SIGN_NONE,
+    ),
+    row(
+        K::CelticRealQuasiPerpendicular4,
+        "4th-celtic-real-quasi-perpendicular",
+        "4th Celtic Real Quasi Perpendicular",
+        38,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_RE | BY_Y,
+        SIGN_IM,
+    ),
+    row(
+        K::CelticRealQuasiHeart4,
+        "4th-celtic-real-quasi-heart",
+        "4th Celtic Real Quasi Heart",
+        39,
+        (4, 4),
+        FOLD_NONE,
+        FOLD_RE | BY_Y,
+        SIGN_NONE,
     ),
 ];
 
@@ -368,11 +505,13 @@ impl Kind {
             _ => "z",
         };
         let w = format!("{base}^{p}");
-        let (re, im) = match fold_out {
-            FOLD_RE => ("|Re w|", "Im w"),
-            FOLD_IM => ("Re w", "|Im w|"),
-            FOLD_BOTH => ("|Re w|", "|Im w|"),
-            _ => ("Re w", "Im w"),
+        let re = if fold_out & FOLD_RE != 0 { "|Re w|" } else { "Re w" };
+        let im = match (fold_out & FOLD_IM != 0, fold_out & IM_BY_X != 0, fold_out & IM_BY_Y != 0) {
+            (false, ..) => "Im w",
+            (true, false, false) => "|Im w|",
+            (true, true, false) => "sgn(x) |Im w|",
+            (true, false, true) => "sgn(y) |Im w|",
+            (true, true, true) => "sgn(xy) |Im w|",
         };
         let (re, op) = match sign {
             SIGN_RE => (format!("-{re}"), "+"),
@@ -409,7 +548,7 @@ mod tests {
             assert_eq!(Kind::from_name(a.name), Some(a.kind));
             assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
         }
-        assert_eq!(Kind::from_kf_type(14), None, "14 is not a composition of folds and a power");
+        assert_eq!(Kind::from_kf_type(33), None, "SimonBrot is not a composition of folds and a power");
     }
 
     #[test]
@@ -419,5 +558,7 @@ mod tests {
         assert_eq!(Kind::Mandelbar.definition(2), "conj(z^2) + c");
         assert_eq!(Kind::Mandelbar.definition(3), "-Re w + i Im w + c, w = z^3");
         assert_eq!(Kind::PerpendicularCeltic.definition(2), "|Re w| - i Im w + c, w = (|x| + iy)^2");
+        assert_eq!(Kind::CubicQuasiPerpendicular.definition(3), "Re w - i sgn(y) |Im w| + c, w = (|x| + iy)^3");
+        assert_eq!(Kind::CelticFalseQuasiHeart4.definition(4), "|Re w| + i sgn(xy) |Im w| + c, w = z^4");
     }
 }

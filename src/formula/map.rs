@@ -1,7 +1,9 @@
 //! The maps of every formula family, composed of four steps that Kalles Fraktaler's formula
 //! definitions are expansions of: fold the components of z (absolute values of x, y or
 //! both), raise to an integer power p, fold the components of the result, and negate one
-//! component. Then c is added.
+//! component. Then c is added. A fold of the result's imaginary part may also give it back
+//! the sign of x, y or xy of z ([`IM_BY_X`], [`IM_BY_Y`]): Kalles Fraktaler's "quasi"
+//! families write such a part y |g(x, y)| where Im w = y g(x, y), which is sgn(y) |Im w|.
 //!
 //! A family is one choice of those four ([`Ops`], const parameters), so every kernel that
 //! is generic over [`Map`] is compiled per family into straight-line code: no opcode is
@@ -24,6 +26,13 @@ pub const FOLD_RE: u8 = 1;
 pub const FOLD_IM: u8 = 2;
 /// Both parts folded.
 pub const FOLD_BOTH: u8 = 3;
+
+/// With [`FOLD_IM`] after the power: the folded imaginary part times the sign of x (of z,
+/// before any fold), sgn(x) |Im w|.
+pub const IM_BY_X: u8 = 4;
+/// With [`FOLD_IM`] after the power: the folded imaginary part times the sign of y,
+/// sgn(y) |Im w| (with [`IM_BY_X`] too: times the sign of xy).
+pub const IM_BY_Y: u8 = 8;
 
 /// No component negated.
 pub const SIGN_NONE: u8 = 0;
@@ -60,6 +69,11 @@ pub trait Num: Copy {
     fn sgn(self) -> Self;
     /// [`diffabs`] of the reference part `self` and the delta `d`, lane by lane.
     fn diffabs(self, d: Self) -> Self;
+    /// [`signed_diffabs`] of the reference part `self`, the delta `d` and the signs (±1)
+    /// `s` and `s_new`, lane by lane.
+    fn signed_diffabs(self, d: Self, s: Self, s_new: Self) -> Self;
+    /// `a` where self is zero (of either sign), `b` elsewhere, lane by lane.
+    fn if_zero(self, a: Self, b: Self) -> Self;
 }
 
 impl Num for f64 {
@@ -98,6 +112,14 @@ impl Num for f64 {
     #[inline(always)]
     fn diffabs(self, d: Self) -> Self {
         diffabs(self, d)
+    }
+    #[inline(always)]
+    fn signed_diffabs(self, d: Self, s: Self, s_new: Self) -> Self {
+        signed_diffabs(self, d, s, s_new)
+    }
+    #[inline(always)]
+    fn if_zero(self, a: Self, b: Self) -> Self {
+        if self == 0.0 { a } else { b }
     }
 }
 
@@ -175,6 +197,26 @@ impl<const L: usize> Num for [f64; L] {
         }
         r
     }
+    #[inline(always)]
+    fn signed_diffabs(self, d: Self, s: Self, s_new: Self) -> Self {
+        // `signed_diffabs` as selects: the same operations, both outcomes computed.
+        let kept = self.diffabs(d);
+        let mut r = d;
+        for k in 0..L {
+            let (u, d) = (self[k], d[k]);
+            let t = u + d;
+            let m = (if t < 0.0 { -t } else { t }) + f64::abs(u);
+            r[k] = if s[k] == s_new[k] { kept[k] * s[k] } else { m * s_new[k] };
+        }
+        r
+    }
+    #[inline(always)]
+    fn if_zero(mut self, a: Self, b: Self) -> Self {
+        for k in 0..L {
+            self[k] = if self[k] == 0.0 { a[k] } else { b[k] };
+        }
+        self
+    }
 }
 
 /// One map z -> f(z) of a family (c is added by the caller), in every arithmetic the
@@ -226,6 +268,64 @@ pub fn diffabs<R: Real>(x: f64, d: R) -> R {
     } else {
         -d
     }
+}
+
+/// s' |U + d| - s |U| for a part U folded and then given a sign, s = ±1 at the reference
+/// and s' = ±1 at the sample ([`IM_BY_X`], [`IM_BY_Y`]), without cancellation: s times
+/// [`diffabs`] where the sign stays, else s' (|U + d| + |U|), a sum of magnitudes. (The
+/// signs multiply exactly: every outcome is the difference's one rounding, or two.)
+#[inline(always)]
+pub fn signed_diffabs<R: Real>(u: f64, d: R, s: f64, s_new: f64) -> R {
+    if s == s_new {
+        diffabs(u, d) * R::from_f64(s)
+    } else {
+        let t = R::from_f64(u) + d;
+        let m = (if t < R::ZERO { -t } else { t }) + R::from_f64(u.abs());
+        m * R::from_f64(s_new)
+    }
+}
+
+/// The sign (±1) a signed fold gives the imaginary part: the product of the signs of the
+/// parts of `z` that `out` names ([`IM_BY_X`], [`IM_BY_Y`]); 1 for none.
+#[inline(always)]
+pub fn side<N: Num>(out: u8, z: [N; 2]) -> N {
+    let one = N::splat(1.0);
+    let sx = if out & IM_BY_X != 0 { z[0].sgn() } else { one };
+    let sy = if out & IM_BY_Y != 0 { z[1].sgn() } else { one };
+    sx.mul(sy)
+}
+
+/// The factor (±1) of the folded imaginary part's derivative against Im u's: sgn(Im u), times
+/// [`side`] for a signed fold. Where the part whose sign a signed fold reads is 0 (x for
+/// [`IM_BY_X`]), Im u = x g is 0 too and the folded part x |g| is smooth: the factor is then
+/// sgn(g), the sign of ∂Im u/∂x there (`grad`: ∂Im u/∂x, ∂Im u/∂y), times the other sign
+/// read (y's, for xy); likewise for y. Elsewhere a zero Im u is a kink, whose derivative is
+/// taken with the fold's as +1.
+#[inline(always)]
+fn signed_slope<N: Num>(out: u8, z: [N; 2], im_u: N, grad: [N; 2]) -> N {
+    let one = N::splat(1.0);
+    let mut f = im_u.sgn();
+    if out & (IM_BY_X | IM_BY_Y) == 0 {
+        return f;
+    }
+    f = f.mul(side(out, z));
+    if out & IM_BY_X != 0 {
+        let other = if out & IM_BY_Y != 0 { z[1].sgn() } else { one };
+        f = z[0].if_zero(grad[0].sgn().mul(other), f);
+    }
+    if out & IM_BY_Y != 0 {
+        let other = if out & IM_BY_X != 0 { z[0].sgn() } else { one };
+        f = z[1].if_zero(grad[1].sgn().mul(other), f);
+    }
+    f
+}
+
+/// The fold after the power of `out` on u = W^p, with the sign [`side`] of z (the map's
+/// input) on a signed imaginary part.
+#[inline(always)]
+fn fold_out<N: Num>(out: u8, z: [N; 2], u: [N; 2]) -> [N; 2] {
+    let v = fold(out, u);
+    if out & (IM_BY_X | IM_BY_Y) == 0 { v } else { [v[0], v[1].mul(side(out, z))] }
 }
 
 /// The binomial coefficient C(n, k) for n <= [`MAX_POWER`], as an f64 (exact).
@@ -316,7 +416,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
 
     #[inline(always)]
     fn apply_n<N: Num>(z: [N; 2]) -> [N; 2] {
-        signed(SIGN, fold(OUT, power::<P, N>(fold(IN, z))))
+        signed(SIGN, fold_out(OUT, z, power::<P, N>(fold(IN, z))))
     }
 
     fn apply_big(z: &BigC) -> BigC {
@@ -331,7 +431,12 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
         for _ in 2..P {
             u = u.mul(&w);
         }
-        let u = fold_big(OUT, u);
+        let mut u = fold_big(OUT, u);
+        // sgn(x), sgn(y) as `Num::sgn` takes them: -1 below zero only.
+        let flip = (OUT & IM_BY_X != 0 && z.re < 0u32) != (OUT & IM_BY_Y != 0 && z.im < 0u32);
+        if flip {
+            u.im = -u.im;
+        }
         match SIGN {
             SIGN_IM => BigC { re: u.re, im: -u.im, bits: u.bits },
             SIGN_RE => BigC { re: -u.re, im: u.im, bits: u.bits },
@@ -351,10 +456,18 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
             du
         } else {
             let u = power::<P, f64>(w);
-            [
-                if OUT & FOLD_RE != 0 { diffabs(u[0], du[0]) } else { du[0] },
-                if OUT & FOLD_IM != 0 { diffabs(u[1], du[1]) } else { du[1] },
-            ]
+            let im = if OUT & (IM_BY_X | IM_BY_Y) != 0 {
+                // The sample's signs: those of Z + d (a rounded sum keeps the exact sum's sign).
+                let neg = |x: f64, d: R| if R::from_f64(x) + d < R::ZERO { -1.0 } else { 1.0 };
+                let sx = if OUT & IM_BY_X != 0 { neg(z[0], d[0]) } else { 1.0 };
+                let sy = if OUT & IM_BY_Y != 0 { neg(z[1], d[1]) } else { 1.0 };
+                signed_diffabs(u[1], du[1], side(OUT, z), sx * sy)
+            } else if OUT & FOLD_IM != 0 {
+                diffabs(u[1], du[1])
+            } else {
+                du[1]
+            };
+            [if OUT & FOLD_RE != 0 { diffabs(u[0], du[0]) } else { du[0] }, im]
         };
         match SIGN {
             SIGN_IM => [du[0], -du[1]],
@@ -375,10 +488,15 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
             du
         } else {
             let u = power::<P, N>(w);
-            [
-                if OUT & FOLD_RE != 0 { u[0].diffabs(du[0]) } else { du[0] },
-                if OUT & FOLD_IM != 0 { u[1].diffabs(du[1]) } else { du[1] },
-            ]
+            let im = if OUT & (IM_BY_X | IM_BY_Y) != 0 {
+                let moved = [z[0].add(d[0]), z[1].add(d[1])];
+                u[1].signed_diffabs(du[1], side(OUT, z), side(OUT, moved))
+            } else if OUT & FOLD_IM != 0 {
+                u[1].diffabs(du[1])
+            } else {
+                du[1]
+            };
+            [if OUT & FOLD_RE != 0 { u[0].diffabs(du[0]) } else { du[0] }, im]
         };
         match SIGN {
             SIGN_IM => [du[0], du[1].neg()],
@@ -404,7 +522,8 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
             (one, one)
         } else {
             let u = power::<P, N>(w);
-            (if OUT & FOLD_RE != 0 { u[0].sgn() } else { one }, if OUT & FOLD_IM != 0 { u[1].sgn() } else { one })
+            let sp = if OUT & FOLD_IM != 0 { signed_slope(OUT, z, u[1], [a[1].mul(si), a[0].mul(sj)]) } else { one };
+            (if OUT & FOLD_RE != 0 { u[0].sgn() } else { one }, sp)
         };
         let (r, m) = match SIGN {
             SIGN_IM => (so, sp.neg()),
@@ -452,6 +571,10 @@ mod tests {
     type Buffalo2 = Ops<FOLD_NONE, 2, FOLD_BOTH, SIGN_NONE>;
     type Perp = Ops<FOLD_RE, 2, FOLD_RE, SIGN_IM>;
     type Multi5 = Ops<FOLD_NONE, 5, FOLD_NONE, SIGN_NONE>;
+    /// Kalles Fraktaler's types 14, 26 and 34: imaginary parts signed by y, xy and x.
+    type QuasiPerp3 = Ops<FOLD_RE, 3, { FOLD_IM | IM_BY_Y }, SIGN_IM>;
+    type CelticFalseHeart4 = Ops<FOLD_NONE, 4, { FOLD_RE | FOLD_IM | IM_BY_X | IM_BY_Y }, SIGN_NONE>;
+    type ImagQuasi4 = Ops<FOLD_NONE, 4, { FOLD_IM | IM_BY_X }, SIGN_NONE>;
 
     const POINTS: [[f64; 2]; 6] = [[0.3, -0.7], [-1.1, 0.2], [0.05, 0.9], [-0.4, -0.35], [1.3, 1e-3], [-2e-3, 0.6]];
 
@@ -509,6 +632,9 @@ mod tests {
         check_delta::<Buffalo2>();
         check_delta::<Perp>();
         check_delta::<Multi5>();
+        check_delta::<QuasiPerp3>();
+        check_delta::<CelticFalseHeart4>();
+        check_delta::<ImagQuasi4>();
     }
 
     #[test]
@@ -517,6 +643,9 @@ mod tests {
         check_jacobian::<Buffalo2>();
         check_jacobian::<Perp>();
         check_jacobian::<Multi5>();
+        check_jacobian::<QuasiPerp3>();
+        check_jacobian::<CelticFalseHeart4>();
+        check_jacobian::<ImagQuasi4>();
     }
 
     #[test]
@@ -525,6 +654,9 @@ mod tests {
         check_big::<Buffalo2>();
         check_big::<Perp>();
         check_big::<Multi5>();
+        check_big::<QuasiPerp3>();
+        check_big::<CelticFalseHeart4>();
+        check_big::<ImagQuasi4>();
     }
 
     #[test]
@@ -591,6 +723,19 @@ mod tests {
                     }
                 }, unreachable!("{phase}"));
             }
+        }
+    }
+
+    /// The signed fold is Kalles Fraktaler's product of a part and the folded factor: type 14's
+    /// Im is -y |3x² - y²|, type 34's 4x |y (x² - y²)|, type 26's 4xy |x² - y²|.
+    #[test]
+    fn signed_folds_are_kf_products() {
+        for z in POINTS.into_iter().chain([[0.0, 0.5], [-0.7, 0.0], [0.4, -0.4]]) {
+            let [x, y] = z;
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-14 * (1.0 + b.abs());
+            assert!(close(QuasiPerp3::apply(z)[1], -(y * (3.0 * x * x - y * y).abs())), "{z:?}");
+            assert!(close(ImagQuasi4::apply(z)[1], 4.0 * x * (y * (x * x - y * y)).abs()), "{z:?}");
+            assert!(close(CelticFalseHeart4::apply(z)[1], 4.0 * x * y * (x * x - y * y).abs()), "{z:?}");
         }
     }
 

@@ -588,9 +588,7 @@ Version: 2150500\r\n";
         let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 42\n");
         assert_eq!(e.message, "FractalType 42 (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((5, 14)));
-        for (t, name) in
-            [(14, "Cubic Quasi Perpendicular"), (23, "4th False Quasi Perpendicular"), (71, "z^2 exp(2 a / z) + c")]
-        {
+        for (t, name) in [(33, "SimonBrot 4th"), (52, "General Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")] {
             let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nFractalType: {t}\n"));
             assert!(e.message.contains(name), "{t}: {e}");
         }

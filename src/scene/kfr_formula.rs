@@ -12,26 +12,13 @@
 use super::kfr::Kfr;
 use super::kfr_hybrid::{self, Hybrid};
 use crate::formula::kind::KINDS;
-use crate::formula::map::FOLD_IM;
+use crate::formula::map::{FOLD_IM, IM_BY_Y};
 use crate::formula::{Formula, Kind, Phase};
 use crate::source::SourceError;
 
 /// KF 2.15's formula types that are none of deepfield's families, with KF's names.
-pub const REFUSED: [(u32, &str); 46] = [
-    (14, "Cubic Quasi Perpendicular"),
-    (23, "4th False Quasi Perpendicular"),
-    (24, "4th False Quasi Heart"),
-    (25, "4th Celtic False Quasi Perpendicular"),
-    (26, "4th Celtic False Quasi Heart"),
-    (31, "5th Quasi Perpendicular"),
-    (32, "5th Quasi Heart"),
+pub const REFUSED: [(u32, &str); 33] = [
     (33, "SimonBrot 4th"),
-    (34, "4th Imag Quasi Perpendicular / Heart"),
-    (35, "4th Real Quasi Perpendicular"),
-    (36, "4th Real Quasi Heart"),
-    (37, "4th Celtic Imag Quasi Perpendicular / Heart"),
-    (38, "4th Celtic Real Quasi Perpendicular"),
-    (39, "4th Celtic Real Quasi Heart"),
     (40, "SimonBrot 6th"),
     (41, "HPDZ Buffalo"),
     (42, "TheRedshiftRider 1: a * z^2 + z^3 + c"),
@@ -133,12 +120,13 @@ pub(super) fn formula(kfr: &Kfr<'_>) -> Result<Chosen, SourceError> {
     Ok(Chosen { formula: Formula::single(Phase { kind, power }), notes })
 }
 
-/// True when every phase commutes with complex conjugation (no fold of the imaginary
-/// part), so the picture about conj(c) is the mirror image of the picture about c.
+/// True when every phase commutes with complex conjugation (no fold of the imaginary part,
+/// or one after the power that takes back the sign of y, which conjugation flips), so the
+/// picture about conj(c) is the mirror image of the picture about c.
 pub(super) fn symmetric(formula: &Formula) -> bool {
     formula.phases().iter().all(|p| {
         let (fold_in, _, fold_out, _) = p.kind.shape(p.power);
-        (fold_in | fold_out) & FOLD_IM == 0
+        fold_in & FOLD_IM == 0 && (fold_out & FOLD_IM == 0 || fold_out & IM_BY_Y != 0)
     })
 }
 
@@ -161,7 +149,7 @@ mod tests {
 
     /// The finding about KF's imaginary axis, checked against the maps: conjugating the
     /// plane maps a family's picture onto its mirror image exactly when it folds no
-    /// imaginary part. The Burning Ship does, so its mirror image (deepfield's axis up
+    /// imaginary part (or signs the fold by y). The Burning Ship does, so its mirror image (deepfield's axis up
     /// against KF's down) is upside down, not another part of the ship.
     #[test]
     fn symmetry_about_the_real_axis() {

@@ -14,7 +14,7 @@
 use malachite_float::Float;
 
 use crate::formula::Phase;
-use crate::formula::map::{FOLD_IM, FOLD_RE, SIGN_IM, SIGN_RE};
+use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
 
@@ -79,10 +79,18 @@ pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
         u = u.mul(&w);
     }
     let a = below.mul(&BigC::from_f64(p as f64, 0.0, z.bits));
-    let flip_out = [
-        (fold_out & FOLD_RE != 0 && negative(&u.re)) != (sign == SIGN_RE),
-        (fold_out & FOLD_IM != 0 && negative(&u.im)) != (sign == SIGN_IM),
-    ];
+    // A signed fold of the imaginary part flips it again where x, y or xy of z is negative;
+    // where the part read is 0, by the sign of Im u's slope across it (`Map::jacobian`'s rule).
+    let (by_x, by_y) = (fold_out & IM_BY_X != 0, fold_out & IM_BY_Y != 0);
+    let mut im =
+        (fold_out & FOLD_IM != 0 && negative(&u.im)) != ((by_x && negative(&z.re)) != (by_y && negative(&z.im)));
+    if by_x && z.re == 0u32 {
+        im = (negative(&a.im) != flip_in[0]) != (by_y && negative(&z.im));
+    }
+    if by_y && z.im == 0u32 {
+        im = (negative(&a.re) != flip_in[1]) != (by_x && negative(&z.re));
+    }
+    let flip_out = [(fold_out & FOLD_RE != 0 && negative(&u.re)) != (sign == SIGN_RE), im != (sign == SIGN_IM)];
     (flipped(&u, flip_out), Derivative { a, flip_in, flip_out })
 }
 

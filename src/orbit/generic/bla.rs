@@ -15,7 +15,8 @@
 //!    |δ| < ε |Z| / (p - 1) (the quadratic term is (p-1)/2 |δ|/|Z| of it; half of that
 //!    allowance is left for the higher ones);
 //! 2. the fold lines: a fold of x before the power is linear only while X + δx keeps the
-//!    sign of X, so |δ| < |X| (likewise y); a fold of Re U after the power (U = W^p) needs
+//!    sign of X, so |δ| < |X| (likewise y, and the sign of x or y that a signed fold of the
+//!    imaginary part reads after the power); a fold of Re U after the power (U = W^p) needs
 //!    |δU| < |Re U|, and |δU| <= (|Z| + |δ|)^p - |Z|^p, so |δ| < |Z| ((1 + |Re U|/|Z|^p)^(1/p) - 1);
 //! 3. escape: |δ| <= R - |Z|, so that no escape is skipped (the loop tests a sample at the
 //!    index it looks a step up from).
@@ -51,7 +52,7 @@ use rayon::prelude::*;
 
 use super::der::{MatFe, to_fe};
 use super::reference::Track;
-use crate::formula::map::{FOLD_IM, FOLD_RE};
+use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y};
 use crate::formula::{Formula, Stepper};
 use crate::num::{FloatExp, Real};
 use crate::orbit::bla::dips;
@@ -289,10 +290,12 @@ fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2]
     };
     let az = z[0].hypot(z[1]);
     let mut r = how.eps * az / (p - 1) as f64;
-    if fin & FOLD_RE != 0 {
+    // A fold before the power, or the sign of x or y that a signed fold after it reads,
+    // stays put while the delta does not reach that part's zero line.
+    if (fin & FOLD_RE != 0) || (fout & IM_BY_X != 0) {
         r = r.min(z[0].abs() * SAFE);
     }
-    if fin & FOLD_IM != 0 {
+    if (fin & FOLD_IM != 0) || (fout & IM_BY_Y != 0) {
         r = r.min(z[1].abs() * SAFE);
     }
     if fout != 0 {

@@ -341,7 +341,7 @@ fn preperiodic_view(formula: &str, julia: Option<[&str; 2]>, digits: i32, max_it
     View { formula, center, julia: jd, radius: FloatExp::exp10(-digits as f64), max_iter, numbers }
 }
 
-const FAMILIES: [&str; 7] = [
+const FAMILIES: [&str; 9] = [
     "mandelbrot^3",
     "burning-ship",
     "buffalo^3",
@@ -349,6 +349,9 @@ const FAMILIES: [&str; 7] = [
     "mandelbar",
     "perpendicular-burning-ship",
     "burning-ship,mandelbrot^3",
+    // Imaginary parts folded and signed by y (the real part folded first), and by xy.
+    "cubic-quasi-perpendicular",
+    "4th-false-quasi-heart",
 ];
 
 #[test]
@@ -372,6 +375,7 @@ fn julia_views_match_big_floats() {
         ("mandelbar^3", ["-0.2", "0.15"]),
         ("buffalo", ["-0.2", "0.1"]),
         ("burning-ship,mandelbrot^3", ["-0.2", "0.1"]),
+        ("4th-real-quasi-heart", ["-0.3", "0.2"]),
     ] {
         for digits in [4, 40] {
             let view = preperiodic_view(name, Some(c), digits, 2000);
@@ -476,6 +480,8 @@ fn every_simd_level_gives_the_scalar_loops_bits() {
         ("buffalo^3 1e-45", preperiodic_view("buffalo^3", None, 45, 3000)),
         ("mandelbar 1e-45", preperiodic_view("mandelbar", None, 45, 3000)),
         ("perpendicular-burning-ship 1e-45", preperiodic_view("perpendicular-burning-ship", None, 45, 3000)),
+        ("4th-imag-quasi-perpendicular 1e-45", preperiodic_view("4th-imag-quasi-perpendicular", None, 45, 3000)),
+        ("cubic-quasi-perpendicular 1e-330", preperiodic_view("cubic-quasi-perpendicular", None, 330, 3000)),
         ("mandelbrot^3 1e-330", preperiodic_view("mandelbrot^3", None, 330, 4000)),
         ("buffalo julia 1e-40", preperiodic_view("buffalo", Some(["-0.2", "0.1"]), 40, 2000)),
         ("burning-ship at -2 + 3e-335 i", axis),

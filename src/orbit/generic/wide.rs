@@ -11,7 +11,7 @@
 //! interpreting the shape costs nothing that matters.
 
 use crate::formula::Phase;
-use crate::formula::map::{FOLD_IM, FOLD_RE, SIGN_IM, SIGN_RE, binomial};
+use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE, binomial};
 use crate::num::FloatExp;
 use crate::num::real::{cadd, cmul};
 
@@ -26,6 +26,17 @@ fn diffabs(x: FloatExp, d: FloatExp) -> FloatExp {
     } else {
         -d
     }
+}
+
+/// The delta of a signed fold of the imaginary part ([`IM_BY_X`], [`IM_BY_Y`] in `fold`):
+/// s' |U + d| - s |U| for U = `u`, its delta `du`, and s, s' the signs of x, y or xy at Z
+/// = `z` and at Z + `d` (`formula::map::signed_diffabs` in FloatExp).
+fn signed_delta(fold: u8, z: [FloatExp; 2], d: [FloatExp; 2], u: FloatExp, du: FloatExp) -> FloatExp {
+    let zero = FloatExp::ZERO;
+    let negative = |v: [FloatExp; 2]| (fold & IM_BY_X != 0 && v[0] < zero) != (fold & IM_BY_Y != 0 && v[1] < zero);
+    let (before, after) = (negative(z), negative([z[0] + d[0], z[1] + d[1]]));
+    let (v, neg) = if before == after { (diffabs(u, du), before) } else { ((u + du).abs() + u.abs(), after) };
+    if neg { -v } else { v }
 }
 
 /// Folds the parts `fold` names.
@@ -60,8 +71,12 @@ pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d:
         let a = pw[(p - k) as usize];
         t = cadd(cmul(t, dw), [a[0].mul_f64(c), a[1].mul_f64(c)]);
     }
-    let du = cmul(t, dw);
-    let du = fold_delta(fout, u.unwrap_or(pw[p as usize]), du);
+    let raw = cmul(t, dw);
+    let u = u.unwrap_or(pw[p as usize]);
+    let mut du = fold_delta(fout, u, raw);
+    if fout & (IM_BY_X | IM_BY_Y) != 0 {
+        du[1] = signed_delta(fout, z, d, u[1], raw[1]);
+    }
     match sign {
         SIGN_IM => [du[0], -du[1]],
         SIGN_RE => [-du[0], du[1]],
@@ -90,7 +105,17 @@ mod tests {
     #[test]
     fn the_wide_step_is_the_difference_of_two_big_float_steps() {
         let bits = 4000;
-        for name in ["burning-ship", "buffalo^3", "celtic^4", "perpendicular-buffalo", "mandelbar^3", "mandelbrot^5"] {
+        for name in [
+            "burning-ship",
+            "buffalo^3",
+            "celtic^4",
+            "perpendicular-buffalo",
+            "mandelbar^3",
+            "mandelbrot^5",
+            "cubic-quasi-perpendicular",
+            "4th-celtic-false-quasi-heart",
+            "4th-imag-quasi-perpendicular",
+        ] {
             let phase = Formula::parse(name, None).unwrap().phases()[0];
             for (z, d) in [
                 (
