@@ -563,7 +563,8 @@ mod tests {
     }
 
     /// Every level this CPU has gives the scalar kernel's bits (N, z_n, the derivative), for
-    /// conformal and folded families, Mandelbrot and Julia forms.
+    /// conformal and folded families, Mandelbrot and Julia forms, and the quasi families'
+    /// imaginary parts signed by y (type 14) and by xy with the real part folded (type 26).
     #[test]
     fn lanes_give_the_scalar_kernels_bits_on_every_level() {
         check::<Ops<3, 2, 0, 0>>(Family::Mandelbrot, [-0.5, -0.5], 1.2);
@@ -571,5 +572,7 @@ mod tests {
         check::<Ops<1, 2, 1, 1>>(Family::Mandelbrot, [-0.3, 0.0], 1.5);
         check::<Ops<0, 5, 3, 0>>(Family::Julia { c: [-0.5, 0.3] }, [0.0, 0.0], 1.3);
         check::<Ops<0, 3, 0, 2>>(Family::Mandelbrot, [0.0, 0.0], 1.2);
+        check::<Ops<1, 3, 10, 1>>(Family::Mandelbrot, [-0.2, 0.0], 1.3);
+        check::<Ops<0, 4, 15, 0>>(Family::Julia { c: [-0.4, 0.2] }, [0.0, 0.0], 1.2);
     }
 }
