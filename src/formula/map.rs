@@ -328,14 +328,30 @@ fn fold_out<N: Num>(out: u8, z: [N; 2], u: [N; 2]) -> [N; 2] {
     if out & (IM_BY_X | IM_BY_Y) == 0 { v } else { [v[0], v[1].mul(side(out, z))] }
 }
 
-/// The binomial coefficient C(n, k) for n <= [`MAX_POWER`], as an f64 (exact).
+/// C(n, k) for n, k <= [`MAX_POWER`], computed when the crate is compiled (each is exact in
+/// f64: a product of integers divided by the next integer, which divides it).
+const BINOMIALS: [[f64; MAX_POWER as usize + 1]; MAX_POWER as usize + 1] = {
+    let mut t = [[0.0; MAX_POWER as usize + 1]; MAX_POWER as usize + 1];
+    let mut n = 0;
+    while n <= MAX_POWER as usize {
+        let mut c = 1.0;
+        let mut k = 0;
+        while k <= n {
+            t[n][k] = c;
+            c = c * (n - k) as f64 / (k + 1) as f64;
+            k += 1;
+        }
+        n += 1;
+    }
+    t
+};
+
+/// The binomial coefficient C(n, k) for k <= n <= [`MAX_POWER`], as an f64 (exact): a load
+/// from a table, so that a loop over k that the compiler leaves rolled (at power 10) does
+/// not compute it with divisions at every step.
 #[inline(always)]
 pub fn binomial(n: u32, k: u32) -> f64 {
-    let mut c = 1.0;
-    for i in 0..k {
-        c = c * (n - i) as f64 / (i + 1) as f64;
-    }
-    c
+    BINOMIALS[n as usize][k as usize]
 }
 
 /// Folds the parts `fold` names.
@@ -374,18 +390,19 @@ fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
     if P == 1 { w } else { u }
 }
 
-/// (W + d)^p - W^p by Horner's rule in d over the binomial expansion.
+/// (W + d)^p - W^p by Horner's rule in d over the binomial expansion: t = 1, then for k
+/// from p - 1 down to 1, t = t d + C(p, k) W^(p-k), and the result t d. The powers of W come
+/// in rising order as k falls, so each is one product of the one before (W^j = W^(j-1) W
+/// from W^0 = 1), made where it is used: no table of powers, whose run-time indexing kept
+/// the lanes' values in memory at p = 10 (the loops past the unroller's limit) and halved
+/// their speed there.
 #[inline(always)]
 fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
-    // Powers W^0 .. W^(P-1).
-    let mut pw = [[1.0, 0.0]; MAX_POWER as usize];
-    for k in 1..P as usize {
-        pw[k] = cmul(pw[k - 1], w);
-    }
+    let mut a = [1.0, 0.0];
     let mut t = [R::from_f64(1.0), R::ZERO];
     for k in (1..P).rev() {
         let c = binomial(P, k);
-        let a = pw[(P - k) as usize];
+        a = cmul(a, w);
         t = cadd(cmul(t, d), [R::from_f64(c * a[0]), R::from_f64(c * a[1])]);
     }
     cmul(t, d)
@@ -396,14 +413,11 @@ fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
 #[inline(always)]
 fn power_delta_n<const P: u32, N: Num>(w: [N; 2], d: [N; 2]) -> [N; 2] {
     let one = [N::splat(1.0), N::splat(0.0)];
-    let mut pw = [one; MAX_POWER as usize];
-    for k in 1..P as usize {
-        pw[k] = nmul(pw[k - 1], w);
-    }
+    let mut a = one;
     let mut t = one;
     for k in (1..P).rev() {
         let c = N::splat(binomial(P, k));
-        let a = pw[(P - k) as usize];
+        a = nmul(a, w);
         let td = nmul(t, d);
         t = [td[0].add(c.mul(a[0])), td[1].add(c.mul(a[1]))];
     }
@@ -744,5 +758,11 @@ mod tests {
         assert_eq!(binomial(10, 5), 252.0);
         assert_eq!(binomial(4, 0), 1.0);
         assert_eq!(binomial(7, 7), 1.0);
+        // Pascal's rule over the whole table.
+        for n in 1..=MAX_POWER {
+            for k in 1..n {
+                assert_eq!(binomial(n, k), binomial(n - 1, k - 1) + binomial(n - 1, k), "C({n}, {k})");
+            }
+        }
     }
 }
