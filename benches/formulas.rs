@@ -11,8 +11,8 @@
 //! engine (f64 deltas) on a view of the family's boundary at zoom about 1e30 found by the
 //! deep fuzzer's generator, with BLA off (every iteration a single step) and on.
 
-use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
+use std::sync::{Mutex, OnceLock};
 
 use deepfield::compare::views::{self, ViewKind, ViewSpec};
 use deepfield::field::{self, FieldParams, Needs};
@@ -89,17 +89,22 @@ fn direct_scalar(bencher: divan::Bencher<'_, '_>, formula: &str) {
 /// 2, whose own kernels `cargo bench --bench kernels` measures): the per-family table of
 /// `docs/performance.md`. (The names are made once per run and live as long as it.)
 fn families() -> Vec<&'static str> {
-    let mut out = Vec::new();
-    for k in &KINDS {
-        for p in k.min_power..=k.max_power {
-            if k.kind == Kind::Mandelbrot && p == 2 {
-                continue;
+    static NAMES: OnceLock<Vec<&'static str>> = OnceLock::new();
+    NAMES
+        .get_or_init(|| {
+            let mut out = Vec::new();
+            for k in &KINDS {
+                for p in k.min_power..=k.max_power {
+                    if k.kind == Kind::Mandelbrot && p == 2 {
+                        continue;
+                    }
+                    let name = if p == k.kind.default_power() { k.name.to_string() } else { format!("{}^{p}", k.name) };
+                    out.push(&*Box::leak(name.into_boxed_str()));
+                }
             }
-            let name = if p == k.kind.default_power() { k.name.to_string() } else { format!("{}^{p}", k.name) };
-            out.push(&*Box::leak(name.into_boxed_str()));
-        }
-    }
-    out
+            out
+        })
+        .clone()
 }
 
 #[divan::bench(args = families(), sample_count = 5)]
@@ -116,7 +121,7 @@ fn deep_view(formula: &str) -> Scene {
     if let Some((_, s)) = VIEWS.lock().unwrap().iter().find(|(f, _)| f == formula) {
         return s.clone();
     }
-    let measuring = common::side(1024) == 1024;
+    let measuring = common::measuring();
     let spec = ViewSpec {
         kind: ViewKind::Boundary,
         log10_zoom: if measuring { 30.0 } else { 7.0 },

@@ -6,7 +6,12 @@
 //! speed, so there the views shrink to an eighth per side and the check takes a second, not
 //! half a minute.
 
+/// True when this run measures (`cargo bench`), false when it only checks (`cargo test`).
+pub fn measuring() -> bool {
+    std::env::args().any(|a| a == "--bench")
+}
+
 /// `n` pixels per side for this run: `n` when measuring, else an eighth of it (at least 8).
 pub fn side(n: u32) -> u32 {
-    if std::env::args().any(|a| a == "--bench") { n } else { (n / 8).max(8) }
+    if measuring() { n } else { (n / 8).max(8) }
 }

@@ -347,8 +347,8 @@ const BINOMIALS: [[f64; MAX_POWER as usize + 1]; MAX_POWER as usize + 1] = {
 };
 
 /// The binomial coefficient C(n, k) for k <= n <= [`MAX_POWER`], as an f64 (exact): a load
-/// from a table, so that a loop over k that the compiler leaves rolled (at power 10) does
-/// not compute it with divisions at every step.
+/// from a table, so that a loop over k that the compiler leaves rolled does not compute it
+/// with divisions at every step.
 #[inline(always)]
 pub fn binomial(n: u32, k: u32) -> f64 {
     BINOMIALS[n as usize][k as usize]
@@ -393,9 +393,10 @@ fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
 /// (W + d)^p - W^p by Horner's rule in d over the binomial expansion: t = 1, then for k
 /// from p - 1 down to 1, t = t d + C(p, k) W^(p-k), and the result t d. The powers of W come
 /// in rising order as k falls, so each is one product of the one before (W^j = W^(j-1) W
-/// from W^0 = 1), made where it is used: no table of powers, whose run-time indexing kept
-/// the lanes' values in memory at p = 10 (the loops past the unroller's limit) and halved
-/// their speed there.
+/// from W^0 = 1), made where it is used. (With a table of powers filled first and the
+/// coefficients computed by divisions, the lanes ran at half speed at p = 10, where the
+/// loops are past what the compiler unrolls: docs/performance.md, "Power 10's single
+/// steps".)
 #[inline(always)]
 fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
     let mut a = [1.0, 0.0];
