@@ -167,7 +167,29 @@ pub fn defined(phase: Phase) -> bool {
         | K::QuasiBurningShip5
         | K::QuasiPerpendicular5
         | K::QuasiHeart5 => p == 5,
+        K::SimonBrot4 | K::SimonBrot2 => p == 4,
+        K::SimonBrot6 => p == 6,
+        K::Mothbrot1x1 => p == 2,
+        K::Mothbrot1x2 | K::Mothbrot2x1 => p == 3,
+        K::Mothbrot1x3 | K::Mothbrot2x2 | K::Mothbrot3x1 => p == 4,
+        K::Mothbrot1x4 | K::Mothbrot2x3 | K::Mothbrot3x2 | K::Mothbrot4x1 => p == 5,
+        K::Mothbrot1x5 | K::Mothbrot2x4 | K::Mothbrot3x3 | K::Mothbrot4x2 | K::Mothbrot5x1 => p == 6,
     }
+}
+
+/// Kalles Fraktaler's Mothbrot a×b (types 54 to 68, and SimonBrot 6th, 40, which is 3×3) as
+/// its generated lines are: every product of a term of z^a's binomial expansion and one of
+/// (|x| + i|y|)^b's, summed into the real or imaginary part by its power of i. Here the two
+/// expansions are summed first and multiplied as complex numbers, which is the same sum
+/// regrouped.
+fn mothbrot<T: Num>(ev: &mut Ev, [x, y]: [&T; 2], (a, b): (u32, u32), [cr, ci]: [&T; 2]) -> [T; 2] {
+    let bits = ev.bits;
+    let [zr, zi] = binomial_power(x, y, a, bits);
+    let (ax, ay) = (ev.abs(x.clone()), ev.abs(y.clone()));
+    let [gr, gi] = binomial_power(&ax, &ay, b, bits);
+    let re = zr.mul(&gr, bits).sub(&zi.mul(&gi, bits), bits);
+    let im = zr.mul(&gi, bits).add(&zi.mul(&gr, bits), bits);
+    [re.add(cr, bits), im.add(ci, bits)]
 }
 
 /// The binomial coefficient C(n, k), n <= 10.
@@ -326,6 +348,45 @@ fn expand<T: Num>(ev: &mut Ev, phase: Phase, [x, y]: [&T; 2], [cr, ci]: [&T; 2])
         (K::CelticRealQuasiHeart4, 4) => {
             [plus(ev.abs(r4()), cr), plus(m(&k(4, y), &ev.abs(sub(&m(x, &xr2), &m(x, &xi2)))), ci)]
         }
+        // Type 33. Xrn = Xi2 abs(Xi2) - 4 Xi abs(Xr Xi) Xr - Xr2 abs(Xi2) - Xi2 abs(Xr2)
+        // + Xr2 abs(Xr2) + Cr; Xin = Ci - 2 Xr Xi abs(Xi2) - 2 Xi2 abs(Xr Xi)
+        // + 2 Xr2 abs(Xr Xi) + 2 Xr Xi abs(Xr2).
+        (K::SimonBrot4, 4) => {
+            let (a_r2, a_i2, a_ri) = (ev.abs(xr2.clone()), ev.abs(xi2.clone()), ev.abs(m(x, y)));
+            let re = add(
+                &sub(&sub(&sub(&m(&xi2, &a_i2), &m(&m(&k(4, y), &a_ri), x)), &m(&xr2, &a_i2)), &m(&xi2, &a_r2)),
+                &m(&xr2, &a_r2),
+            );
+            let im = add(
+                &add(&sub(&sub(ci, &m(&m(&k(2, x), y), &a_i2)), &m(&k(2, &xi2), &a_ri)), &m(&k(2, &xr2), &a_ri)),
+                &m(&m(&k(2, x), y), &a_r2),
+            );
+            [plus(re, cr), im]
+        }
+        // Type 51. Xrn = (Xr2 - Xi2) abs(Xr2 - Xi2) - 2 Xr Xi abs(2 Xr Xi) + Cr;
+        // Xin = (Xr2 - Xi2) abs(2 Xr Xi) + 2 Xr Xi abs(Xr2 - Xi2) + Ci.
+        (K::SimonBrot2, 4) => {
+            let two_xy = m(&k(2, x), y);
+            let (a_d, a_t) = (ev.abs(d2()), ev.abs(two_xy.clone()));
+            [plus(sub(&m(&d2(), &a_d), &m(&two_xy, &a_t)), cr), plus(add(&m(&d2(), &a_t), &m(&two_xy, &a_d)), ci)]
+        }
+        // Types 54 to 68, Mothbrot a×b of power a + b, and type 40, SimonBrot 6th = 3×3.
+        (K::SimonBrot6, 6) => mothbrot(ev, [x, y], (3, 3), [cr, ci]),
+        (K::Mothbrot1x1, 2) => mothbrot(ev, [x, y], (1, 1), [cr, ci]),
+        (K::Mothbrot1x2, 3) => mothbrot(ev, [x, y], (1, 2), [cr, ci]),
+        (K::Mothbrot2x1, 3) => mothbrot(ev, [x, y], (2, 1), [cr, ci]),
+        (K::Mothbrot1x3, 4) => mothbrot(ev, [x, y], (1, 3), [cr, ci]),
+        (K::Mothbrot2x2, 4) => mothbrot(ev, [x, y], (2, 2), [cr, ci]),
+        (K::Mothbrot3x1, 4) => mothbrot(ev, [x, y], (3, 1), [cr, ci]),
+        (K::Mothbrot1x4, 5) => mothbrot(ev, [x, y], (1, 4), [cr, ci]),
+        (K::Mothbrot2x3, 5) => mothbrot(ev, [x, y], (2, 3), [cr, ci]),
+        (K::Mothbrot3x2, 5) => mothbrot(ev, [x, y], (3, 2), [cr, ci]),
+        (K::Mothbrot4x1, 5) => mothbrot(ev, [x, y], (4, 1), [cr, ci]),
+        (K::Mothbrot1x5, 6) => mothbrot(ev, [x, y], (1, 5), [cr, ci]),
+        (K::Mothbrot2x4, 6) => mothbrot(ev, [x, y], (2, 4), [cr, ci]),
+        (K::Mothbrot3x3, 6) => mothbrot(ev, [x, y], (3, 3), [cr, ci]),
+        (K::Mothbrot4x2, 6) => mothbrot(ev, [x, y], (4, 2), [cr, ci]),
+        (K::Mothbrot5x1, 6) => mothbrot(ev, [x, y], (5, 1), [cr, ci]),
         _ => return None,
     })
 }

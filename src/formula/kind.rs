@@ -9,7 +9,8 @@
 //! real part of z³ where its other powers conjugate: the table keeps that. Its "quasi"
 //! families fold a factor of the imaginary part, `Xin = Ci - |3 Xr2 - Xi2| Xi`: since
 //! Im w = y (3x² - y²) there, that is -sgn(y) |Im w|, a fold of Im w that gives it back the
-//! sign of y (`IM_BY_Y`; of x or xy in others).
+//! sign of y (`IM_BY_Y`; of x or xy in others). The Mothbrot and SimonBrot rows are
+//! products of two maps instead ([`super::product`]), with their factors in the row.
 //! `tests/integration/formula_kf.rs` checks every row against KF's expanded formulas.
 
 use super::map::{FOLD_BOTH, FOLD_IM, FOLD_NONE, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_NONE, SIGN_RE};
@@ -83,6 +84,8 @@ pub enum Kind {
     QuasiPerpendicular5,
     /// Re w + i sgn(y)|Im w| + c, w = (|x| + iy)⁵ (type 32).
     QuasiHeart5,
+    /// z² (|x| + i|y|)² + c, Mothbrot 2×2 under its other name (type 33).
+    SimonBrot4,
     /// Re z⁴ + i sgn(x)|Im z⁴| + c (type 34).
     ImagQuasiPerpendicular4,
     /// Re z⁴ - i sgn(y)|Im z⁴| + c (type 35).
@@ -95,6 +98,40 @@ pub enum Kind {
     CelticRealQuasiPerpendicular4,
     /// |Re z⁴| + i sgn(y)|Im z⁴| + c (type 39).
     CelticRealQuasiHeart4,
+    /// z³ (|x| + i|y|)³ + c, Mothbrot 3×3 under its other name (type 40).
+    SimonBrot6,
+    /// u (|Re u| + i|Im u|) + c, u = z² (type 51).
+    SimonBrot2,
+    /// z^1 (|x| + i|y|)^1 + c (type 54).
+    Mothbrot1x1,
+    /// z^1 (|x| + i|y|)^2 + c (type 55).
+    Mothbrot1x2,
+    /// z^2 (|x| + i|y|)^1 + c (type 56).
+    Mothbrot2x1,
+    /// z^1 (|x| + i|y|)^3 + c (type 57).
+    Mothbrot1x3,
+    /// z^2 (|x| + i|y|)^2 + c (type 58).
+    Mothbrot2x2,
+    /// z^3 (|x| + i|y|)^1 + c (type 59).
+    Mothbrot3x1,
+    /// z^1 (|x| + i|y|)^4 + c (type 60).
+    Mothbrot1x4,
+    /// z^2 (|x| + i|y|)^3 + c (type 61).
+    Mothbrot2x3,
+    /// z^3 (|x| + i|y|)^2 + c (type 62).
+    Mothbrot3x2,
+    /// z^4 (|x| + i|y|)^1 + c (type 63).
+    Mothbrot4x1,
+    /// z^1 (|x| + i|y|)^5 + c (type 64).
+    Mothbrot1x5,
+    /// z^2 (|x| + i|y|)^4 + c (type 65).
+    Mothbrot2x4,
+    /// z^3 (|x| + i|y|)^3 + c (type 66).
+    Mothbrot3x3,
+    /// z^4 (|x| + i|y|)^2 + c (type 67).
+    Mothbrot4x2,
+    /// z^5 (|x| + i|y|)^1 + c (type 68).
+    Mothbrot5x1,
 }
 
 /// What one family is: the facts every part of the tool reads from.
@@ -120,7 +157,14 @@ pub struct KindInfo {
     pub sign: u8,
     /// The negation at the end for power 3.
     pub sign3: u8,
+    /// For a product family ([`super::product`]): (PRE, A, B) of u^A (|Re u| + i|Im u|)^B,
+    /// u = z^PRE; its fold and sign fields are then [`PRODUCT`], which no composition has.
+    pub factors: Option<(u32, u32, u32)>,
 }
+
+/// What the fold and sign fields of a product family's row hold: no composition's steps,
+/// so code that reads a row as a composition cannot take a product for one.
+pub const PRODUCT: u8 = 0x80;
 
 const fn row(
     kind: Kind,
@@ -143,6 +187,23 @@ const fn row(
         fold_out,
         sign,
         sign3: sign,
+        factors: None,
+    }
+}
+
+/// The row of a product family: u^A (|Re u| + i|Im u|)^B, u = z^PRE, of power PRE (A + B).
+const fn prow(
+    kind: Kind,
+    name: &'static str,
+    kf_name: &'static str,
+    kf_type: u32,
+    (pre, a, b): (u32, u32, u32),
+) -> KindInfo {
+    let p = pre * (a + b);
+    KindInfo {
+        factors: Some((pre, a, b)),
+        sign3: PRODUCT,
+        ..row(kind, name, kf_name, kf_type, (p, p), PRODUCT, PRODUCT, PRODUCT)
     }
 }
 
@@ -154,7 +215,7 @@ const BY_Y: u8 = FOLD_IM | IM_BY_Y;
 const BY_XY: u8 = FOLD_IM | IM_BY_X | IM_BY_Y;
 
 /// Every family, in Kalles Fraktaler's order.
-pub const KINDS: [KindInfo; 39] = [
+pub const KINDS: [KindInfo; 57] = [
     row(K::Mandelbrot, "mandelbrot", "Mandelbrot", 0, (2, 10), FOLD_NONE, FOLD_NONE, SIGN_NONE),
     row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
     row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
@@ -389,6 +450,7 @@ pub const KINDS: [KindInfo; 39] = [
         SIGN_IM,
     ),
     row(K::QuasiHeart5, "5th-quasi-heart", "5th Quasi Heart", 32, (5, 5), FOLD_RE, BY_Y, SIGN_NONE),
+    prow(K::SimonBrot4, "simonbrot-4th", "SimonBrot 4th", 33, (1, 2, 2)),
     row(
         K::ImagQuasiPerpendicular4,
         "4th-imag-quasi-perpendicular",
@@ -440,6 +502,23 @@ pub const KINDS: [KindInfo; 39] = [
         FOLD_RE | BY_Y,
         SIGN_NONE,
     ),
+    prow(K::SimonBrot6, "simonbrot-6th", "SimonBrot 6th", 40, (1, 3, 3)),
+    prow(K::SimonBrot2, "simonbrot2-4th", "SimonBrot2 4th", 51, (2, 1, 1)),
+    prow(K::Mothbrot1x1, "mothbrot-1x1", "Mothbrot 2nd 1x1", 54, (1, 1, 1)),
+    prow(K::Mothbrot1x2, "mothbrot-1x2", "Mothbrot 3rd 1x2", 55, (1, 1, 2)),
+    prow(K::Mothbrot2x1, "mothbrot-2x1", "Mothbrot 3rd 2x1", 56, (1, 2, 1)),
+    prow(K::Mothbrot1x3, "mothbrot-1x3", "Mothbrot 4th 1x3", 57, (1, 1, 3)),
+    prow(K::Mothbrot2x2, "mothbrot-2x2", "Mothbrot 4th 2x2 (aka SimonBrot 4th)", 58, (1, 2, 2)),
+    prow(K::Mothbrot3x1, "mothbrot-3x1", "Mothbrot 4th 3x1", 59, (1, 3, 1)),
+    prow(K::Mothbrot1x4, "mothbrot-1x4", "Mothbrot 5th 1x4", 60, (1, 1, 4)),
+    prow(K::Mothbrot2x3, "mothbrot-2x3", "Mothbrot 5th 2x3", 61, (1, 2, 3)),
+    prow(K::Mothbrot3x2, "mothbrot-3x2", "Mothbrot 5th 3x2", 62, (1, 3, 2)),
+    prow(K::Mothbrot4x1, "mothbrot-4x1", "Mothbrot 5th 4x1", 63, (1, 4, 1)),
+    prow(K::Mothbrot1x5, "mothbrot-1x5", "Mothbrot 6th 1x5", 64, (1, 1, 5)),
+    prow(K::Mothbrot2x4, "mothbrot-2x4", "Mothbrot 6th 2x4 (Simon's Mothbrot)", 65, (1, 2, 4)),
+    prow(K::Mothbrot3x3, "mothbrot-3x3", "Mothbrot 6th 3x3 (aka SimonBrot 6th)", 66, (1, 3, 3)),
+    prow(K::Mothbrot4x2, "mothbrot-4x2", "Mothbrot 6th 4x2", 67, (1, 4, 2)),
+    prow(K::Mothbrot5x1, "mothbrot-5x1", "Mothbrot 6th 5x1", 68, (1, 5, 1)),
 ];
 
 // Each family's row is at its index in `Kind`, so that `Kind::info` is one load rather than a
@@ -487,16 +566,31 @@ impl Kind {
         self.info().min_power
     }
 
-    /// The four steps of the map at power `p`: (fold in, power, fold out, sign).
+    /// The four steps of the map at power `p`: (fold in, power, fold out, sign); for a
+    /// product family, ([`PRODUCT`], p, [`PRODUCT`], [`PRODUCT`]), which no composition is.
     #[inline(always)]
     pub fn shape(self, p: u32) -> (u8, u32, u8, u8) {
         let i = self.info();
         (i.fold_in, p, i.fold_out, if p == 3 { i.sign3 } else { i.sign })
     }
 
+    /// (PRE, A, B) for a product family ([`KindInfo::factors`]), None for a composition.
+    #[inline(always)]
+    pub fn factors(self) -> Option<(u32, u32, u32)> {
+        self.info().factors
+    }
+
     /// The map at power `p` in words, derived from its four steps (what `deepfield formulas`
     /// prints): `|Re w| - i Im w + c, w = (|x| + iy)^2`.
     pub fn definition(self, p: u32) -> String {
+        if let Some((pre, a, b)) = self.factors() {
+            let power = |w: &str, n: u32| if n == 1 { w.to_string() } else { format!("{w}^{n}") };
+            return if pre == 1 {
+                format!("{} {} + c", power("z", a), power("(|x| + i|y|)", b))
+            } else {
+                format!("{} {} + c, u = z^{pre}", power("u", a), power("(|Re u| + i|Im u|)", b))
+            };
+        }
         let (fold_in, _, fold_out, sign) = self.shape(p);
         let base = match fold_in {
             FOLD_RE => "(|x| + iy)",
@@ -548,7 +642,8 @@ mod tests {
             assert_eq!(Kind::from_name(a.name), Some(a.kind));
             assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
         }
-        assert_eq!(Kind::from_kf_type(33), None, "SimonBrot is not a composition of folds and a power");
+        assert_eq!(Kind::from_kf_type(42), None, "TheRedshiftRider has KF's coefficient a");
+        assert_eq!(Kind::from_kf_type(33), Some(Kind::SimonBrot4));
     }
 
     #[test]
@@ -560,5 +655,8 @@ mod tests {
         assert_eq!(Kind::PerpendicularCeltic.definition(2), "|Re w| - i Im w + c, w = (|x| + iy)^2");
         assert_eq!(Kind::CubicQuasiPerpendicular.definition(3), "Re w - i sgn(y) |Im w| + c, w = (|x| + iy)^3");
         assert_eq!(Kind::CelticFalseQuasiHeart4.definition(4), "|Re w| + i sgn(xy) |Im w| + c, w = z^4");
+        assert_eq!(Kind::Mothbrot2x3.definition(5), "z^2 (|x| + i|y|)^3 + c");
+        assert_eq!(Kind::Mothbrot1x1.definition(2), "z (|x| + i|y|) + c");
+        assert_eq!(Kind::SimonBrot2.definition(4), "u (|Re u| + i|Im u|) + c, u = z^2");
     }
 }

@@ -356,7 +356,7 @@ pub fn binomial(n: u32, k: u32) -> f64 {
 
 /// Folds the parts `fold` names.
 #[inline(always)]
-fn fold<N: Num>(fold: u8, z: [N; 2]) -> [N; 2] {
+pub(super) fn fold<N: Num>(fold: u8, z: [N; 2]) -> [N; 2] {
     let x = if fold & FOLD_RE != 0 { z[0].abs() } else { z[0] };
     let y = if fold & FOLD_IM != 0 { z[1].abs() } else { z[1] };
     [x, y]
@@ -374,13 +374,13 @@ fn signed<N: Num>(sign: u8, z: [N; 2]) -> [N; 2] {
 
 /// a b for complex numbers in [`Num`]s.
 #[inline(always)]
-fn nmul<N: Num>(a: [N; 2], b: [N; 2]) -> [N; 2] {
+pub(super) fn nmul<N: Num>(a: [N; 2], b: [N; 2]) -> [N; 2] {
     [a[0].mul(b[0]).sub(a[1].mul(b[1])), a[0].mul(b[1]).add(a[1].mul(b[0]))]
 }
 
 /// w^p (squaring as z² + c's kernels do; higher powers by repeated products).
 #[inline(always)]
-fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
+pub(super) fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
     let [x, y] = w;
     let square = [x.mul_add(x, y.mul(y).neg()), x.add(x).mul(y)];
     let mut u = square;
@@ -398,7 +398,7 @@ fn power<const P: u32, N: Num>(w: [N; 2]) -> [N; 2] {
 /// loops are past what the compiler unrolls: docs/performance.md, "Power 10's single
 /// steps".)
 #[inline(always)]
-fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
+pub(super) fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
     let mut a = [1.0, 0.0];
     let mut t = [R::from_f64(1.0), R::ZERO];
     for k in (1..P).rev() {
@@ -412,7 +412,7 @@ fn power_delta<const P: u32, R: Real>(w: [f64; 2], d: [R; 2]) -> [R; 2] {
 /// [`power_delta`] in [`Num`]s, operation for operation (the products of `cmul` are
 /// [`nmul`]'s, and `[1, 0]` is multiplied out as it is there).
 #[inline(always)]
-fn power_delta_n<const P: u32, N: Num>(w: [N; 2], d: [N; 2]) -> [N; 2] {
+pub(super) fn power_delta_n<const P: u32, N: Num>(w: [N; 2], d: [N; 2]) -> [N; 2] {
     let one = [N::splat(1.0), N::splat(0.0)];
     let mut a = one;
     let mut t = one;

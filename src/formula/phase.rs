@@ -241,11 +241,15 @@ impl Stepper for Cycle {
 
 /// Runs `$body` with `$M` the [`Map`] type of `$phase` (a [`Phase`]), or `$none` when the
 /// phase is not one the table of families holds (a test checks none is missing). The list
-/// is every (fold in, power, fold out, sign) the table of families uses.
+/// is every (PRE, A, B) of a product family and every (fold in, power, fold out, sign) of a
+/// composition that the table of families uses.
 #[macro_export]
 macro_rules! with_map {
     ($phase:expr, $M:ident => $body:expr, $none:expr) => {
         $crate::__map_arms!($phase, $M, $body, $none;
+            // the products u^A (|Re u| + i|Im u|)^B, u = z^PRE: (PRE, A, B)
+            [(1, 2, 2), (1, 3, 3), (2, 1, 1), (1, 1, 1), (1, 1, 2), (1, 2, 1), (1, 1, 3), (1, 3, 1),
+             (1, 1, 4), (1, 2, 3), (1, 3, 2), (1, 4, 1), (1, 1, 5), (1, 2, 4), (1, 4, 2), (1, 5, 1)];
             // mandelbrot
             (0, 2, 0, 0), (0, 3, 0, 0), (0, 4, 0, 0), (0, 5, 0, 0), (0, 6, 0, 0), (0, 7, 0, 0),
             (0, 8, 0, 0), (0, 9, 0, 0), (0, 10, 0, 0),
@@ -277,14 +281,23 @@ macro_rules! with_map {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __map_arms {
-    ($phase:expr, $M:ident, $body:expr, $none:expr; $( ($i:literal, $p:literal, $o:literal, $s:literal) ),* ) => {{
+    ($phase:expr, $M:ident, $body:expr, $none:expr;
+     [ $( ($pre:literal, $a:literal, $b:literal) ),* ];
+     $( ($i:literal, $p:literal, $o:literal, $s:literal) ),* ) => {{
         let phase: $crate::formula::Phase = $phase;
-        match phase.kind.shape(phase.power) {
-            $( ($i, $p, $o, $s) => {
-                type $M = $crate::formula::map::Ops<$i, $p, $o, $s>;
+        match phase.kind.factors() {
+            None => match phase.kind.shape(phase.power) {
+                $( ($i, $p, $o, $s) => {
+                    type $M = $crate::formula::map::Ops<$i, $p, $o, $s>;
+                    $body
+                } )*
+                _ => $none,
+            },
+            $( Some(($pre, $a, $b)) => {
+                type $M = $crate::formula::product::Product<$pre, $a, $b>;
                 $body
             } )*
-            _ => $none,
+            Some(_) => $none,
         }
     }};
 }

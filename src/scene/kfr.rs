@@ -588,7 +588,7 @@ Version: 2150500\r\n";
         let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 42\n");
         assert_eq!(e.message, "FractalType 42 (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((5, 14)));
-        for (t, name) in [(33, "SimonBrot 4th"), (52, "General Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")] {
+        for (t, name) in [(41, "HPDZ Buffalo"), (52, "General Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")] {
             let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nFractalType: {t}\n"));
             assert!(e.message.contains(name), "{t}: {e}");
         }
@@ -611,14 +611,17 @@ Version: 2150500\r\n";
         let (kind, power) = formula_of(&format!("{base}HybridFormula: 0/1|1,1,0,0,4,1,0;{none};0\n"));
         assert_eq!((kind.as_str(), power), ("burning-ship", Some(4)), "one phase is a single family");
         // An operator, pointed at where it is; the FractalType's name comes with it.
-        let e = err(&format!("{base}FractalType: 54\nHybridFormula: 0/1|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2\n")
+        let e = err(&format!("{base}FractalType: 42\nHybridFormula: 0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0\n")
             .replace("FractalType: 0\n", ""));
-        assert!(e.message.contains("combines two operators") && e.message.contains("Mothbrot 2nd 1x1"), "{e}");
+        assert!(e.message.contains("combines two operators") && e.message.contains("TheRedshiftRider 1"), "{e}");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((7, 20)));
         // KF draws FractalType when the hybrid is missing or fails its own check.
         let (kind, _) =
             formula_of(&format!("{base}HybridFormula: 0/0|1,1,0,0,2,1,0;{none};0\n").replace("Type: 0", "Type: 1"));
         assert_eq!(kind, "burning-ship");
+        // A product: Mothbrot 2×1's lines, the family of that FractalType.
+        let moth = format!("{base}HybridFormula: 0/1|0,0,0,0,2,1,0;1,1,0,0,1,1,0;2\n").replace("Type: 0", "Type: 56");
+        assert_eq!(formula_of(&moth), ("mothbrot-2x1".into(), None));
         let out = kfr_to_toml("h.kfr", base).unwrap();
         assert!(out.contains("gives none"), "{out}");
         // Off means off, whatever the hybrid says.

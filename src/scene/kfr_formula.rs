@@ -17,9 +17,7 @@ use crate::formula::{Formula, Kind, Phase};
 use crate::source::SourceError;
 
 /// KF 2.15's formula types that are none of deepfield's families, with KF's names.
-pub const REFUSED: [(u32, &str); 33] = [
-    (33, "SimonBrot 4th"),
-    (40, "SimonBrot 6th"),
+pub const REFUSED: [(u32, &str); 15] = [
     (41, "HPDZ Buffalo"),
     (42, "TheRedshiftRider 1: a * z^2 + z^3 + c"),
     (43, "TheRedshiftRider 2: a * z^2 - z^3 + c"),
@@ -30,24 +28,8 @@ pub const REFUSED: [(u32, &str); 33] = [
     (48, "TheRedshiftRider 7: a * z^2 - z^5 + c"),
     (49, "TheRedshiftRider 8: a * z^2 + z^6 + c"),
     (50, "TheRedshiftRider 9: a * z^2 - z^6 + c"),
-    (51, "SimonBrot2 4th"),
     (52, "General Quadratic Minus"),
     (53, "General Quadratic Plus"),
-    (54, "Mothbrot 2nd 1x1"),
-    (55, "Mothbrot 3rd 1x2"),
-    (56, "Mothbrot 3rd 2x1"),
-    (57, "Mothbrot 4th 1x3"),
-    (58, "Mothbrot 4th 2x2 (aka SimonBrot 4th)"),
-    (59, "Mothbrot 4th 3x1"),
-    (60, "Mothbrot 5th 1x4"),
-    (61, "Mothbrot 5th 2x3"),
-    (62, "Mothbrot 5th 3x2"),
-    (63, "Mothbrot 5th 4x1"),
-    (64, "Mothbrot 6th 1x5"),
-    (65, "Mothbrot 6th 2x4 (Simon's Mothbrot)"),
-    (66, "Mothbrot 6th 3x3 (aka SimonBrot 6th)"),
-    (67, "Mothbrot 6th 4x2"),
-    (68, "Mothbrot 6th 5x1"),
     (69, "General Abs Quadratic Minus"),
     (70, "General Abs Quadratic Plus"),
     (71, "z^2 exp(2 a / z) + c"),
@@ -125,6 +107,10 @@ pub(super) fn formula(kfr: &Kfr<'_>) -> Result<Chosen, SourceError> {
 /// picture about conj(c) is the mirror image of the picture about c.
 pub(super) fn symmetric(formula: &Formula) -> bool {
     formula.phases().iter().all(|p| {
+        if p.kind.factors().is_some() {
+            // z^a (|x| + i|y|)^b at conj(z) is conj(z^a) (|x| + i|y|)^b.
+            return false;
+        }
         let (fold_in, _, fold_out, _) = p.kind.shape(p.power);
         fold_in & FOLD_IM == 0 && (fold_out & FOLD_IM == 0 || fold_out & IM_BY_Y != 0)
     })

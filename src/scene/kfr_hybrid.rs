@@ -23,8 +23,10 @@
 //! odd p, negates it), those after it its fold out and negation, and the result must be a
 //! row of [`crate::formula::kind::KINDS`] at that power. KF's formula presets write every
 //! built-in family this way (Buffalo is `z^p` then a line `|x| + i|y|` of power 1).
-//! Anything else is refused with what it is: a line combining two operators (Mothbrot,
-//! SimonBrot, TheRedshiftRider, HPDZ Buffalo), a factor other than 1, a constant, two
+//! A group whose last line multiplies z^a by (|x| + i|y|)^b, after nothing or after z^2
+//! alone, is a product family (`formula::product`: Mothbrot, SimonBrot, SimonBrot2).
+//! Anything else is refused with what it is: a line combining two operators otherwise
+//! (TheRedshiftRider, HPDZ Buffalo), a factor other than 1, a constant, two
 //! powers in one iteration, or a map no family has. The sequence of groups must repeat
 //! from the first iteration with at most [`MAX_PHASES`] iterations per cycle (groups
 //! before the loop start are allowed when they equal the loop's end).
@@ -235,6 +237,29 @@ impl Steps {
     }
 }
 
+/// The product family a `*` line is, after the steps so far: z^A times (|x| + i|y|)^B (in
+/// either order, factors 1), on z itself or on u = z^PRE from a power line before it with
+/// no fold or negation (KF's SimonBrot2 is `z^2`, then `z * (|x| + i|y|)`). Where two rows
+/// are one map (Mothbrot 2×2 is SimonBrot 4th), the general family's row, Mothbrot (KF's
+/// higher type number).
+fn product_phase(steps: &Steps, one: Operator, two: Operator) -> Option<Phase> {
+    let factor_one = |o: &Operator| o.neg == 0 && o.mul == [1.0, 0.0] && o.pow >= 1;
+    let (a, b) = match (one.abs, two.abs) {
+        (0, 3) if factor_one(&one) && factor_one(&two) => (one.pow, two.pow),
+        (3, 0) if factor_one(&one) && factor_one(&two) => (two.pow, one.pow),
+        _ => return None,
+    };
+    if steps.fold_in != 0 || steps.neg_in != 0 || steps.fold_out != 0 || steps.sign != 0 {
+        return None;
+    }
+    let factors = (steps.power.unwrap_or(1), u32::try_from(a).ok()?, u32::try_from(b).ok()?);
+    KINDS
+        .iter()
+        .filter(|k| k.factors == Some(factors))
+        .max_by_key(|k| k.kf_type)
+        .map(|k| Phase { kind: k.kind, power: k.min_power })
+}
+
 /// One group's iteration as a phase.
 fn group_phase(at: usize, lines: &[(usize, &str)]) -> Result<Phase, HybridError> {
     let mut steps = Steps::default();
@@ -259,6 +284,14 @@ fn group_phase(at: usize, lines: &[(usize, &str)]) -> Result<Phase, HybridError>
             _ => '+',
         };
         let alone = two.pow == 0 && two.mul == [0.0, 0.0] && symbol != '*';
+        if symbol == '*'
+            && let Some(phase) = product_phase(&steps, one, two)
+        {
+            if line_at != lines[lines.len() - 1].0 {
+                return err(line_at, "a line after a product (Mothbrot, SimonBrot), which no deepfield family has");
+            }
+            return Ok(phase);
+        }
         if !alone {
             return err(
                 line_at,
@@ -418,6 +451,29 @@ mod tests {
         assert_eq!(formula(&two("1,0,0,0,5,1,0", "0,1,0,1,1,1,0")), "5th-quasi-burning-ship");
     }
 
+    /// KF's Mothbrot and SimonBrot presets: a line multiplying z^a by (|x| + i|y|)^b, on z or
+    /// on z² from a line before it.
+    #[test]
+    fn kf_presets_of_the_products() {
+        assert_eq!(formula("0/1|0,0,0,0,2,1,0;1,1,0,0,3,1,0;2"), "mothbrot-2x3");
+        assert_eq!(formula("0/1|1,1,0,0,3,1,0;0,0,0,0,2,1,0;2"), "mothbrot-2x3", "either order");
+        assert_eq!(formula("0/1|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2"), "mothbrot-1x1");
+        assert_eq!(formula("0/1|0,0,0,0,3,1,0;1,1,0,0,3,1,0;2"), "mothbrot-3x3", "SimonBrot 6th's lines");
+        let simon2 = format!("0/1|0,0,0,0,2,1,0;{NONE};0|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2");
+        assert_eq!(formula(&simon2), "simonbrot2-4th");
+        assert_eq!(
+            formula(&format!("0/1|0,0,0,0,2,1,0;1,1,0,0,2,1,0;2/1|1,1,0,0,2,1,0;{NONE};0")),
+            "mothbrot-2x2,burning-ship"
+        );
+        // No row: z^3 (|x| + i|y|)^4, a product after a fold, a line after a product.
+        assert!(refused("0/1|0,0,0,0,3,1,0;1,1,0,0,4,1,0;2").message.contains("combines two operators"));
+        assert!(
+            refused(&format!("0/1|1,1,0,0,1,1,0;{NONE};0|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2")).message.contains("combines")
+        );
+        let e = refused(&format!("0/1|0,0,0,0,1,1,0;1,1,0,0,1,1,0;2|0,0,0,0,2,1,0;{NONE};0"));
+        assert!(e.message.contains("after a product"), "{e}");
+    }
+
     /// KF's Mandelbar of power 3 is -Re z³ + i Im z³, which is (-x + iy)³; its preset's
     /// hybrid, (x - iy)³ = conj(z³), is a different map that no family is.
     #[test]
@@ -463,11 +519,11 @@ mod tests {
 
     #[test]
     fn operators_factors_and_constants_are_refused_by_what_they_are() {
-        // TheRedshiftRider 1, SimonBrot 4th, HPDZ Buffalo.
+        // TheRedshiftRider 1, a product of a partial fold, HPDZ Buffalo.
         let e = refused("0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0");
         assert!(e.message.contains("`(x + iy)^2 + (x + iy)^3` combines two operators"), "{e}");
-        let e = refused("0/1|0,0,0,0,2,1,0;1,1,0,0,2,1,0;2");
-        assert!(e.message.contains("(x + iy)^2 * (|x| + i|y|)^2"), "{e}");
+        let e = refused("0/1|0,0,0,0,2,1,0;1,0,0,0,2,1,0;2");
+        assert!(e.message.contains("(x + iy)^2 * (|x| + iy)^2"), "{e}");
         let e = refused("0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1");
         assert!(e.message.contains(" - "), "{e}");
         let e = refused("0/1|0,0,0,0,2,2,0;0,0,0,0,0,0,0;0");

@@ -33,7 +33,8 @@ use super::step::step;
 fn orbit_step(formula: Formula, c: &BigC, n: u32, z: &BigC, dz: &BigC) -> (BigC, BigC) {
     let one = BigC::from_f64(1.0, 0.0, c.bits);
     let (f, d) = step(formula.phase(n), z);
-    (f.add(c), d.factor().mul(dz).add(&one))
+    let a = d.factor().expect("a conformal formula's derivative is one complex number");
+    (f.add(c), a.mul(dz).add(&one))
 }
 
 /// The orbit of c, `n` steps (ended early above `bound`).

@@ -9,24 +9,40 @@
 //! between two sign flips of the components: conformal (a complex number) for the
 //! Mandelbrot family, conformal or anti-conformal (a complex number times a reflection)
 //! for every family; only the sums of such maps that the derivative in c accumulates are
-//! general 2×2 matrices.
+//! general 2×2 matrices. A product family's (`formula::product`) is such a sum already:
+//! α t + β S t, t = e v, with S the fold of u = z^PRE.
 
 use malachite_float::Float;
 
 use crate::formula::Phase;
 use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE};
+use crate::formula::product::{fold_big, power_big};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
 
-/// The derivative of one step at a point: v -> flip_out(a flip_in(v)).
+/// The derivative of one step at a point.
 #[derive(Debug, Clone)]
-pub struct Derivative {
-    /// p w^(p-1), w the folded point.
-    a: BigC,
-    /// Components the first fold negates (folded and negative).
-    flip_in: [bool; 2],
-    /// Components the second fold and the negation negate together.
-    flip_out: [bool; 2],
+pub enum Derivative {
+    /// A composition's: v -> flip_out(a flip_in(v)).
+    Composition {
+        /// p w^(p-1), w the folded point.
+        a: BigC,
+        /// Components the first fold negates (folded and negative).
+        flip_in: [bool; 2],
+        /// Components the second fold and the negation negate together.
+        flip_out: [bool; 2],
+    },
+    /// A product's (`formula::product`): v -> α t + β flip(t), t = e v.
+    Product {
+        /// PRE z^(PRE-1), the derivative of u = z^PRE.
+        e: BigC,
+        /// A u^(A-1) Q.
+        alpha: BigC,
+        /// P B g^(B-1).
+        beta: BigC,
+        /// The parts of u that are negative (the fold of u negates them).
+        flip: [bool; 2],
+    },
 }
 
 /// `x`, negated where `flip`.
@@ -42,31 +58,74 @@ fn flipped(v: &BigC, flip: [bool; 2]) -> BigC {
 impl Derivative {
     /// Df v.
     pub fn apply(&self, v: &BigC) -> BigC {
-        flipped(&self.a.mul(&flipped(v, self.flip_in)), self.flip_out)
+        match self {
+            Derivative::Composition { a, flip_in, flip_out } => flipped(&a.mul(&flipped(v, *flip_in)), *flip_out),
+            Derivative::Product { e, alpha, beta, flip } => {
+                let t = e.mul(v);
+                alpha.mul(&t).add(&beta.mul(&flipped(&t, *flip)))
+            }
+        }
     }
 
     /// Df as a 2×2 matrix in FloatExp, rows first (its columns are Df 1 and Df i).
     pub fn matrix(&self) -> [[FloatExp; 2]; 2] {
-        let one = BigC::from_f64(1.0, 0.0, self.a.bits);
-        let i = BigC::from_f64(0.0, 1.0, self.a.bits);
+        let bits = match self {
+            Derivative::Composition { a, .. } => a.bits,
+            Derivative::Product { alpha, .. } => alpha.bits,
+        };
+        let one = BigC::from_f64(1.0, 0.0, bits);
+        let i = BigC::from_f64(0.0, 1.0, bits);
         let ([a, c], [b, d]) = (self.apply(&one).to_fe(), self.apply(&i).to_fe());
         [[a, b], [c, d]]
     }
 
-    /// Whether Df is a complex number (no reflection between the flips).
+    /// Whether Df is a complex number (no reflection between the flips; a product's never
+    /// is taken to be).
     pub fn conformal(&self) -> bool {
-        self.flip_in[0] == self.flip_in[1] && self.flip_out[0] == self.flip_out[1]
+        match self {
+            Derivative::Composition { flip_in, flip_out, .. } => flip_in[0] == flip_in[1] && flip_out[0] == flip_out[1],
+            Derivative::Product { .. } => false,
+        }
     }
 
-    /// a, the complex factor between the flips.
-    pub fn factor(&self) -> &BigC {
-        &self.a
+    /// a, the complex factor between a composition's flips; None for a product, whose
+    /// derivative is no one complex number.
+    pub fn factor(&self) -> Option<&BigC> {
+        match self {
+            Derivative::Composition { a, .. } => Some(a),
+            Derivative::Product { .. } => None,
+        }
     }
+}
+
+/// n w^(n-1) in big floats.
+fn slope_big(w: &BigC, n: u32) -> BigC {
+    let k = BigC::from_f64(n as f64, 0.0, w.bits);
+    if n == 1 { k } else { power_big(w, n - 1).mul(&k) }
+}
+
+/// A product family's step and derivative, by the operations of `Product::apply_big`.
+fn product_step((pre, a, b): (u32, u32, u32), z: &BigC) -> (BigC, Derivative) {
+    let u = power_big(z, pre);
+    let g = fold_big(&u);
+    let (p, q) = (power_big(&u, a), power_big(&g, b));
+    let f = p.mul(&q);
+    let flip = [u.re < 0u32, u.im < 0u32];
+    let d = Derivative::Product {
+        e: slope_big(z, pre),
+        alpha: slope_big(&u, a).mul(&q),
+        beta: p.mul(&slope_big(&g, b)),
+        flip,
+    };
+    (f, d)
 }
 
 /// f(z) for `phase` (c not added) and its derivative at z, in big floats at `z.bits`. f(z)
 /// is computed by the same operations as `Map::apply_big`, so the two agree to the bit.
 pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
+    if let Some(factors) = phase.kind.factors() {
+        return product_step(factors, z);
+    }
     let (fold_in, p, fold_out, sign) = phase.kind.shape(phase.power);
     let negative = |x: &Float| *x < 0u32;
     let flip_in = [fold_in & FOLD_RE != 0 && negative(&z.re), fold_in & FOLD_IM != 0 && negative(&z.im)];
@@ -91,7 +150,7 @@ pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
         im = (negative(&a.re) != flip_in[1]) != (by_x && negative(&z.re));
     }
     let flip_out = [(fold_out & FOLD_RE != 0 && negative(&u.re)) != (sign == SIGN_RE), im != (sign == SIGN_IM)];
-    (flipped(&u, flip_out), Derivative { a, flip_in, flip_out })
+    (flipped(&u, flip_out), Derivative::Composition { a, flip_in, flip_out })
 }
 
 #[cfg(test)]
@@ -120,9 +179,7 @@ mod tests {
                             assert!((got - want).abs() <= 1e-12 * (1.0 + want.abs()), "{phase} {z:?} [{r}][{c}]");
                         }
                     }
-                    let conformal =
-                        phase.kind.shape(p).0 == 0 && phase.kind.shape(p).2 == 0 && phase.kind.shape(p).3 == 0;
-                    if conformal {
+                    if crate::formula::Formula::single(phase).is_conformal() {
                         assert!(d.conformal(), "{phase}");
                     }
                 }

@@ -298,7 +298,18 @@ fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2]
     if (fin & FOLD_IM != 0) || (fout & IM_BY_Y != 0) {
         r = r.min(z[1].abs() * SAFE);
     }
-    if fout != 0 {
+    if let Some((pre, _, _)) = formula.phase(n).kind.factors() {
+        // A product folds u = Z^PRE: each part of it keeps its sign while |δ| stays below
+        // |Z| ((1 + |part| / |Z|^PRE)^(1/PRE) - 1), as (|Z| + |δ|)^PRE - |Z|^PRE bounds
+        // the change of u (|x| and |y| for PRE = 1).
+        let u = if pre == 1 { z } else { [z[0] * z[0] - z[1] * z[1], 2.0 * z[0] * z[1]] };
+        let zp = az.powi(pre as i32);
+        for part in u {
+            let q = part.abs() / zp;
+            let t = if q.is_finite() { (q.ln_1p() / pre as f64).exp_m1() } else { 0.0 };
+            r = r.min(az * t * SAFE);
+        }
+    } else if fout != 0 {
         // |Re U| and |Im U| are those of f(Z): a fold or a negation keeps magnitudes.
         let u = stepper.apply(n, z);
         let zp = az.powi(p as i32);

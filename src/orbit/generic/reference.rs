@@ -118,6 +118,10 @@ fn narrow(v: [FloatExp; 2], power: u32) -> bool {
 /// power, in big floats.
 fn power_big(formula: &Formula, n: u32, z: &BigC) -> BigC {
     let phase = formula.phase(n);
+    if let Some((pre, _, _)) = phase.kind.factors() {
+        // A product folds u = Z^PRE.
+        return crate::formula::product::power_big(z, pre);
+    }
     let (fin, p, _, _) = phase.kind.shape(phase.power);
     let abs = |x: &malachite_float::Float, on: bool| if on && *x < 0u32 { -x.clone() } else { x.clone() };
     let w = BigC { re: abs(&z.re, fin & FOLD_RE != 0), im: abs(&z.im, fin & FOLD_IM != 0), bits: z.bits };
@@ -128,9 +132,19 @@ fn power_big(formula: &Formula, n: u32, z: &BigC) -> BigC {
     u
 }
 
-/// True when U = f(Z) before its fold (|parts| those of `fz`) has a folded part near 0.
-fn near_fold(formula: &Formula, n: u32, fz: [FloatExp; 2]) -> bool {
+/// True when U = f(Z) before its fold (|parts| those of `fz`) has a folded part near 0;
+/// for a product, when u = Z^PRE (from `z`) has, for PRE > 1 (u = Z itself keeps its signs
+/// in f64).
+fn near_fold(formula: &Formula, n: u32, z: [FloatExp; 2], fz: [FloatExp; 2]) -> bool {
     let phase = formula.phase(n);
+    if let Some((pre, _, _)) = phase.kind.factors() {
+        if pre == 1 {
+            return false;
+        }
+        let u = [z[0] * z[0] - z[1] * z[1], (z[0] * z[1]).ldexp(1)];
+        let size = u[0].abs().max(u[1].abs()).mul_f64(NEAR_FOLD);
+        return u[0].abs() < size || u[1].abs() < size;
+    }
     let (_, _, fout, _) = phase.kind.shape(phase.power);
     let size = fz[0].abs().max(fz[1].abs()).mul_f64(NEAR_FOLD);
     (fout & FOLD_RE != 0 && fz[0].abs() < size) || (fout & FOLD_IM != 0 && fz[1].abs() < size)
@@ -178,7 +192,7 @@ pub(super) fn compute<S: Stepper>(
         let fz = stepper.apply_big(n, &z);
         // The map's own parts decide a fold after the power: they must be f64 too.
         let ffe = fz.to_fe();
-        if !narrow(fe, max_power) || !narrow(ffe, 1) || near_fold(formula, n, ffe) {
+        if !narrow(fe, max_power) || !narrow(ffe, 1) || near_fold(formula, n, fe, ffe) {
             out.wide.push(Wide { m: j, z: fe, u: power_big(formula, n, &z).to_fe() });
         }
         z = fz.add(c);

@@ -332,16 +332,20 @@ fn preperiodic_view(formula: &str, julia: Option<[&str; 2]>, digits: i32, max_it
     let bits = (digits as f64 * std::f64::consts::LOG2_10) as u64 + 64;
     let jd = julia.map(|j| dec(&j));
     let jb = jd.as_ref().map(|j| BigC::from_decimals(&j[0], &j[1], bits));
-    // Julia sets: a point of a repelling cycle itself.
-    let k = if julia.is_some() { 0 } else { 3 };
-    let center = (1..=3)
-        .find_map(|turns| preperiodic(formula, jb.as_ref(), k, turns, bits))
+    // Julia sets: a point of a repelling cycle itself. The Mandelbrot form tries preperiod
+    // 3 first, then longer ones: where a map collapses half its plane onto a line
+    // (SimonBrot2 sends u = z² with Re u Im u < 0 to the real axis, ±|u|²), few short
+    // cycles are repelling in both directions.
+    let preperiods: &[u32] = if julia.is_some() { &[0] } else { &[3, 4, 5, 6, 7] };
+    let center = preperiods
+        .iter()
+        .find_map(|&k| (1..=3).find_map(|turns| preperiodic(formula, jb.as_ref(), k, turns, bits)))
         .unwrap_or_else(|| panic!("{formula}: no preperiodic point found"));
     let numbers = if digits > 250 { Numbers::FloatExp } else { Numbers::F64 };
     View { formula, center, julia: jd, radius: FloatExp::exp10(-digits as f64), max_iter, numbers }
 }
 
-const FAMILIES: [&str; 9] = [
+const FAMILIES: [&str; 12] = [
     "mandelbrot^3",
     "burning-ship",
     "buffalo^3",
@@ -352,6 +356,10 @@ const FAMILIES: [&str; 9] = [
     // Imaginary parts folded and signed by y (the real part folded first), and by xy.
     "cubic-quasi-perpendicular",
     "4th-false-quasi-heart",
+    // Products of two maps: z^a (|x| + i|y|)^b, and u (|Re u| + i|Im u|) with u = z².
+    "mothbrot-2x3",
+    "simonbrot2-4th",
+    "mothbrot-2x1,mandelbrot^3",
 ];
 
 #[test]
@@ -376,6 +384,7 @@ fn julia_views_match_big_floats() {
         ("buffalo", ["-0.2", "0.1"]),
         ("burning-ship,mandelbrot^3", ["-0.2", "0.1"]),
         ("4th-real-quasi-heart", ["-0.3", "0.2"]),
+        ("mothbrot-2x2", ["-0.2", "0.3"]),
     ] {
         for digits in [4, 40] {
             let view = preperiodic_view(name, Some(c), digits, 2000);
@@ -452,6 +461,8 @@ fn floatexp_views_beyond_1e_320() {
         ("burning-ship,mandelbar julia -2 at 2", at("burning-ship,mandelbar", ["2", "0"], Some(["-2", "0"]))),
         ("mandelbrot^3", preperiodic_view("mandelbrot^3", None, 330, 4000)),
         ("burning-ship,mandelbrot^3", preperiodic_view("burning-ship,mandelbrot^3", None, 330, 4000)),
+        ("mothbrot-2x1", preperiodic_view("mothbrot-2x1", None, 330, 4000)),
+        ("simonbrot2-4th", preperiodic_view("simonbrot2-4th", None, 330, 4000)),
     ];
     for (name, view) in views {
         check_view(name, &view, 5);
@@ -492,6 +503,9 @@ fn every_simd_level_gives_the_scalar_loops_bits() {
             preperiodic_view("mandelbrot,perpendicular-burning-ship", Some(["-0.1", "0.1"]), 40, 2000),
         ),
         ("burning-ship,mandelbrot^3 1e-330", preperiodic_view("burning-ship,mandelbrot^3", None, 330, 3000)),
+        ("mothbrot-3x2 1e-45", preperiodic_view("mothbrot-3x2", None, 45, 3000)),
+        ("simonbrot2-4th 1e-330", preperiodic_view("simonbrot2-4th", None, 330, 3000)),
+        ("mothbrot-1x1 julia 1e-40", preperiodic_view("mothbrot-1x1", Some(["-0.3", "0.1"]), 40, 2000)),
     ];
     let mut rebases = 0;
     for (name, view) in &views {

@@ -7,7 +7,7 @@
 //! that a fold's `diffabs` decides on, and where |Z| is so small that its powers underflow
 //! the binomial expansion loses its linear term. This step is the same composition (fold,
 //! power, fold, negation, as in `formula::map`) read from the phase's shape at run time and
-//! evaluated wholly in FloatExp: it runs only at the few wide indices of an orbit, where
+//! evaluated wholly in FloatExp (a product family's, `formula::product`, likewise): it runs only at the few wide indices of an orbit, where
 //! interpreting the shape costs nothing that matters.
 
 use crate::formula::Phase;
@@ -56,23 +56,14 @@ fn fold_delta(fold: u8, z: [FloatExp; 2], d: [FloatExp; 2]) -> [FloatExp; 2] {
 /// floats where the reference has it (its signs decide a fold after the power), else
 /// computed here.
 pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d: [FloatExp; 2]) -> [FloatExp; 2] {
+    if let Some(factors) = phase.kind.factors() {
+        return product_delta(factors, z, u, d);
+    }
     let (fin, p, fout, sign) = phase.kind.shape(phase.power);
     let dw = fold_delta(fin, z, d);
     let w = fold(fin, z);
-    // Powers W^0 .. W^p.
-    let mut pw = vec![[FloatExp::ONE, FloatExp::ZERO]];
-    for k in 1..=p as usize {
-        pw.push(cmul(pw[k - 1], w));
-    }
-    // (W + dw)^p - W^p by Horner's rule over the binomial expansion.
-    let mut t = [FloatExp::ONE, FloatExp::ZERO];
-    for k in (1..p).rev() {
-        let c = binomial(p, k);
-        let a = pw[(p - k) as usize];
-        t = cadd(cmul(t, dw), [a[0].mul_f64(c), a[1].mul_f64(c)]);
-    }
-    let raw = cmul(t, dw);
-    let u = u.unwrap_or(pw[p as usize]);
+    let (wp, raw) = power_delta(w, dw, p);
+    let u = u.unwrap_or(wp);
     let mut du = fold_delta(fout, u, raw);
     if fout & (IM_BY_X | IM_BY_Y) != 0 {
         du[1] = signed_delta(fout, z, d, u[1], raw[1]);
@@ -82,6 +73,40 @@ pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d:
         SIGN_RE => [-du[0], du[1]],
         _ => du,
     }
+}
+
+/// (W^p, (W + dw)^p - W^p), the difference by Horner's rule over the binomial expansion.
+fn power_delta(w: [FloatExp; 2], dw: [FloatExp; 2], p: u32) -> ([FloatExp; 2], [FloatExp; 2]) {
+    // Powers W^0 .. W^p.
+    let mut pw = vec![[FloatExp::ONE, FloatExp::ZERO]];
+    for k in 1..=p as usize {
+        pw.push(cmul(pw[k - 1], w));
+    }
+    let mut t = [FloatExp::ONE, FloatExp::ZERO];
+    for k in (1..p).rev() {
+        let c = binomial(p, k);
+        let a = pw[(p - k) as usize];
+        t = cadd(cmul(t, dw), [a[0].mul_f64(c), a[1].mul_f64(c)]);
+    }
+    (pw[p as usize], cmul(t, dw))
+}
+
+/// f(Z + d) - f(Z) for the product family u^A (|Re u| + i|Im u|)^B, u = Z^PRE
+/// (`formula::product`), by the product rule: dP (Q + dQ) + P dQ. `u`: u with the signs
+/// the big floats give, where the reference has it.
+fn product_delta(
+    (pre, a, b): (u32, u32, u32),
+    z: [FloatExp; 2],
+    u: Option<[FloatExp; 2]>,
+    d: [FloatExp; 2],
+) -> [FloatExp; 2] {
+    let (zp, du) = power_delta(z, d, pre);
+    let u = u.unwrap_or(zp);
+    let g = fold(FOLD_RE | FOLD_IM, u);
+    let dg = fold_delta(FOLD_RE | FOLD_IM, u, du);
+    let (p, dp) = power_delta(u, du, a);
+    let (q, dq) = power_delta(g, dg, b);
+    cadd(cmul(dp, cadd(q, dq)), cmul(p, dq))
 }
 
 /// An f64 value with the signs of `v`'s parts (a part below f64's range becomes the least
