@@ -23,7 +23,7 @@ use crate::num::real::{Real, cadd, cmul};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Product<const PRE: u32, const A: u32, const B: u32>;
 
-/// w^n in big floats, as [`power`] takes it: w itself for n = 1, else a square and then
+/// w^n in big floats, as `formula::map`'s `power` takes it: w itself for n = 1, else a square and then
 /// products.
 pub fn power_big(w: &BigC, n: u32) -> BigC {
     if n == 1 {
