@@ -129,6 +129,6 @@ fn every_row_of_kinds_is_kalles_fraktalers_formula() {
         }
     }
     // Types 0 to 4 (by power), 5-9, 10-13, 15-22, 27-30, then the quasi families 14, 23-26,
-    // 31-32 and 34-39.
-    assert_eq!(rows, 9 + 4 * 4 + 5 + 4 + 8 + 4 + 1 + 4 + 2 + 6);
+    // 31-32 and 34-39, then the products 33, 40, 51 and 54-68.
+    assert_eq!(rows, 9 + 4 * 4 + 5 + 4 + 8 + 4 + 1 + 4 + 2 + 6 + 18);
 }
