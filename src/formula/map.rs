@@ -13,8 +13,6 @@
 //! [`diffabs`]), and the real 2×2 Jacobian ([`Map::jacobian`]) for derivatives and
 //! bilinear approximation.
 
-use malachite_float::Float;
-
 use crate::num::bigcomplex::BigC;
 use crate::num::real::{Real, cadd, cmul};
 
@@ -256,6 +254,12 @@ pub trait Map: Copy + Default + Send + Sync + 'static {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Ops<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8>;
 
+/// z with the parts that `fold` (a set of [`FOLD_RE`], [`FOLD_IM`]) names replaced by their
+/// magnitudes, in big floats.
+pub fn fold_big(fold: u8, z: BigC) -> BigC {
+    z.fold_parts(fold & FOLD_RE != 0, fold & FOLD_IM != 0)
+}
+
 /// |X + d| - |X| without cancellation (Claude Heiland-Allen's `diffabs`): exact in the sense
 /// that only the sign of X + d is decided, and the result is d, -d, or d + 2X up to sign.
 #[inline(always)]
@@ -435,18 +439,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     }
 
     fn apply_big(z: &BigC) -> BigC {
-        let abs = |f: &Float| if *f < 0u32 { -f.clone() } else { f.clone() };
-        let fold_big = |fold: u8, z: BigC| BigC {
-            re: if fold & FOLD_RE != 0 { abs(&z.re) } else { z.re },
-            im: if fold & FOLD_IM != 0 { abs(&z.im) } else { z.im },
-            bits: z.bits,
-        };
-        let w = fold_big(IN, z.clone());
-        let mut u = w.square();
-        for _ in 2..P {
-            u = u.mul(&w);
-        }
-        let mut u = fold_big(OUT, u);
+        let mut u = fold_big(OUT, fold_big(IN, z.clone()).pow(P));
         // sgn(x), sgn(y) as `Num::sgn` takes them: -1 below zero only.
         let flip = (OUT & IM_BY_X != 0 && z.re < 0u32) != (OUT & IM_BY_Y != 0 && z.im < 0u32);
         if flip {
@@ -581,6 +574,7 @@ pub fn gradient_dz(z: [f64; 2], j: Mat2) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formula::checks;
 
     type Ship3 = Ops<FOLD_BOTH, 3, FOLD_NONE, SIGN_NONE>;
     type Buffalo2 = Ops<FOLD_NONE, 2, FOLD_BOTH, SIGN_NONE>;
@@ -593,50 +587,21 @@ mod tests {
 
     const POINTS: [[f64; 2]; 6] = [[0.3, -0.7], [-1.1, 0.2], [0.05, 0.9], [-0.4, -0.35], [1.3, 1e-3], [-2e-3, 0.6]];
 
+    const DELTAS: [[f64; 2]; 4] = [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8]];
+
     fn check_delta<M: Map>() {
-        let bits = 200;
-        for z in POINTS {
-            for d in [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8]] {
-                let got = M::delta::<f64>(z, d);
-                let zb = BigC::from_f64(z[0], z[1], bits);
-                let zd = BigC::from_f64(z[0] + d[0], z[1] + d[1], bits);
-                let want = M::apply_big(&zd).sub(&M::apply_big(&zb));
-                let want = [want.re.to_string().parse::<f64>().unwrap(), want.im.to_string().parse::<f64>().unwrap()];
-                let scale = 1e-13 * (1.0 + want[0].abs().max(want[1].abs()));
-                // z + d is rounded; it is exact for these sizes only to about 1e-16 of |z|.
-                let tol = scale + 1e-15 * (d[0].abs() + d[1].abs() + 1.0) * 40.0;
-                assert!(
-                    (got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol,
-                    "{z:?} {d:?}: {got:?} {want:?}"
-                );
-            }
-        }
+        checks::check_delta::<M>(&POINTS, &DELTAS, 4e-14);
     }
 
     fn check_jacobian<M: Map>() {
-        let h = 1e-7;
-        for z in POINTS {
-            let j = M::jacobian(z);
-            for (col, e) in [[1.0, 0.0], [0.0, 1.0]].into_iter().enumerate() {
-                let p = M::apply([z[0] + h * e[0], z[1] + h * e[1]]);
-                let m = M::apply([z[0] - h * e[0], z[1] - h * e[1]]);
-                for row in 0..2 {
-                    let fd = (p[row] - m[row]) / (2.0 * h);
-                    assert!(
-                        (fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()),
-                        "{z:?} [{row}][{col}] {fd} {}",
-                        j[row][col]
-                    );
-                }
-            }
-        }
+        checks::check_jacobian::<M>(&POINTS);
     }
 
     fn check_big<M: Map>() {
         for z in POINTS {
             let f = M::apply(z);
             let b = M::apply_big(&BigC::from_f64(z[0], z[1], 200));
-            let b = [b.re.to_string().parse::<f64>().unwrap(), b.im.to_string().parse::<f64>().unwrap()];
+            let b = checks::parse(&b);
             assert!((f[0] - b[0]).abs() < 1e-14 && (f[1] - b[1]).abs() < 1e-14, "{z:?}");
         }
     }

@@ -12,6 +12,8 @@
 //! more accurate, and on the machines we target they move work from the saturated add
 //! pipes to the multiply pipes.
 
+#[cfg(test)]
+mod checks;
 pub mod end;
 pub mod kind;
 pub mod map;

@@ -13,34 +13,13 @@
 //! product of a complex number and a reflection, as every composition's is
 //! (`formula::map`), but the sum of two such maps.
 
-use malachite_float::Float;
-
-use super::map::{FOLD_BOTH, Map, Num, diffabs, fold, nmul, power, power_delta, power_delta_n};
+use super::map::{FOLD_BOTH, Map, Num, diffabs, fold, fold_big, nmul, power, power_delta, power_delta_n};
 use crate::num::bigcomplex::BigC;
 use crate::num::real::{Real, cadd, cmul};
 
 /// The product family u^A (|Re u| + i|Im u|)^B with u = z^PRE.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Product<const PRE: u32, const A: u32, const B: u32>;
-
-/// w^n in big floats, as `formula::map`'s `power` takes it: w itself for n = 1, else a square and then
-/// products.
-pub fn power_big(w: &BigC, n: u32) -> BigC {
-    if n == 1 {
-        return w.clone();
-    }
-    let mut u = w.square();
-    for _ in 2..n {
-        u = u.mul(w);
-    }
-    u
-}
-
-/// |Re u| + i|Im u| in big floats.
-pub fn fold_big(u: &BigC) -> BigC {
-    let abs = |f: &Float| if *f < 0u32 { -f.clone() } else { f.clone() };
-    BigC { re: abs(&u.re), im: abs(&u.im), bits: u.bits }
-}
 
 /// n w^(n-1) for one sample or several in lanes: the complex derivative of w^n.
 #[inline(always)]
@@ -64,8 +43,8 @@ impl<const PRE: u32, const A: u32, const B: u32> Map for Product<PRE, A, B> {
     }
 
     fn apply_big(z: &BigC) -> BigC {
-        let u = power_big(z, PRE);
-        power_big(&u, A).mul(&power_big(&fold_big(&u), B))
+        let u = z.pow(PRE);
+        u.pow(A).mul(&fold_big(FOLD_BOTH, u).pow(B))
     }
 
     #[inline(always)]
@@ -125,6 +104,7 @@ impl<const PRE: u32, const A: u32, const B: u32> Map for Product<PRE, A, B> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formula::checks;
 
     type Moth11 = Product<1, 1, 1>;
     type Moth23 = Product<1, 2, 3>;
@@ -134,45 +114,15 @@ mod tests {
     const POINTS: [[f64; 2]; 7] =
         [[0.3, -0.7], [-1.1, 0.2], [0.05, 0.9], [-0.4, -0.35], [1.3, 1e-3], [-2e-3, 0.6], [0.5, -0.52]];
 
-    fn parse(b: &BigC) -> [f64; 2] {
-        [b.re.to_string().parse().unwrap(), b.im.to_string().parse().unwrap()]
-    }
+    /// The deltas include one that crosses a fold line of u.
+    const DELTAS: [[f64; 2]; 5] = [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8], [0.0, 1.4]];
 
-    /// The delta is the difference of two big-float steps, also where d crosses a fold
-    /// line of u.
     fn check_delta<M: Map>() {
-        for z in POINTS {
-            for d in [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8], [0.0, 1.4]] {
-                let got = M::delta::<f64>(z, d);
-                let want = M::apply_big(&BigC::from_f64(z[0] + d[0], z[1] + d[1], 200))
-                    .sub(&M::apply_big(&BigC::from_f64(z[0], z[1], 200)));
-                let want = parse(&want);
-                let tol = 1e-13 * (1.0 + want[0].abs().max(want[1].abs())) + 1e-14 * (d[0].abs() + d[1].abs() + 1.0);
-                assert!(
-                    (got[0] - want[0]).abs() <= tol && (got[1] - want[1]).abs() <= tol,
-                    "{z:?} {d:?}: {got:?} {want:?}"
-                );
-            }
-        }
+        checks::check_delta::<M>(&POINTS, &DELTAS, 1e-14);
     }
 
     fn check_jacobian<M: Map>() {
-        let h = 1e-7;
-        for z in POINTS {
-            let j = M::jacobian(z);
-            for (col, e) in [[1.0, 0.0], [0.0, 1.0]].into_iter().enumerate() {
-                let p = M::apply([z[0] + h * e[0], z[1] + h * e[1]]);
-                let m = M::apply([z[0] - h * e[0], z[1] - h * e[1]]);
-                for row in 0..2 {
-                    let fd = (p[row] - m[row]) / (2.0 * h);
-                    assert!(
-                        (fd - j[row][col]).abs() < 1e-5 * (1.0 + fd.abs()),
-                        "{z:?} [{row}][{col}] {fd} {}",
-                        j[row][col]
-                    );
-                }
-            }
-        }
+        checks::check_jacobian::<M>(&POINTS);
     }
 
     /// The f64 map against the big-float one, and both against the product written out
@@ -184,7 +134,7 @@ mod tests {
             let u = pow(z, pre);
             let want = mulc(pow(u, a), pow([u[0].abs(), u[1].abs()], b));
             let f = M::apply(z);
-            let big = parse(&M::apply_big(&BigC::from_f64(z[0], z[1], 200)));
+            let big = checks::parse(&M::apply_big(&BigC::from_f64(z[0], z[1], 200)));
             for k in 0..2 {
                 let tol = 1e-13 * (1.0 + want[k].abs());
                 assert!(

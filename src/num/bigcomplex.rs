@@ -78,6 +78,27 @@ impl BigC {
         BigC { re, im, bits: p }
     }
 
+    /// self^n for n >= 1 as every big-float map takes it: self itself for n = 1, else a
+    /// square and then products by self (so that two users of a power agree to the bit).
+    pub fn pow(&self, n: u32) -> BigC {
+        if n <= 1 {
+            return self.clone();
+        }
+        let mut u = self.square();
+        for _ in 2..n {
+            u = u.mul(self);
+        }
+        u
+    }
+
+    /// self with the real part, the imaginary part or both replaced by their magnitudes: the
+    /// folds of the Burning Ship's relatives. (A negative zero stays as it is: only a part
+    /// below zero changes.)
+    pub fn fold_parts(self, re: bool, im: bool) -> BigC {
+        let abs = |f: Float, on: bool| if on && f < 0u32 { -f } else { f };
+        BigC { re: abs(self.re, re), im: abs(self.im, im), bits: self.bits }
+    }
+
     /// The principal square root (non-negative real part; the imaginary part takes the sign
     /// of self's).
     pub fn sqrt(&self) -> BigC {

@@ -15,8 +15,7 @@
 use malachite_float::Float;
 
 use crate::formula::Phase;
-use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE};
-use crate::formula::product::{fold_big, power_big};
+use crate::formula::map::{FOLD_BOTH, FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE, fold_big};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
 
@@ -101,14 +100,14 @@ impl Derivative {
 /// n w^(n-1) in big floats.
 fn slope_big(w: &BigC, n: u32) -> BigC {
     let k = BigC::from_f64(n as f64, 0.0, w.bits);
-    if n == 1 { k } else { power_big(w, n - 1).mul(&k) }
+    if n == 1 { k } else { w.pow(n - 1).mul(&k) }
 }
 
 /// A product family's step and derivative, by the operations of `Product::apply_big`.
 fn product_step((pre, a, b): (u32, u32, u32), z: &BigC) -> (BigC, Derivative) {
-    let u = power_big(z, pre);
-    let g = fold_big(&u);
-    let (p, q) = (power_big(&u, a), power_big(&g, b));
+    let u = z.pow(pre);
+    let g = fold_big(FOLD_BOTH, u.clone());
+    let (p, q) = (u.pow(a), g.pow(b));
     let f = p.mul(&q);
     let flip = [u.re < 0u32, u.im < 0u32];
     let d = Derivative::Product {

@@ -30,7 +30,7 @@
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::cancel::Cancelled;
-use crate::formula::map::{FOLD_IM, FOLD_RE};
+use crate::formula::map::{FOLD_IM, FOLD_RE, fold_big};
 use crate::formula::{Formula, Stepper};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
@@ -120,16 +120,10 @@ fn power_big(formula: &Formula, n: u32, z: &BigC) -> BigC {
     let phase = formula.phase(n);
     if let Some((pre, _, _)) = phase.kind.factors() {
         // A product folds u = Z^PRE.
-        return crate::formula::product::power_big(z, pre);
+        return z.pow(pre);
     }
     let (fin, p, _, _) = phase.kind.shape(phase.power);
-    let abs = |x: &malachite_float::Float, on: bool| if on && *x < 0u32 { -x.clone() } else { x.clone() };
-    let w = BigC { re: abs(&z.re, fin & FOLD_RE != 0), im: abs(&z.im, fin & FOLD_IM != 0), bits: z.bits };
-    let mut u = w.square();
-    for _ in 2..p {
-        u = u.mul(&w);
-    }
-    u
+    fold_big(fin, z.clone()).pow(p)
 }
 
 /// True when U = f(Z) before its fold (|parts| those of `fz`) has a folded part near 0;
