@@ -81,6 +81,7 @@ impl BigC {
     /// self^n for n >= 1 as every big-float map takes it: self itself for n = 1, else a
     /// square and then products by self (so that two users of a power agree to the bit).
     pub fn pow(&self, n: u32) -> BigC {
+        debug_assert!(n >= 1, "BigC::pow takes n >= 1, not {n}");
         if n <= 1 {
             return self.clone();
         }
