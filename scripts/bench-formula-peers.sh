@@ -26,7 +26,9 @@
 #   with its wisdom file. Its parameters carry the family as `[[formula]]` fields:
 #   Burning Ship `abs_x = true, abs_y = true`, Mandelbar `neg_y = true`, power 3
 #   `power = 3`; the per-pixel limits on perturbation iterations and BLA steps are the
-#   iteration limit (as in bench-fraktaler3.sh).
+#   iteration limit (as in bench-fraktaler3.sh). Its EXR is named as a save format with
+#   raw channels only (`render.save_exr`, `render.exr_channels`): version 3.1 saves
+#   nothing otherwise, and a build without its GUI cannot write colour channels.
 # deepfield writes its PNG, fractall-rust its PNG, Fraktaler-3 its EXR (raw data only).
 set -euo pipefail
 if [ $# -lt 3 ]; then
@@ -83,6 +85,8 @@ image.height = {h}
 image.subsampling = 1
 image.subframes = 1
 render.filename = "{base}"
+render.save_exr = true
+render.exr_channels = ["N0", "N1", "NF", "T", "DEX", "DEY"]
 
 [[formula]]
 {f3_fields}

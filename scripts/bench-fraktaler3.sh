@@ -19,7 +19,9 @@
 # are set to the iteration limit: at the "few thousand" its documentation suggests, pixels
 # of bench-e50 and bench-e227 stop early and come out as interior (4815 and 44096 of them
 # in version 2.1). Both write the same raw data, an EXR of N, NF, T, DEX and DEY (so both
-# carry the derivative for the distance estimate), and deepfield its PNG as well.
+# carry the derivative for the distance estimate), and deepfield its PNG as well. The
+# parameters name the EXR and its raw channels (`render.save_exr`, `render.exr_channels`):
+# version 3.1 saves nothing otherwise, and a build of it without GUI writes no colour.
 set -euo pipefail
 if [ $# -lt 2 ]; then
     echo "usage: $0 FRAKTALER3_BINARY WISDOM [ROUNDS] [DEEPFIELD]" >&2
@@ -51,6 +53,8 @@ image.height = {s["view"]["height"]}
 image.subsampling = 1
 image.subframes = 1
 render.filename = "{sys.argv[2]}"
+render.save_exr = true
+render.exr_channels = ["N0", "N1", "NF", "T", "DEX", "DEY"]
 
 [[formula]]
 power = 2''')
