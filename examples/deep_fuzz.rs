@@ -15,7 +15,8 @@
 //! descent, minibrot, misiurewicz, early-escape, floatexp-line, julia, boundary, julia-boundary,
 //! mini, real-axis; for a formula other than z² + c only the last four, which work for any
 //! formula), `--formula F` (a family, `NAME^P`, or a hybrid `a,b^3`; default z² + c; the
-//! views' Julia forms come from `julia-boundary`), `--list-formulas` (print every family at
+//! views' Julia forms come from `julia-boundary`), `--a RE,IM` (the coefficient of a formula
+//! that takes one, `redshift-rider-*`; default 1,0), `--list-formulas` (print every family at
 //! every power, one a line, and stop; `scripts/fuzz-deep.sh --formulas` loops over them).
 //!
 //! Boundary descents sample the view at every step of the way down (by perturbation about
@@ -65,6 +66,8 @@ fn flags() -> Result<Flags, String> {
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut it = args.iter();
+    let mut coef: Option<[f64; 2]> = None;
+    let a_flag = "--a";
     while let Some(a) = it.next() {
         let mut value = || it.next().ok_or(format!("{a} needs a value"));
         let bad = |a: &str| format!("{a}: not a number");
@@ -93,10 +96,15 @@ fn flags() -> Result<Flags, String> {
                 );
             }
             "--formula" => f.formula = Formula::parse(value()?, None).map_err(|e| format!("--formula: {e}"))?,
+            "--a" => {
+                let v = value()?;
+                let (re, im) = v.split_once(',').ok_or(format!("--a {v}: not RE,IM"))?;
+                coef = Some([re.parse().map_err(|_| bad(a_flag))?, im.parse().map_err(|_| bad(a_flag))?]);
+            }
             "--list-formulas" => {
                 for k in KINDS {
                     for p in k.min_power..=k.max_power {
-                        let phase = deepfield::formula::Phase { kind: k.kind, power: p };
+                        let phase = deepfield::formula::Phase::new(k.kind, p);
                         println!("{phase}");
                     }
                 }
@@ -104,6 +112,12 @@ fn flags() -> Result<Flags, String> {
             }
             other => return Err(format!("unknown flag {other}")),
         }
+    }
+    if let Some(a) = coef {
+        if f.formula.a().is_none() {
+            return Err(format!("--a: {} has no coefficient", f.formula));
+        }
+        f.formula = f.formula.with_a(a);
     }
     Ok(f)
 }

@@ -398,6 +398,10 @@ pub struct SceneArgs {
     /// pixel, c fixed).
     #[arg(long, value_name = "RE,IM", value_parser = parse_pair, allow_hyphen_values = true)]
     pub julia_c: Option<[String; 2]>,
+    /// The coefficient a of the families that take one (redshift-rider-*: a z² ± z^p + c),
+    /// as RE,IM (default 1,0, as in Kalles Fraktaler).
+    #[arg(long, value_name = "RE,IM", value_parser = parse_coefficient, allow_hyphen_values = true)]
+    pub formula_a: Option<[f64; 2]>,
     /// View centre, as RE,IM (decimal strings, any precision).
     #[arg(long, value_name = "RE,IM", value_parser = parse_pair, allow_hyphen_values = true)]
     pub center: Option<[String; 2]>,
@@ -525,6 +529,14 @@ fn parse_decimal(s: &str) -> Result<String, String> {
 fn parse_pair(s: &str) -> Result<[String; 2], String> {
     let (re, im) = s.split_once(',').ok_or_else(|| format!("`{s}` is not RE,IM (two numbers separated by a comma)"))?;
     Ok([parse_decimal(re)?, parse_decimal(im)?])
+}
+
+fn parse_coefficient(s: &str) -> Result<[f64; 2], String> {
+    let bad = || format!("`{s}` is not RE,IM (two finite numbers separated by a comma)");
+    let (re, im) = s.split_once(',').ok_or_else(bad)?;
+    let re: f64 = re.trim().parse().map_err(|_| bad())?;
+    let im: f64 = im.trim().parse().map_err(|_| bad())?;
+    if re.is_finite() && im.is_finite() { Ok([re, im]) } else { Err(bad()) }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {

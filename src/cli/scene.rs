@@ -111,9 +111,16 @@ fn apply_flags(file: &mut SceneFile, a: &SceneArgs) {
             // says otherwise.
             file.formula.c = None;
         }
+        // The scene's coefficient stays only with a formula that takes one.
+        if deepfield::formula::Formula::parse(f, None).map_or(true, |f| f.a().is_none()) {
+            file.formula.a = None;
+        }
     }
     if let Some(p) = a.power {
         file.formula.power = Some(cli(i64::from(p)));
+    }
+    if let Some(v) = a.formula_a {
+        file.formula.a = Some(cli(v));
     }
     if let Some(c) = &a.julia_c {
         // z² + c's Julia set keeps its name; any other formula takes c as its Julia form.

@@ -453,7 +453,7 @@ mod tests {
     use crate::formula::{Kind, Phase};
 
     fn ship() -> Formula {
-        Formula::single(Phase { kind: Kind::BurningShip, power: 2 })
+        Formula::single(Phase::new(Kind::BurningShip, 2))
     }
 
     #[test]

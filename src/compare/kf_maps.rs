@@ -35,6 +35,8 @@ pub trait Num: Clone {
     fn times(&self, k: u32, bits: u64) -> Self;
     /// -self (exact).
     fn neg(&self) -> Self;
+    /// The constant `v` (no derivative).
+    fn lift(v: Float) -> Self;
 }
 
 impl Num for Float {
@@ -55,6 +57,9 @@ impl Num for Float {
     }
     fn neg(&self) -> Self {
         -self.clone()
+    }
+    fn lift(v: Float) -> Self {
+        v
     }
 }
 
@@ -107,6 +112,9 @@ impl Num for Dual {
     }
     fn neg(&self) -> Self {
         Dual { v: -self.v.clone(), d: [-self.d[0].clone(), -self.d[1].clone()] }
+    }
+    fn lift(v: Float) -> Self {
+        Dual::constant(v)
     }
 }
 
@@ -174,7 +182,31 @@ pub fn defined(phase: Phase) -> bool {
         K::Mothbrot1x3 | K::Mothbrot2x2 | K::Mothbrot3x1 => p == 4,
         K::Mothbrot1x4 | K::Mothbrot2x3 | K::Mothbrot3x2 | K::Mothbrot4x1 => p == 5,
         K::Mothbrot1x5 | K::Mothbrot2x4 | K::Mothbrot3x3 | K::Mothbrot4x2 | K::Mothbrot5x1 => p == 6,
+        K::RedshiftRider1 | K::RedshiftRider2 | K::RedshiftRider3 => p == 3,
+        K::RedshiftRider4 | K::RedshiftRider5 => p == 4,
+        K::RedshiftRider6 | K::RedshiftRider7 => p == 5,
+        K::RedshiftRider8 | K::RedshiftRider9 => p == 6,
     }
+}
+
+/// Kalles Fraktaler's TheRedshiftRider formulas (types 42 to 50) as their complex reference
+/// lines are, `Xn = A * (X^2) + (X^q) + C` (or `- (X^q)`; type 44 `2 * (X^2) - (X^3)`): A
+/// times X², as complex numbers, then X^q by the binomial expansion, then C. `a` is None for
+/// type 44's literal 2.
+fn redshift<T: Num>([x, y]: [&T; 2], a: Option<[f64; 2]>, q: u32, minus: bool, [cr, ci]: [&T; 2], bits: u64) -> [T; 2] {
+    let [sr, si] = binomial_power(x, y, 2, bits);
+    let [ar2, ai2] = match a {
+        None => [sr.times(2, bits), si.times(2, bits)],
+        Some([ar, ai]) => {
+            let big = |v: f64| T::lift(Float::from_primitive_float_prec(v, 64).0);
+            let (ar, ai) = (big(ar), big(ai));
+            [ar.mul(&sr, bits).sub(&ai.mul(&si, bits), bits), ar.mul(&si, bits).add(&ai.mul(&sr, bits), bits)]
+        }
+    };
+    let [qr, qi] = binomial_power(x, y, q, bits);
+    let (re, im) =
+        if minus { (ar2.sub(&qr, bits), ai2.sub(&qi, bits)) } else { (ar2.add(&qr, bits), ai2.add(&qi, bits)) };
+    [re.add(cr, bits), im.add(ci, bits)]
 }
 
 /// Kalles Fraktaler's Mothbrot a×b (types 54 to 68, and SimonBrot 6th, 40, which is 3×3) as
@@ -387,6 +419,16 @@ fn expand<T: Num>(ev: &mut Ev, phase: Phase, [x, y]: [&T; 2], [cr, ci]: [&T; 2])
         (K::Mothbrot3x3, 6) => mothbrot(ev, [x, y], (3, 3), [cr, ci]),
         (K::Mothbrot4x2, 6) => mothbrot(ev, [x, y], (4, 2), [cr, ci]),
         (K::Mothbrot5x1, 6) => mothbrot(ev, [x, y], (5, 1), [cr, ci]),
+        // Types 42 to 50.
+        (K::RedshiftRider1, 3) => redshift([x, y], Some(phase.a.get()), 3, false, [cr, ci], b),
+        (K::RedshiftRider2, 3) => redshift([x, y], Some(phase.a.get()), 3, true, [cr, ci], b),
+        (K::RedshiftRider3, 3) => redshift([x, y], None, 3, true, [cr, ci], b),
+        (K::RedshiftRider4, 4) => redshift([x, y], Some(phase.a.get()), 4, false, [cr, ci], b),
+        (K::RedshiftRider5, 4) => redshift([x, y], Some(phase.a.get()), 4, true, [cr, ci], b),
+        (K::RedshiftRider6, 5) => redshift([x, y], Some(phase.a.get()), 5, false, [cr, ci], b),
+        (K::RedshiftRider7, 5) => redshift([x, y], Some(phase.a.get()), 5, true, [cr, ci], b),
+        (K::RedshiftRider8, 6) => redshift([x, y], Some(phase.a.get()), 6, false, [cr, ci], b),
+        (K::RedshiftRider9, 6) => redshift([x, y], Some(phase.a.get()), 6, true, [cr, ci], b),
         _ => return None,
     })
 }
@@ -452,7 +494,7 @@ mod tests {
     fn every_row_of_kinds_is_defined_and_nothing_else() {
         for k in KINDS {
             for p in 2..=10 {
-                let phase = Phase { kind: k.kind, power: p };
+                let phase = Phase::new(k.kind, p);
                 let inside = (k.min_power..=k.max_power).contains(&p);
                 assert_eq!(defined(phase), inside, "{phase}");
                 let one = f(0.5);
@@ -482,12 +524,12 @@ mod tests {
     /// negated, where conj(z)³ would give -11 + 2i).
     #[test]
     fn mandelbar_power_3_negates_the_real_part() {
-        let phase = Phase { kind: Kind::Mandelbar, power: 3 };
+        let phase = Phase::new(Kind::Mandelbar, 3);
         let (one, two, zero) = (f(1.0), f(2.0), f(0.0));
         let [re, im] = kf_step(phase, [&one, &two], [&zero, &zero], 64).unwrap();
         assert_eq!((to_f64(&re), to_f64(&im)), (11.0, -2.0));
         // Power 2 conjugates: (1 - 2i)² = -3 - 4i.
-        let phase = Phase { kind: Kind::Mandelbar, power: 2 };
+        let phase = Phase::new(Kind::Mandelbar, 2);
         let [re, im] = kf_step(phase, [&one, &two], [&zero, &zero], 64).unwrap();
         assert_eq!((to_f64(&re), to_f64(&im)), (-3.0, -4.0));
     }
@@ -495,7 +537,7 @@ mod tests {
     /// Burning Ship power 3 by hand at z = -1 - 2i: (|x| + i|y|)³ = (1 + 2i)³ = -11 - 2i.
     #[test]
     fn burning_ship_power_3_folds_both_parts() {
-        let phase = Phase { kind: Kind::BurningShip, power: 3 };
+        let phase = Phase::new(Kind::BurningShip, 3);
         let (x, y, c) = (f(-1.0), f(-2.0), f(0.5));
         let [re, im] = kf_step(phase, [&x, &y], [&c, &c], 64).unwrap();
         assert_eq!((to_f64(&re), to_f64(&im)), (-10.5, -1.5));
@@ -525,7 +567,7 @@ mod tests {
         let h = 1e-20;
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let phase = Phase { kind: k.kind, power: p };
+                let phase = Phase::new(k.kind, p);
                 let z = [0.37, -0.81];
                 let j = kf_jacobian(phase, [&f(z[0]), &f(z[1])], bits).unwrap();
                 assert!(!j.kink);
@@ -549,7 +591,7 @@ mod tests {
 
     #[test]
     fn a_fold_at_zero_is_a_kink() {
-        let phase = Phase { kind: Kind::BurningShip, power: 2 };
+        let phase = Phase::new(Kind::BurningShip, 2);
         let j = kf_jacobian(phase, [&f(0.0), &f(0.5)], 100).unwrap();
         assert!(j.kink);
         let j = kf_jacobian(Phase::QUADRATIC, [&f(0.0), &f(0.5)], 100).unwrap();

@@ -258,7 +258,7 @@ mod tests {
     /// Jacobian J of z_n in c, by central differences, then `gradient_dz`.
     #[test]
     fn a_non_conformal_derivative_is_the_gradient_of_the_jacobian() {
-        let formula = Formula::single(Phase { kind: crate::formula::Kind::BurningShip, power: 2 });
+        let formula = Formula::single(Phase::new(crate::formula::Kind::BurningShip, 2));
         let bits = 200;
         let c = [-1.7602, -0.0282];
         let one = f(1.0);
@@ -297,7 +297,7 @@ mod tests {
     /// z² + c's (-0.1 + 0.1i), do not spread at any depth a view has.
     #[test]
     fn chaotic_bounded_orbits_spread_and_attracted_ones_do_not() {
-        let ship = Formula::single(Phase { kind: crate::formula::Kind::BurningShip, power: 2 });
+        let ship = Formula::single(Phase::new(crate::formula::Kind::BurningShip, 2));
         let bits = 160;
         let dec = |t: &str| bigfloat::from_decimal(&crate::num::Decimal::parse(t).unwrap(), bits);
         let spacing = dec("1.284336128e-12").mul_prec(f(2.0 / 48.0), bits).0;

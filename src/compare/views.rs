@@ -278,6 +278,9 @@ fn scene_text(center: &BigC, radius: FloatExp, julia: Option<&[Decimal; 2]>, max
     if let Some([cr, ci]) = julia {
         let _ = writeln!(t, "c = [\"{cr}\", \"{ci}\"]");
     }
+    if let Some([ar, ai]) = spec.formula.a() {
+        let _ = writeln!(t, "a = [{ar:?}, {ai:?}]");
+    }
     let radius = crate::num::scientific(radius.log2() * std::f64::consts::LOG10_2, 9);
     let _ = writeln!(t, "[view]\ncenter = [\"{re}\", \"{im}\"]\nradius = \"{radius}\"");
     let _ = writeln!(t, "width = {}\nheight = {}\n[iteration]\nmax = {max_iter}", spec.width, spec.height);

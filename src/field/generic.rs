@@ -157,8 +157,8 @@ mod tests {
     #[test]
     fn hybrids_escape_where_they_escape() {
         let f = Formula::cycle(&[
-            Phase { kind: crate::formula::Kind::BurningShip, power: 2 },
-            Phase { kind: crate::formula::Kind::Mandelbrot, power: 3 },
+            Phase::new(crate::formula::Kind::BurningShip, 2),
+            Phase::new(crate::formula::Kind::Mandelbrot, 3),
         ])
         .unwrap();
         let s = crate::formula::Cycle(f);

@@ -27,7 +27,7 @@ use crate::cancel::Cancelled;
 use crate::formula::end::Orbit;
 use crate::formula::map::{Map, Mat2, Num, Ops, gradient_dz};
 use crate::formula::phase::MAX_PHASES;
-use crate::formula::{Family, Formula};
+use crate::formula::{Family, Formula, Phase};
 use crate::simd_level::LaneJob;
 
 /// Steps between two looks at the cancel flag.
@@ -36,6 +36,7 @@ const CANCEL_EVERY: u64 = 1 << 16;
 /// Iterates every point with family `M`, writing one [`Orbit`] per point; returns the
 /// iterations performed.
 pub fn iterate<M: Map>(
+    map: M,
     params: &OrbitParams,
     points: &[[f64; 2]],
     out: &mut [Orbit],
@@ -44,11 +45,11 @@ pub fn iterate<M: Map>(
     assert_eq!(points.len(), out.len());
     // Two vectors' worth of lanes, interleaved to hide the latency of each step; one lane
     // at the scalar level (or a level this CPU lacks).
-    match params.simd.run_lanes(Job::<M> { params, points, out, cancel, _map: M::default() }) {
+    match params.simd.run_lanes(Job::<M> { params, points, out, cancel, map }) {
         Ok(done) => done,
-        Err(Job { params, points, out, cancel, .. }) => match params.derivative {
-            false => run::<M, 1, false>(params, points, out, cancel),
-            true => run::<M, 1, true>(params, points, out, cancel),
+        Err(Job { params, points, out, cancel, map }) => match params.derivative {
+            false => run::<M, 1, false>(map, params, points, out, cancel),
+            true => run::<M, 1, true>(map, params, points, out, cancel),
         },
     }
 }
@@ -61,7 +62,7 @@ struct Job<'a, M: Map> {
     points: &'a [[f64; 2]],
     out: &'a mut [Orbit],
     cancel: &'a AtomicBool,
-    _map: M,
+    map: M,
 }
 
 impl<M: Map> LaneJob for Job<'_, M> {
@@ -69,10 +70,10 @@ impl<M: Map> LaneJob for Job<'_, M> {
 
     #[inline(always)]
     fn run<S: Simd, const L: usize>(self, _: S) -> Self::Output {
-        let Job { params, points, out, cancel, .. } = self;
+        let Job { params, points, out, cancel, map } = self;
         match params.derivative {
-            false => run::<M, L, false>(params, points, out, cancel),
-            true => run::<M, L, true>(params, points, out, cancel),
+            false => run::<M, L, false>(map, params, points, out, cancel),
+            true => run::<M, L, true>(map, params, points, out, cancel),
         }
     }
 }
@@ -129,33 +130,34 @@ impl CycleJob<'_> {
             *step = crate::with_map!(phase, M => pass::<S, M, L, DE> as PassFn<S, L>,
                 unreachable!("a validated formula has compiled code"));
         }
-        let phases = Phases { simd, steps, len: formula.phases().len() as u32 };
+        let phases = Phases { simd, steps, formula, len: formula.phases().len() as u32 };
         run_cycle::<S, L, DE>(phases, params, points, out, cancel)
     }
 }
 
-/// A pass of one phase over the lanes: z and the Jacobian stepped by that phase's family.
-type PassFn<S, const L: usize> = fn(S, &mut Lanes<L>, f64);
+/// A pass of one phase over the lanes: z and the Jacobian stepped by that phase's map.
+type PassFn<S, const L: usize> = fn(S, &Phase, &mut Lanes<L>, f64);
 
 /// One phase's pass, out of line (one function per family in the table), its body compiled
 /// under the level's target features by pulp's `vectorize`.
 #[inline(never)]
-fn pass<S: Simd, M: Map, const L: usize, const DE: bool>(simd: S, s: &mut Lanes<L>, add: f64) {
+fn pass<S: Simd, M: Map, const L: usize, const DE: bool>(simd: S, phase: &Phase, s: &mut Lanes<L>, add: f64) {
     struct Op<'a, M, const L: usize, const DE: bool>(&'a mut Lanes<L>, f64, M);
     impl<M: Map, const L: usize, const DE: bool> WithSimd for Op<'_, M, L, DE> {
         type Output = ();
         #[inline(always)]
         fn with_simd<S: Simd>(self, _: S) {
-            step_lanes::<M, L, DE>(self.0, self.1);
+            step_lanes::<M, L, DE>(&self.2, self.0, self.1);
         }
     }
-    simd.vectorize(Op::<M, L, DE>(s, add, M::default()));
+    simd.vectorize(Op::<M, L, DE>(s, add, M::of(phase)));
 }
 
 /// A hybrid: the pass of each phase, by phase.
 struct Phases<S, const L: usize> {
     simd: S,
     steps: [PassFn<S, L>; MAX_PHASES],
+    formula: Formula,
     len: u32,
 }
 
@@ -163,16 +165,16 @@ impl<S: Simd, const L: usize> Phases<S, L> {
     /// Steps every lane by the map of phase `g`.
     #[inline(always)]
     fn step(&self, g: u32, s: &mut Lanes<L>, add: f64) {
-        (self.steps[g as usize])(self.simd, s, add);
+        (self.steps[g as usize])(self.simd, &self.formula.phases()[g as usize], s, add);
     }
 }
 
 /// One step of every lane by family `M`: the Jacobian (with `DE`), then z ← f(z) + c.
 #[inline(always)]
-fn step_lanes<M: Map, const L: usize, const DE: bool>(s: &mut Lanes<L>, add: f64) {
+fn step_lanes<M: Map, const L: usize, const DE: bool>(map: &M, s: &mut Lanes<L>, add: f64) {
     if DE {
         let z = [s.x, s.y];
-        let a = M::jacobian_n(z);
+        let a = map.jacobian_n(z);
         let b = s.j;
         // The scalar kernel's `mat_mul`, then the identity added (Mandelbrot form).
         let m00 = a[0][0].mul(b[0][0]).add(a[0][1].mul(b[1][0]));
@@ -185,7 +187,7 @@ fn step_lanes<M: Map, const L: usize, const DE: bool>(s: &mut Lanes<L>, add: f64
             s.j = [[m00, m01], [m10, m11]];
         }
     }
-    let f = M::apply_n([s.x, s.y]);
+    let f = map.apply_n([s.x, s.y]);
     s.x = f[0].add(s.cx);
     s.y = f[1].add(s.cy);
 }
@@ -400,6 +402,7 @@ fn run_cycle<S: Simd, const L: usize, const DE: bool>(
 
 #[inline(always)]
 fn run<M: Map, const L: usize, const DE: bool>(
+    map: M,
     params: &OrbitParams,
     points: &[[f64; 2]],
     out: &mut [Orbit],
@@ -454,7 +457,7 @@ fn run<M: Map, const L: usize, const DE: bool>(
             let later = s.save_at[k].saturating_mul(2).saturating_sub(n0);
             s.save_at[k] = if save { later } else { s.save_at[k] };
         }
-        step_lanes::<M, L, DE>(&mut s, add);
+        step_lanes::<M, L, DE>(&map, &mut s, add);
         for k in 0..L {
             s.n[k] = s.n[k].wrapping_add(1);
         }
@@ -472,7 +475,7 @@ mod tests {
     use crate::formula::{Cycle, Single};
     use crate::simd_level::SimdLevel;
 
-    fn check<M: Map>(family: Family, center: [f64; 2], radius: f64) {
+    fn check<M: Map + Default>(family: Family, center: [f64; 2], radius: f64) {
         let points: Vec<[f64; 2]> = (0..1500)
             .map(|k| {
                 [
@@ -497,7 +500,7 @@ mod tests {
             for simd in SimdLevel::usable() {
                 let params = OrbitParams { simd, ..base };
                 let mut got = vec![Orbit::interior(); points.len()];
-                iterate::<M>(&params, &points, &mut got, &AtomicBool::new(false)).unwrap();
+                iterate::<M>(M::default(), &params, &points, &mut got, &AtomicBool::new(false)).unwrap();
                 for (k, (a, b)) in got.iter().zip(&want).enumerate() {
                     assert_eq!(a.n, b.n, "{simd:?} de={derivative} point {:?}", points[k]);
                     assert_eq!(a.z.map(f64::to_bits), b.z.map(f64::to_bits), "{simd:?} point {:?}", points[k]);

@@ -237,11 +237,11 @@ fn generic_strip(
     let mut orbits = vec![Orbit::interior(); points.len()];
     let formula = params.orbit.formula;
     let iterations = if traps.iter().all(|t| !t.observes_orbit()) && formula.phases().len() == 1 {
-        crate::with_map!(formula.phases()[0], M => {
+        crate::with_map!(formula.phases()[0], m: M => {
             points
                 .par_chunks(GENERIC_CHUNK)
                 .zip(orbits.par_chunks_mut(GENERIC_CHUNK))
-                .map(|(p, o)| generic_lanes::iterate::<M>(&params.orbit, p, o, cancel))
+                .map(|(p, o)| generic_lanes::iterate::<M>(m, &params.orbit, p, o, cancel))
                 .try_reduce(|| 0, |a, b| Ok(a + b))?
         }, unreachable!("a validated formula has compiled code"))
     } else if traps.iter().all(|t| !t.observes_orbit()) {

@@ -100,6 +100,24 @@ pub enum Kind {
     CelticRealQuasiHeart4,
     /// z³ (|x| + i|y|)³ + c, Mothbrot 3×3 under its other name (type 40).
     SimonBrot6,
+    /// a z² + z³ + c (type 42).
+    RedshiftRider1,
+    /// a z² - z³ + c (type 43).
+    RedshiftRider2,
+    /// 2 z² - z³ + c (type 44).
+    RedshiftRider3,
+    /// a z² + z⁴ + c (type 45).
+    RedshiftRider4,
+    /// a z² - z⁴ + c (type 46).
+    RedshiftRider5,
+    /// a z² + z⁵ + c (type 47).
+    RedshiftRider6,
+    /// a z² - z⁵ + c (type 48).
+    RedshiftRider7,
+    /// a z² + z⁶ + c (type 49).
+    RedshiftRider8,
+    /// a z² - z⁶ + c (type 50).
+    RedshiftRider9,
     /// u (|Re u| + i|Im u|) + c, u = z² (type 51).
     SimonBrot2,
     /// z^1 (|x| + i|y|)^1 + c (type 54).
@@ -160,9 +178,37 @@ pub struct KindInfo {
     /// For a product family ([`super::product`]): (PRE, A, B) of u^A (|Re u| + i|Im u|)^B,
     /// u = z^PRE; its fold and sign fields are then [`PRODUCT`], which no composition has.
     pub factors: Option<(u32, u32, u32)>,
+    /// For a family of two terms ([`super::sum`]), a z² + z^p (false) or a z² - z^p (true);
+    /// its fold and sign fields are then [`PRODUCT`].
+    pub sum: Option<bool>,
+    /// Where the family's coefficient a comes from.
+    pub coef: Coefficient,
 }
 
-/// What the fold and sign fields of a product family's row hold: no composition's steps,
+/// Where a family's coefficient a comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coefficient {
+    /// The family has none.
+    None,
+    /// The user's (`a` in scenes, `--a` on the command line, Kalles Fraktaler's
+    /// `FactorAR`, `FactorAI`), 1 when none is given, as in Kalles Fraktaler.
+    User,
+    /// A constant of the family (Kalles Fraktaler writes some families with a number
+    /// where their relatives have a).
+    Fixed(i32),
+}
+
+impl Coefficient {
+    /// The value a phase of the family starts with.
+    pub fn default(self) -> [f64; 2] {
+        match self {
+            Coefficient::Fixed(v) => [v as f64, 0.0],
+            _ => [1.0, 0.0],
+        }
+    }
+}
+
+/// What the fold and sign fields of a product's or a sum's row hold: no composition's steps,
 /// so code that reads a row as a composition cannot take a product for one.
 pub const PRODUCT: u8 = 0x80;
 
@@ -188,6 +234,8 @@ const fn row(
         sign,
         sign3: sign,
         factors: None,
+        sum: None,
+        coef: Coefficient::None,
     }
 }
 
@@ -207,6 +255,25 @@ const fn prow(
     }
 }
 
+/// The row of a family of two terms ([`super::sum`]): a z² + z^q, or a z² - z^q where `neg`,
+/// of power q.
+const fn srow(
+    kind: Kind,
+    name: &'static str,
+    kf_name: &'static str,
+    kf_type: u32,
+    q: u32,
+    neg: bool,
+    coef: Coefficient,
+) -> KindInfo {
+    KindInfo {
+        sum: Some(neg),
+        coef,
+        sign3: PRODUCT,
+        ..row(kind, name, kf_name, kf_type, (q, q), PRODUCT, PRODUCT, PRODUCT)
+    }
+}
+
 use Kind as K;
 
 /// The imaginary part folded after the power and given the sign of x, of y, or of xy.
@@ -215,7 +282,7 @@ const BY_Y: u8 = FOLD_IM | IM_BY_Y;
 const BY_XY: u8 = FOLD_IM | IM_BY_X | IM_BY_Y;
 
 /// Every family, in Kalles Fraktaler's order.
-pub const KINDS: [KindInfo; 57] = [
+pub const KINDS: [KindInfo; 66] = [
     row(K::Mandelbrot, "mandelbrot", "Mandelbrot", 0, (2, 10), FOLD_NONE, FOLD_NONE, SIGN_NONE),
     row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
     row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
@@ -503,6 +570,87 @@ pub const KINDS: [KindInfo; 57] = [
         SIGN_NONE,
     ),
     prow(K::SimonBrot6, "simonbrot-6th", "SimonBrot 6th", 40, (1, 3, 3)),
+    srow(
+        K::RedshiftRider1,
+        "redshift-rider-1",
+        "TheRedshiftRider 1: a * z^2 + z^3 + c",
+        42,
+        3,
+        false,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider2,
+        "redshift-rider-2",
+        "TheRedshiftRider 2: a * z^2 - z^3 + c",
+        43,
+        3,
+        true,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider3,
+        "redshift-rider-3",
+        "TheRedshiftRider 3: 2 * z^2 - z^3 + c",
+        44,
+        3,
+        true,
+        Coefficient::Fixed(2),
+    ),
+    srow(
+        K::RedshiftRider4,
+        "redshift-rider-4",
+        "TheRedshiftRider 4: a * z^2 + z^4 + c",
+        45,
+        4,
+        false,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider5,
+        "redshift-rider-5",
+        "TheRedshiftRider 5: a * z^2 - z^4 + c",
+        46,
+        4,
+        true,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider6,
+        "redshift-rider-6",
+        "TheRedshiftRider 6: a * z^2 + z^5 + c",
+        47,
+        5,
+        false,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider7,
+        "redshift-rider-7",
+        "TheRedshiftRider 7: a * z^2 - z^5 + c",
+        48,
+        5,
+        true,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider8,
+        "redshift-rider-8",
+        "TheRedshiftRider 8: a * z^2 + z^6 + c",
+        49,
+        6,
+        false,
+        Coefficient::User,
+    ),
+    srow(
+        K::RedshiftRider9,
+        "redshift-rider-9",
+        "TheRedshiftRider 9: a * z^2 - z^6 + c",
+        50,
+        6,
+        true,
+        Coefficient::User,
+    ),
     prow(K::SimonBrot2, "simonbrot2-4th", "SimonBrot2 4th", 51, (2, 1, 1)),
     prow(K::Mothbrot1x1, "mothbrot-1x1", "Mothbrot 2nd 1x1", 54, (1, 1, 1)),
     prow(K::Mothbrot1x2, "mothbrot-1x2", "Mothbrot 3rd 1x2", 55, (1, 1, 2)),
@@ -567,11 +715,22 @@ impl Kind {
     }
 
     /// The four steps of the map at power `p`: (fold in, power, fold out, sign); for a
-    /// product family, ([`PRODUCT`], p, [`PRODUCT`], [`PRODUCT`]), which no composition is.
+    /// product or a sum, ([`PRODUCT`], p, [`PRODUCT`], [`PRODUCT`]), which no composition is.
     #[inline(always)]
     pub fn shape(self, p: u32) -> (u8, u32, u8, u8) {
         let i = self.info();
         (i.fold_in, p, i.fold_out, if p == 3 { i.sign3 } else { i.sign })
+    }
+
+    /// True when the user gives the family its coefficient a ([`Coefficient::User`]).
+    pub fn takes_a(self) -> bool {
+        self.info().coef == Coefficient::User
+    }
+
+    /// Some(negated) for a family of two terms ([`KindInfo::sum`]), None otherwise.
+    #[inline(always)]
+    pub fn sum(self) -> Option<bool> {
+        self.info().sum
     }
 
     /// (PRE, A, B) for a product family ([`KindInfo::factors`]), None for a composition.
@@ -583,6 +742,13 @@ impl Kind {
     /// The map at power `p` in words, derived from its four steps (what `deepfield formulas`
     /// prints): `|Re w| - i Im w + c, w = (|x| + iy)^2`.
     pub fn definition(self, p: u32) -> String {
+        if let Some(neg) = self.sum() {
+            let a = match self.info().coef {
+                Coefficient::Fixed(v) => v.to_string(),
+                _ => "a".into(),
+            };
+            return format!("{a} z^2 {} z^{p} + c", if neg { "-" } else { "+" });
+        }
         if let Some((pre, a, b)) = self.factors() {
             let power = |w: &str, n: u32| if n == 1 { w.to_string() } else { format!("{w}^{n}") };
             return if pre == 1 {
@@ -642,7 +808,9 @@ mod tests {
             assert_eq!(Kind::from_name(a.name), Some(a.kind));
             assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
         }
-        assert_eq!(Kind::from_kf_type(42), None, "TheRedshiftRider has KF's coefficient a");
+        assert_eq!(Kind::from_kf_type(41), None, "HPDZ Buffalo is refused");
+        assert_eq!(Kind::from_kf_type(44), Some(Kind::RedshiftRider3));
+        assert!(Kind::RedshiftRider1.takes_a() && !Kind::RedshiftRider3.takes_a() && !Kind::Mandelbrot.takes_a());
         assert_eq!(Kind::from_kf_type(33), Some(Kind::SimonBrot4));
     }
 

@@ -13,6 +13,7 @@
 //! [`diffabs`]), and the real 2×2 Jacobian ([`Map::jacobian`]) for derivatives and
 //! bilinear approximation.
 
+use super::phase::Phase;
 use crate::num::bigcomplex::BigC;
 use crate::num::real::{Real, cadd, cmul};
 
@@ -218,36 +219,40 @@ impl<const L: usize> Num for [f64; L] {
 }
 
 /// One map z -> f(z) of a family (c is added by the caller), in every arithmetic the
-/// engines use.
-pub trait Map: Copy + Default + Send + Sync + 'static {
+/// engines use. A value of the type is the map: zero-sized for the families that are fixed
+/// by their type (the kernels then hold nothing but the family's code), the coefficient for
+/// those that take one ([`super::sum`]).
+pub trait Map: Copy + Send + Sync + 'static {
     /// The power p (the degree that smooth iteration and the escape rate use).
     const POWER: u32;
     /// True when f is complex-analytic (no fold, no negation of one part alone): its
     /// Jacobian is then a complex number.
     const CONFORMAL: bool;
+    /// The map of `phase` (whose family and power are this type's).
+    fn of(phase: &Phase) -> Self;
     /// f(z) in f64.
     #[inline(always)]
-    fn apply(z: [f64; 2]) -> [f64; 2] {
-        Self::apply_n(z)
+    fn apply(&self, z: [f64; 2]) -> [f64; 2] {
+        self.apply_n(z)
     }
     /// f(z) for one sample (f64) or several in lanes, the same operations in each.
-    fn apply_n<N: Num>(z: [N; 2]) -> [N; 2];
+    fn apply_n<N: Num>(&self, z: [N; 2]) -> [N; 2];
     /// f(z) in big floats at `z.bits`.
-    fn apply_big(z: &BigC) -> BigC;
+    fn apply_big(&self, z: &BigC) -> BigC;
     /// f(Z + d) - f(Z) for a reference value Z (f64) and a delta d, without cancellation:
     /// the power by the binomial expansion in d, the folds by [`diffabs`].
-    fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2];
+    fn delta<R: Real>(&self, z: [f64; 2], d: [R; 2]) -> [R; 2];
     /// [`Map::delta`] in f64 for one sample or several in lanes (each lane its own Z):
     /// the same operations in the same order, so each lane has the bits of
     /// `delta::<f64>`.
-    fn delta_n<N: Num>(z: [N; 2], d: [N; 2]) -> [N; 2];
+    fn delta_n<N: Num>(&self, z: [N; 2], d: [N; 2]) -> [N; 2];
     /// The Jacobian of f at z (a fold's derivative taken as +1 at 0).
     #[inline(always)]
-    fn jacobian(z: [f64; 2]) -> Mat2 {
-        Self::jacobian_n(z)
+    fn jacobian(&self, z: [f64; 2]) -> Mat2 {
+        self.jacobian_n(z)
     }
     /// The Jacobian for one sample or several in lanes.
-    fn jacobian_n<N: Num>(z: [N; 2]) -> [[N; 2]; 2];
+    fn jacobian_n<N: Num>(&self, z: [N; 2]) -> [[N; 2]; 2];
 }
 
 /// The family composed of a fold `IN`, the power `P`, a fold `OUT` and a negation `SIGN`.
@@ -434,11 +439,16 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     const CONFORMAL: bool = IN == FOLD_NONE && OUT == FOLD_NONE && SIGN == SIGN_NONE;
 
     #[inline(always)]
-    fn apply_n<N: Num>(z: [N; 2]) -> [N; 2] {
+    fn of(_: &Phase) -> Self {
+        Ops
+    }
+
+    #[inline(always)]
+    fn apply_n<N: Num>(&self, z: [N; 2]) -> [N; 2] {
         signed(SIGN, fold_out(OUT, z, power::<P, N>(fold(IN, z))))
     }
 
-    fn apply_big(z: &BigC) -> BigC {
+    fn apply_big(&self, z: &BigC) -> BigC {
         let mut u = fold_big(OUT, fold_big(IN, z.clone()).pow(P));
         // sgn(x), sgn(y) as `Num::sgn` takes them: -1 below zero only.
         let flip = (OUT & IM_BY_X != 0 && z.re < 0u32) != (OUT & IM_BY_Y != 0 && z.im < 0u32);
@@ -453,7 +463,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     }
 
     #[inline(always)]
-    fn delta<R: Real>(z: [f64; 2], d: [R; 2]) -> [R; 2] {
+    fn delta<R: Real>(&self, z: [f64; 2], d: [R; 2]) -> [R; 2] {
         let dw = [
             if IN & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
             if IN & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
@@ -485,7 +495,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     }
 
     #[inline(always)]
-    fn delta_n<N: Num>(z: [N; 2], d: [N; 2]) -> [N; 2] {
+    fn delta_n<N: Num>(&self, z: [N; 2], d: [N; 2]) -> [N; 2] {
         let dw = [
             if IN & FOLD_RE != 0 { z[0].diffabs(d[0]) } else { d[0] },
             if IN & FOLD_IM != 0 { z[1].diffabs(d[1]) } else { d[1] },
@@ -514,7 +524,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
     }
 
     #[inline(always)]
-    fn jacobian_n<N: Num>(z: [N; 2]) -> [[N; 2]; 2] {
+    fn jacobian_n<N: Num>(&self, z: [N; 2]) -> [[N; 2]; 2] {
         let one = N::splat(1.0);
         let w = fold(IN, z);
         // p w^(p-1), the complex derivative of the power.
@@ -589,18 +599,18 @@ mod tests {
 
     const DELTAS: [[f64; 2]; 4] = [[1e-3, -2e-3], [-0.5, 0.1], [2e-9, 7e-9], [-0.31, 0.8]];
 
-    fn check_delta<M: Map>() {
-        checks::check_delta::<M>(&POINTS, &DELTAS, 4e-14);
+    fn check_delta<M: Map + Default>() {
+        checks::check_delta(&M::default(), &POINTS, &DELTAS, 4e-14);
     }
 
-    fn check_jacobian<M: Map>() {
-        checks::check_jacobian::<M>(&POINTS);
+    fn check_jacobian<M: Map + Default>() {
+        checks::check_jacobian(&M::default(), &POINTS);
     }
 
-    fn check_big<M: Map>() {
+    fn check_big<M: Map + Default>() {
         for z in POINTS {
-            let f = M::apply(z);
-            let b = M::apply_big(&BigC::from_f64(z[0], z[1], 200));
+            let f = M::default().apply(z);
+            let b = M::default().apply_big(&BigC::from_f64(z[0], z[1], 200));
             let b = checks::parse(&b);
             assert!((f[0] - b[0]).abs() < 1e-14 && (f[1] - b[1]).abs() < 1e-14, "{z:?}");
         }
@@ -686,17 +696,17 @@ mod tests {
         const L: usize = 8;
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let phase = Phase { kind: k.kind, power: p };
-                crate::with_map!(phase, M => {
+                let phase = Phase::new(k.kind, p);
+                crate::with_map!(phase, m: M => {
                     for chunk in cases.chunks(L) {
                         let mut z = [[0.0; L]; 2];
                         let mut d = [[0.0; L]; 2];
                         for (j, (zc, dc)) in chunk.iter().enumerate() {
                             (z[0][j], z[1][j], d[0][j], d[1][j]) = (zc[0], zc[1], dc[0], dc[1]);
                         }
-                        let got = M::delta_n(z, d);
+                        let got = m.delta_n(z, d);
                         for (j, (zc, dc)) in chunk.iter().enumerate() {
-                            let want = M::delta::<f64>(*zc, *dc);
+                            let want = m.delta::<f64>(*zc, *dc);
                             let lane = [got[0][j], got[1][j]];
                             assert_eq!(lane.map(f64::to_bits), want.map(f64::to_bits), "{phase} {zc:?} {dc:?}");
                         }
@@ -713,9 +723,9 @@ mod tests {
         for z in POINTS.into_iter().chain([[0.0, 0.5], [-0.7, 0.0], [0.4, -0.4]]) {
             let [x, y] = z;
             let close = |a: f64, b: f64| (a - b).abs() <= 1e-14 * (1.0 + b.abs());
-            assert!(close(QuasiPerp3::apply(z)[1], -(y * (3.0 * x * x - y * y).abs())), "{z:?}");
-            assert!(close(ImagQuasi4::apply(z)[1], 4.0 * x * (y * (x * x - y * y)).abs()), "{z:?}");
-            assert!(close(CelticFalseHeart4::apply(z)[1], 4.0 * x * y * (x * x - y * y).abs()), "{z:?}");
+            assert!(close(QuasiPerp3::default().apply(z)[1], -(y * (3.0 * x * x - y * y).abs())), "{z:?}");
+            assert!(close(ImagQuasi4::default().apply(z)[1], 4.0 * x * (y * (x * x - y * y)).abs()), "{z:?}");
+            assert!(close(CelticFalseHeart4::default().apply(z)[1], 4.0 * x * y * (x * x - y * y).abs()), "{z:?}");
         }
     }
 

@@ -2,7 +2,8 @@
 //!
 //! z² + c, the map most views use, has its exact operation sequence here ([`step`],
 //! [`deriv_step`]) for its own kernels; every other family of maps is a row of
-//! [`kind::KINDS`], composed by [`map`] (or a product of two maps, [`product`]) and chosen, alone or in hybrids, as a
+//! [`kind::KINDS`], composed by [`map`] (or a product of two maps, [`product`], or a sum of two powers with
+//! a coefficient, [`sum`]) and chosen, alone or in hybrids, as a
 //! [`phase::Formula`].
 //!
 //! Every f64 path (scalar, SIMD, traps) must produce bit-identical orbits, so the exact
@@ -19,6 +20,7 @@ pub mod kind;
 pub mod map;
 pub mod phase;
 pub mod product;
+pub mod sum;
 
 pub use kind::Kind;
 pub use phase::{Cycle, Formula, FormulaError, Phase, Single, Stepper};

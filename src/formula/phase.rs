@@ -18,18 +18,61 @@ use crate::num::real::Real;
 /// The most phases a hybrid may have.
 pub const MAX_PHASES: usize = 8;
 
-/// One family at one power.
+/// A family's complex coefficient a (Kalles Fraktaler's `FactorAR` + i `FactorAI`), held as
+/// the bits of its parts so that phases compare and hash exactly. Families without one
+/// hold 1.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Coef([u64; 2]);
+
+impl Coef {
+    /// 1 + 0i, Kalles Fraktaler's default a.
+    pub const ONE: Coef = Coef([1f64.to_bits(), 0f64.to_bits()]);
+
+    /// The coefficient re + i im (a zero of either sign is kept as +0, so that equal
+    /// values are equal phases).
+    pub fn new([re, im]: [f64; 2]) -> Coef {
+        Coef([(re + 0.0).to_bits(), (im + 0.0).to_bits()])
+    }
+
+    /// re, im.
+    #[inline(always)]
+    pub fn get(self) -> [f64; 2] {
+        [f64::from_bits(self.0[0]), f64::from_bits(self.0[1])]
+    }
+}
+
+impl fmt::Debug for Coef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [re, im] = self.get();
+        write!(f, "{re:?}{im:+?}i")
+    }
+}
+
+/// One family at one power, with its coefficient where the family has one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Phase {
     /// The family.
     pub kind: Kind,
     /// Its power.
     pub power: u32,
+    /// Its coefficient a: the user's for a family that takes one ([`Kind::takes_a`]), the
+    /// family's own constant for the others.
+    pub a: Coef,
 }
 
 impl Phase {
     /// z² + c.
-    pub const QUADRATIC: Phase = Phase { kind: Kind::Mandelbrot, power: 2 };
+    pub const QUADRATIC: Phase = Phase { kind: Kind::Mandelbrot, power: 2, a: Coef::ONE };
+
+    /// `kind` at `power`, with the family's own coefficient (1 where the user may set one).
+    pub fn new(kind: Kind, power: u32) -> Phase {
+        Phase { kind, power, a: Coef::new(kind.info().coef.default()) }
+    }
+
+    /// This phase with coefficient `a`, where the family takes one; unchanged otherwise.
+    pub fn with_a(self, a: [f64; 2]) -> Phase {
+        if self.kind.takes_a() { Phase { a: Coef::new(a), ..self } } else { self }
+    }
 }
 
 impl fmt::Display for Phase {
@@ -84,6 +127,22 @@ impl Formula {
         Some(Formula { phases: all, len: phases.len() as u8 })
     }
 
+    /// This formula with coefficient `a` on every phase whose family takes one (one a for
+    /// the whole formula, as Kalles Fraktaler has one `FactorAR`, `FactorAI`).
+    pub fn with_a(mut self, a: [f64; 2]) -> Formula {
+        // Every slot, the unused ones too: they hold copies of the first phase, and equal
+        // formulas must hold equal slots.
+        for p in &mut self.phases {
+            *p = p.with_a(a);
+        }
+        self
+    }
+
+    /// The coefficient a of the phases that take one; None when no phase does.
+    pub fn a(&self) -> Option<[f64; 2]> {
+        self.phases().iter().find(|p| p.kind.takes_a()).map(|p| p.a.get())
+    }
+
     /// The phases, in order.
     pub fn phases(&self) -> &[Phase] {
         &self.phases[..self.len as usize]
@@ -103,10 +162,7 @@ impl Formula {
 
     /// True when every phase is complex-analytic (one complex derivative).
     pub fn is_conformal(&self) -> bool {
-        self.phases().iter().all(|p| {
-            let (i, _, o, s) = p.kind.shape(p.power);
-            i == 0 && o == 0 && s == 0
-        })
+        self.phases().iter().all(|p| crate::with_map!(*p, M => <M as Map>::CONFORMAL, false))
     }
 
     /// ln of the escape rate: the mean of ln p over the cycle (smooth iteration divides by
@@ -155,7 +211,7 @@ impl Formula {
                 };
                 return Err(FormulaError(format!("`{name}` comes in {range}, not {p}")));
             }
-            phases.push(Phase { kind, power: p });
+            phases.push(Phase::new(kind, p));
         }
         Formula::cycle(&phases).ok_or_else(|| FormulaError("a formula needs a family".into()))
     }
@@ -188,24 +244,24 @@ pub trait Stepper: Copy + Send + Sync + 'static {
 }
 
 /// One family at one power, as a type.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub struct Single<M: Map>(pub M);
 
 impl<M: Map> Stepper for Single<M> {
     #[inline(always)]
     fn apply(&self, _: u32, z: [f64; 2]) -> [f64; 2] {
-        M::apply(z)
+        self.0.apply(z)
     }
     #[inline(always)]
     fn delta<R: Real>(&self, _: u32, z: [f64; 2], d: [R; 2]) -> [R; 2] {
-        M::delta(z, d)
+        self.0.delta(z, d)
     }
     #[inline(always)]
     fn jacobian(&self, _: u32, z: [f64; 2]) -> Mat2 {
-        M::jacobian(z)
+        self.0.jacobian(z)
     }
     fn apply_big(&self, _: u32, z: &BigC) -> BigC {
-        M::apply_big(z)
+        self.0.apply_big(z)
     }
     #[inline(always)]
     fn period(&self) -> u32 {
@@ -220,18 +276,18 @@ pub struct Cycle(pub Formula);
 impl Stepper for Cycle {
     #[inline(always)]
     fn apply(&self, n: u32, z: [f64; 2]) -> [f64; 2] {
-        crate::with_map!(self.0.phase(n), M => M::apply(z), unreachable!("validated phase"))
+        crate::with_map!(self.0.phase(n), m: M => m.apply(z), unreachable!("validated phase"))
     }
     #[inline(always)]
     fn delta<R: Real>(&self, n: u32, z: [f64; 2], d: [R; 2]) -> [R; 2] {
-        crate::with_map!(self.0.phase(n), M => M::delta(z, d), unreachable!("validated phase"))
+        crate::with_map!(self.0.phase(n), m: M => m.delta(z, d), unreachable!("validated phase"))
     }
     #[inline(always)]
     fn jacobian(&self, n: u32, z: [f64; 2]) -> Mat2 {
-        crate::with_map!(self.0.phase(n), M => M::jacobian(z), unreachable!("validated phase"))
+        crate::with_map!(self.0.phase(n), m: M => m.jacobian(z), unreachable!("validated phase"))
     }
     fn apply_big(&self, n: u32, z: &BigC) -> BigC {
-        crate::with_map!(self.0.phase(n), M => M::apply_big(z), unreachable!("validated phase"))
+        crate::with_map!(self.0.phase(n), m: M => m.apply_big(z), unreachable!("validated phase"))
     }
     #[inline(always)]
     fn period(&self) -> u32 {
@@ -239,14 +295,26 @@ impl Stepper for Cycle {
     }
 }
 
-/// Runs `$body` with `$M` the [`Map`] type of `$phase` (a [`Phase`]), or `$none` when the
+/// Runs `$body` with `$M` the [`Map`] type of `$phase` (a [`Phase`]; with `m: M =>`, `m`
+/// its map, [`Map::of`] the phase), or `$none` when the
 /// phase is not one the table of families holds (a test checks none is missing). The list
-/// is every (PRE, A, B) of a product family and every (fold in, power, fold out, sign) of a
-/// composition that the table of families uses.
+/// is every (Q, negated) of a sum, every (PRE, A, B) of a product family and every (fold in,
+/// power, fold out, sign) of a composition that the table of families uses.
 #[macro_export]
 macro_rules! with_map {
+    ($phase:expr, $m:ident : $M:ident => $body:expr, $none:expr) => {{
+        let phase_of_map: $crate::formula::Phase = $phase;
+        $crate::with_map!(phase_of_map, $M => {
+            #[allow(unused_imports)]
+            use $crate::formula::map::Map as _;
+            let $m = <$M as $crate::formula::map::Map>::of(&phase_of_map);
+            $body
+        }, $none)
+    }};
     ($phase:expr, $M:ident => $body:expr, $none:expr) => {
         $crate::__map_arms!($phase, $M, $body, $none;
+            // the sums a z^2 ± z^Q: (Q, negated)
+            [(3, false), (3, true), (4, false), (4, true), (5, false), (5, true), (6, false), (6, true)];
             // the products u^A (|Re u| + i|Im u|)^B, u = z^PRE: (PRE, A, B)
             [(1, 2, 2), (1, 3, 3), (2, 1, 1), (1, 1, 1), (1, 1, 2), (1, 2, 1), (1, 1, 3), (1, 3, 1),
              (1, 1, 4), (1, 2, 3), (1, 3, 2), (1, 4, 1), (1, 1, 5), (1, 2, 4), (1, 4, 2), (1, 5, 1)];
@@ -282,22 +350,28 @@ macro_rules! with_map {
 #[macro_export]
 macro_rules! __map_arms {
     ($phase:expr, $M:ident, $body:expr, $none:expr;
+     [ $( ($q:literal, $neg:literal) ),* ];
      [ $( ($pre:literal, $a:literal, $b:literal) ),* ];
      $( ($i:literal, $p:literal, $o:literal, $s:literal) ),* ) => {{
         let phase: $crate::formula::Phase = $phase;
-        match phase.kind.factors() {
-            None => match phase.kind.shape(phase.power) {
+        match (phase.kind.sum(), phase.kind.factors()) {
+            $( (Some($neg), _) if phase.power == $q => {
+                type $M = $crate::formula::sum::Sum<$q, $neg>;
+                $body
+            } )*
+            (Some(_), _) => $none,
+            (None, None) => match phase.kind.shape(phase.power) {
                 $( ($i, $p, $o, $s) => {
                     type $M = $crate::formula::map::Ops<$i, $p, $o, $s>;
                     $body
                 } )*
                 _ => $none,
             },
-            $( Some(($pre, $a, $b)) => {
+            $( (None, Some(($pre, $a, $b))) => {
                 type $M = $crate::formula::product::Product<$pre, $a, $b>;
                 $body
             } )*
-            Some(_) => $none,
+            (None, Some(_)) => $none,
         }
     }};
 }
@@ -309,8 +383,8 @@ macro_rules! with_stepper {
     ($formula:expr, $s:ident => $body:expr) => {{
         let formula: $crate::formula::Formula = $formula;
         if formula.phases().len() == 1 {
-            $crate::with_map!(formula.phases()[0], M => {
-                let $s = $crate::formula::Single::<M>(M::default());
+            $crate::with_map!(formula.phases()[0], m: M => {
+                let $s = $crate::formula::Single::<M>(m);
                 $body
             }, {
                 let $s = $crate::formula::Cycle(formula);
@@ -326,7 +400,7 @@ macro_rules! with_stepper {
 /// The map of `phase` in f64 (c not added): the one-off uses (seeds, tests) that need no
 /// compiled loop.
 pub fn apply(phase: Phase, z: [f64; 2]) -> [f64; 2] {
-    crate::with_map!(phase, M => M::apply(z), [f64::NAN; 2])
+    crate::with_map!(phase, m: M => m.apply(z), [f64::NAN; 2])
 }
 
 #[cfg(test)]
@@ -338,7 +412,7 @@ mod tests {
     fn every_family_at_every_power_has_compiled_code() {
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let phase = Phase { kind: k.kind, power: p };
+                let phase = Phase::new(k.kind, p);
                 let known = crate::with_map!(phase, M => M::POWER == p, false);
                 assert!(known, "{phase} has no arm in with_map!");
             }

@@ -153,7 +153,7 @@ mod tests {
     /// is z² + c's), its period-1 component about 0, and nothing far outside.
     #[test]
     fn burning_ship_periods() {
-        let ship = Formula::single(Phase { kind: Kind::BurningShip, power: 2 });
+        let ship = Formula::single(Phase::new(Kind::BurningShip, 2));
         let at = |re: f64, im: f64, r: f64| ball_period(ship, &BigC::from_f64(re, im, 128), FloatExp::from(r), 1000);
         assert_eq!(at(-1.7549, 0.0, 1e-3), Some(3));
         assert_eq!(at(0.0, 0.0, 0.1), Some(1));

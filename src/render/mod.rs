@@ -328,7 +328,10 @@ pub fn describe_formula(scene: &Scene) -> String {
         FamilySpec::Mandelbrot => "Mandelbrot form".to_string(),
         FamilySpec::Julia { c } => format!("Julia form, c = {}, {}", c[0].text(), c[1].text()),
     };
-    format!("{} ({form})", scene.formula)
+    match scene.formula.a() {
+        Some([re, im]) => format!("{} with a = {re:?}{im:+?}i ({form})", scene.formula),
+        None => format!("{} ({form})", scene.formula),
+    }
 }
 
 /// The field parameters of a scene.

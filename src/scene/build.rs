@@ -101,6 +101,7 @@ impl Scene {
         file.formula.kind =
             cli(if formula.is_quadratic() && julia { "julia".to_string() } else { formula.to_string() });
         file.formula.power = None;
+        file.formula.a = formula.a().map(cli);
         (self.family, self.formula) = self.check(&file, |cx, f| validate::family(cx, &f.formula))?;
         self.file = file;
         Ok(self)
@@ -143,6 +144,7 @@ pub(super) fn label(file: &mut SceneFile) -> Vec<String> {
     l.tag(&mut file.formula.kind, "formula.kind");
     l.tag_opt(&mut file.formula.power, "formula.power");
     l.tag_opt(&mut file.formula.c, "formula.c");
+    l.tag_opt(&mut file.formula.a, "formula.a");
     let v = &mut file.view;
     l.tag(&mut v.center, "view.center");
     l.tag_opt(&mut v.zoom, "view.zoom");
@@ -281,6 +283,7 @@ mod tests {
                 kind: cli("julia".into()),
                 power: None,
                 c: Some(cli(["-0.8".into(), "0.156".into()])),
+                a: None,
             },
             view: ViewRaw {
                 center: cli(["0.1".into(), "-0.2".into()]),

@@ -49,7 +49,7 @@
 //!
 //! KF 2.15 has no Julia mode: no key, formula or hybrid holds a fixed c (every reference and
 //! perturbation loop adds the pixel's c; `SeedR + i SeedI` is only the orbit's z_0, and
-//! `FactorAR`/`FactorAI` the `a` of formulas deepfield refuses). So a `.kfr` never converts to
+//! `FactorAR`/`FactorAI` the coefficient a of some families). So a `.kfr` never converts to
 //! `[formula] c`: it is always the Mandelbrot-type form of its family.
 //!
 //! Colours come with the location, near enough to open looking as its author saved it: a
@@ -65,7 +65,8 @@
 //! What is ignored: the rest of KF's colouring (`Differences`, `MultiColors`, `Slopes*`,
 //! `Texture*`, `Flat`, `GLSL`, ...), smoothing and bailout choices (deepfield's escape radius
 //! is its own; `real`/`imag` are the bailout norm's weights), `Period`, `FactorAR`/`FactorAI`
-//! (used only by formulas deepfield refuses; Fraktaler-3's `.kfr` import ignores them too),
+//! for the families without a coefficient (the TheRedshiftRider families, `redshift-rider-*`,
+//! take them as `[formula] a`, 1 + 0i where missing, as KF reads them),
 //! `Version`, and any key this module does not know. A file without `Colors` gets deepfield's default colouring.
 //!
 //! Two differences remain (the first is stated in the generated text): without
@@ -284,6 +285,9 @@ pub fn kfr_to_toml(origin: &str, text: &str) -> Result<String, SourceError> {
             }
         }
         _ => out.push_str(&format!("kind = \"{}\"\n", chosen.formula)),
+    }
+    if let Some([re, im]) = chosen.formula.a() {
+        out.push_str(&format!("a = [{re:?}, {im:?}]\n"));
     }
     out.push_str("\n[view]\n");
     // Decimal texts hold only digits, signs, '.', 'e' and 'E': safe inside TOML strings.
@@ -576,17 +580,35 @@ Version: 2150500\r\n";
                 assert_eq!(kind, k.name);
                 assert_eq!(power, (p != k.min_power).then_some(p as i64), "{}^{p}", k.name);
                 let f = crate::formula::Formula::parse(&kind, power.map(|p| p as u32)).unwrap();
-                assert_eq!(f.phases(), [crate::formula::Phase { kind: k.kind, power: p }]);
+                assert_eq!(f.phases(), [crate::formula::Phase::new(k.kind, p)]);
             }
         }
+        // KF's coefficient a of the sums, 1 + 0i where the file has none.
+        let a = |text: &str| {
+            let t = table(&kfr_to_toml("f.kfr", text).unwrap_or_else(|e| panic!("{text}: {e}")));
+            let a = t["formula"].get("a").map(|a| [a[0].as_float().unwrap(), a[1].as_float().unwrap()]);
+            (t["formula"]["kind"].as_str().unwrap().to_string(), a)
+        };
+        let base = "Re: 0\nIm: 0\nZoom: 1\n";
+        assert_eq!(a(&format!("{base}Power: 3\nFractalType: 43\n")), ("redshift-rider-2".into(), Some([1.0, 0.0])));
+        assert_eq!(
+            a(&format!("{base}Power: 5\nFractalType: 47\nFactorAR: -0.25\nFactorAI: 1.5\n")),
+            ("redshift-rider-6".into(), Some([-0.25, 1.5]))
+        );
+        assert_eq!(
+            a(&format!("{base}Power: 3\nFractalType: 44\nFactorAR: 3\n")),
+            ("redshift-rider-3".into(), None),
+            "a fixed 2"
+        );
+        assert_eq!(a(&format!("{base}FractalType: 1\nFactorAR: 3\n")), ("burning-ship".into(), None));
         // No keys: KF's type 0 at power 2, written as before (no `power`).
         assert_eq!(formula_of("Re: 0\nIm: 0\nZoom: 1\n"), ("mandelbrot".into(), None));
     }
 
     #[test]
     fn refused_types_and_powers_are_named() {
-        let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 42\n");
-        assert_eq!(e.message, "FractalType 42 (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws");
+        let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 52\n");
+        assert_eq!(e.message, "FractalType 52 (General Quadratic Minus) is not one deepfield draws");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((5, 14)));
         for (t, name) in [(41, "HPDZ Buffalo"), (52, "General Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")] {
             let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nFractalType: {t}\n"));
@@ -611,9 +633,9 @@ Version: 2150500\r\n";
         let (kind, power) = formula_of(&format!("{base}HybridFormula: 0/1|1,1,0,0,4,1,0;{none};0\n"));
         assert_eq!((kind.as_str(), power), ("burning-ship", Some(4)), "one phase is a single family");
         // An operator, pointed at where it is; the FractalType's name comes with it.
-        let e = err(&format!("{base}FractalType: 42\nHybridFormula: 0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0\n")
+        let e = err(&format!("{base}FractalType: 41\nHybridFormula: 0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1\n")
             .replace("FractalType: 0\n", ""));
-        assert!(e.message.contains("combines two operators") && e.message.contains("TheRedshiftRider 1"), "{e}");
+        assert!(e.message.contains("combines two operators") && e.message.contains("HPDZ Buffalo"), "{e}");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((7, 20)));
         // KF draws FractalType when the hybrid is missing or fails its own check.
         let (kind, _) =
@@ -680,7 +702,8 @@ Version: 2150500\r\n";
     fn unsupported_keys_are_refused() {
         let base = "Re: 0\nIm: 0\nZoom: 1\n";
         for (line, needle) in [
-            ("FractalType: 42", "TheRedshiftRider"),
+            ("FractalType: 41", "HPDZ Buffalo"),
+            ("Power: 3\nFractalType: 42\nFactorAI: 1e999", "FactorAI"),
             ("Power: 11", "powers 2 to 10"),
             ("FractalType: x", "whole number"),
             ("UseHybridFormula: 1\nHybridFormula: 0/1|0,0,0,0,2,3,0;0,0,0,0,0,0,0;0", "multiplies by 3"),

@@ -17,17 +17,8 @@ use crate::formula::{Formula, Kind, Phase};
 use crate::source::SourceError;
 
 /// KF 2.15's formula types that are none of deepfield's families, with KF's names.
-pub const REFUSED: [(u32, &str); 15] = [
+pub const REFUSED: [(u32, &str); 6] = [
     (41, "HPDZ Buffalo"),
-    (42, "TheRedshiftRider 1: a * z^2 + z^3 + c"),
-    (43, "TheRedshiftRider 2: a * z^2 - z^3 + c"),
-    (44, "TheRedshiftRider 3: 2 * z^2 - z^3 + c"),
-    (45, "TheRedshiftRider 4: a * z^2 + z^4 + c"),
-    (46, "TheRedshiftRider 5: a * z^2 - z^4 + c"),
-    (47, "TheRedshiftRider 6: a * z^2 + z^5 + c"),
-    (48, "TheRedshiftRider 7: a * z^2 - z^5 + c"),
-    (49, "TheRedshiftRider 8: a * z^2 + z^6 + c"),
-    (50, "TheRedshiftRider 9: a * z^2 - z^6 + c"),
     (52, "General Quadratic Minus"),
     (53, "General Quadratic Plus"),
     (69, "General Abs Quadratic Minus"),
@@ -99,7 +90,23 @@ pub(super) fn formula(kfr: &Kfr<'_>) -> Result<Chosen, SourceError> {
             ));
         }
     };
-    Ok(Chosen { formula: Formula::single(Phase { kind, power }), notes })
+    let mut formula = Formula::single(Phase::new(kind, power));
+    if kind.takes_a() {
+        // KF's a: `FactorAR` + i `FactorAI`, 1 + 0i where a key is missing.
+        let part = |key: &str, default: f64| -> Result<f64, SourceError> {
+            let Some(e) = kfr.get(key) else { return Ok(default) };
+            let v = crate::num::Decimal::parse(e.value)
+                .map(|d| d.to_f64())
+                .map_err(|err| kfr.error_at(e.value_at, format!("`{key}` (the formula's coefficient a): {err}")))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(kfr.error_at(e.value_at, format!("`{key}: {}` is out of range for the coefficient a", e.value)))
+            }
+        };
+        formula = formula.with_a([part("FactorAR", 1.0)?, part("FactorAI", 0.0)?]);
+    }
+    Ok(Chosen { formula, notes })
 }
 
 /// True when every phase commutes with complex conjugation (no fold of the imaginary part,
@@ -107,6 +114,10 @@ pub(super) fn formula(kfr: &Kfr<'_>) -> Result<Chosen, SourceError> {
 /// picture about conj(c) is the mirror image of the picture about c.
 pub(super) fn symmetric(formula: &Formula) -> bool {
     formula.phases().iter().all(|p| {
+        if p.kind.sum().is_some() {
+            // a z² ± z^p at conj(z) is conj(conj(a) z² ± z^p): the mirror image for real a.
+            return p.a.get()[1] == 0.0;
+        }
         if p.kind.factors().is_some() {
             // z^a (|x| + i|y|)^b at conj(z) is conj(z^a) (|x| + i|y|)^b.
             return false;
@@ -142,14 +153,14 @@ mod tests {
         let conj = |z: [f64; 2]| [z[0], -z[1]];
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let phase = Phase { kind: k.kind, power: p };
+                let phase = Phase::new(k.kind, p);
                 let commutes = [[0.3, 0.7], [-0.6, 0.2], [0.45, -0.85], [-0.25, -0.35]]
                     .iter()
                     .all(|&z| apply(phase, conj(z)) == conj(apply(phase, z)));
                 assert_eq!(symmetric(&Formula::single(phase)), commutes, "{phase}");
             }
         }
-        assert!(!symmetric(&Formula::single(Phase { kind: Kind::BurningShip, power: 2 })));
+        assert!(!symmetric(&Formula::single(Phase::new(Kind::BurningShip, 2))));
         assert!(symmetric(&Formula::default()));
     }
 }

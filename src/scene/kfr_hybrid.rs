@@ -25,8 +25,11 @@
 //! built-in family this way (Buffalo is `z^p` then a line `|x| + i|y|` of power 1).
 //! A group whose last line multiplies z^a by (|x| + i|y|)^b, after nothing or after z^2
 //! alone, is a product family (`formula::product`: Mothbrot, SimonBrot, SimonBrot2).
+//! A group of one line A z² + z^q or A z² - z^q (q = 3 to 6) is a sum family
+//! (`formula::sum`: TheRedshiftRider) with a = A; a formula has one a, so a hybrid whose
+//! sums have different factors is refused.
 //! Anything else is refused with what it is: a line combining two operators otherwise
-//! (TheRedshiftRider, HPDZ Buffalo), a factor other than 1, a constant, two
+//! (HPDZ Buffalo), a factor other than 1, a constant, two
 //! powers in one iteration, or a map no family has. The sequence of groups must repeat
 //! from the first iteration with at most [`MAX_PHASES`] iterations per cycle (groups
 //! before the loop start are allowed when they equal the loop's end).
@@ -257,7 +260,22 @@ fn product_phase(steps: &Steps, one: Operator, two: Operator) -> Option<Phase> {
         .iter()
         .filter(|k| k.factors == Some(factors))
         .max_by_key(|k| k.kf_type)
-        .map(|k| Phase { kind: k.kind, power: k.min_power })
+        .map(|k| Phase::new(k.kind, k.min_power))
+}
+
+/// The sum family a `+` or `-` line is, as the only line of its group: A z² then z^q (no
+/// fold or negation, the second operator's factor 1), KF's TheRedshiftRider presets, which
+/// is `redshift-rider-*` with a = A (KF's type 44, 2 z² - z³, is then the row of a z² - z³
+/// with a = 2: the same map).
+fn sum_phase(one: Operator, two: Operator, minus: bool) -> Option<Phase> {
+    if one.abs != 0 || one.neg != 0 || one.pow != 2 || two.abs != 0 || two.neg != 0 || two.mul != [1.0, 0.0] {
+        return None;
+    }
+    let q = u32::try_from(two.pow).ok()?;
+    KINDS
+        .iter()
+        .find(|k| k.sum == Some(minus) && k.min_power == q && k.kind.takes_a())
+        .map(|k| Phase::new(k.kind, q).with_a(one.mul))
 }
 
 /// One group's iteration as a phase.
@@ -284,6 +302,12 @@ fn group_phase(at: usize, lines: &[(usize, &str)]) -> Result<Phase, HybridError>
             _ => '+',
         };
         let alone = two.pow == 0 && two.mul == [0.0, 0.0] && symbol != '*';
+        if symbol != '*'
+            && lines.len() == 1
+            && let Some(phase) = sum_phase(one, two, symbol == '-')
+        {
+            return Ok(phase);
+        }
         if symbol == '*'
             && let Some(phase) = product_phase(&steps, one, two)
         {
@@ -339,14 +363,9 @@ fn group_phase(at: usize, lines: &[(usize, &str)]) -> Result<Phase, HybridError>
     };
     let sign = if steps.sign & IM != 0 { SIGN_IM } else { 0 } | if steps.sign & RE != 0 { SIGN_RE } else { 0 };
     let shape = (steps.fold_in, p, steps.fold_out, sign);
-    KINDS
-        .iter()
-        .find(|k| k.kind.has_power(p) && k.kind.shape(p) == shape)
-        .map(|k| Phase { kind: k.kind, power: p })
-        .ok_or_else(|| HybridError {
-            at,
-            message: format!("the iteration {} is none of deepfield's families", steps.text(p)),
-        })
+    KINDS.iter().find(|k| k.kind.has_power(p) && k.kind.shape(p) == shape).map(|k| Phase::new(k.kind, p)).ok_or_else(
+        || HybridError { at, message: format!("the iteration {} is none of deepfield's families", steps.text(p)) },
+    )
 }
 
 /// Reads a `HybridFormula` value.
@@ -392,6 +411,14 @@ pub fn parse(text: &str) -> Result<Hybrid, HybridError> {
         let (phase, repeats) = phases[group];
         seq.extend(std::iter::repeat_n(phase, repeats as usize));
         group = if group + 1 == phases.len() { loop_start } else { group + 1 };
+    }
+    // One coefficient a for the formula, as KF has one (`FactorAR`, `FactorAI`) and scenes
+    // have one `a`.
+    let coefs = || seq.iter().filter(|p| p.kind.takes_a()).map(|p| p.a);
+    if let Some(first) = coefs().next()
+        && coefs().any(|a| a != first)
+    {
+        return err(0, "the hybrid's lines a z^2 ± z^q have different factors a; deepfield's formulas have one a");
     }
     // The shortest period of the whole sequence (iterations before the loop included).
     let period = (1..=MAX_PHASES).find(|&d| (0..head + cycle).all(|n| seq[n] == seq[n + d]));
@@ -449,6 +476,29 @@ mod tests {
         assert_eq!(formula(&two("1,0,0,0,3,1,0", "0,1,0,1,1,1,0")), "cubic-quasi-burning-ship");
         assert_eq!(formula(&two("0,0,0,1,5,1,0", "1,0,0,0,1,1,0")), "5th-celtic-mbar");
         assert_eq!(formula(&two("1,0,0,0,5,1,0", "0,1,0,1,1,1,0")), "5th-quasi-burning-ship");
+    }
+
+    /// KF's TheRedshiftRider presets: one line A z² ± z^q, with A the formula's a.
+    #[test]
+    fn kf_presets_of_the_sums() {
+        let a = |text: &str| match parse(text) {
+            Ok(Hybrid::Formula(f)) => (f.to_string(), f.a()),
+            other => panic!("{text}: {other:?}"),
+        };
+        assert_eq!(a("0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0"), ("redshift-rider-1".into(), Some([1.0, 0.0])));
+        assert_eq!(a("0/1|0,0,0,0,2,2,0;0,0,0,0,3,1,0;1"), ("redshift-rider-2".into(), Some([2.0, 0.0])));
+        assert_eq!(a("0/1|0,0,0,0,2,1,0;0,0,0,0,6,1,0;1"), ("redshift-rider-9".into(), Some([1.0, 0.0])));
+        assert_eq!(
+            a(&format!("0/1|0,0,0,0,2,-0.5,0.25;0,0,0,0,4,1,0;0/1|1,1,0,0,2,1,0;{NONE};0")),
+            ("redshift-rider-4,burning-ship".into(), Some([-0.5, 0.25]))
+        );
+        // Two factors a, a sum after another line, a power the family lacks.
+        let e = refused("0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0/1|0,0,0,0,2,3,0;0,0,0,0,3,1,0;0");
+        assert!(e.message.contains("different factors a"), "{e}");
+        assert!(
+            refused(&format!("0/1|1,1,0,0,1,1,0;{NONE};0|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0")).message.contains("combines")
+        );
+        assert!(refused("0/1|0,0,0,0,2,1,0;0,0,0,0,7,1,0;0").message.contains("combines two operators"));
     }
 
     /// KF's Mothbrot and SimonBrot presets: a line multiplying z^a by (|x| + i|y|)^b, on z or
@@ -519,9 +569,10 @@ mod tests {
 
     #[test]
     fn operators_factors_and_constants_are_refused_by_what_they_are() {
-        // TheRedshiftRider 1, a product of a partial fold, HPDZ Buffalo.
-        let e = refused("0/1|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0");
-        assert!(e.message.contains("`(x + iy)^2 + (x + iy)^3` combines two operators"), "{e}");
+        // z^3 + z^2 (the order of TheRedshiftRider's terms turned), a product of a partial
+        // fold, HPDZ Buffalo.
+        let e = refused("0/1|0,0,0,0,3,1,0;0,0,0,0,2,1,0;0");
+        assert!(e.message.contains("`(x + iy)^3 + (x + iy)^2` combines two operators"), "{e}");
         let e = refused("0/1|0,0,0,0,2,1,0;1,0,0,0,2,1,0;2");
         assert!(e.message.contains("(x + iy)^2 * (|x| + iy)^2"), "{e}");
         let e = refused("0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1");

@@ -58,11 +58,15 @@ pub struct FormulaRaw {
     /// Julia parameter as decimal strings [re, im]: the formula's Julia form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub c: Option<Spanned<[String; 2]>>,
+    /// The coefficient a = [re, im] of the families that take one (Kalles Fraktaler's
+    /// `FactorAR`, `FactorAI`; 1 when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<Spanned<[f64; 2]>>,
 }
 
 impl Default for FormulaRaw {
     fn default() -> Self {
-        Self { kind: Spanned::new(0..0, "mandelbrot".into()), power: None, c: None }
+        Self { kind: Spanned::new(0..0, "mandelbrot".into()), power: None, c: None, a: None }
     }
 }
 

@@ -161,6 +161,21 @@ pub(super) fn family(cx: &Ctx<'_>, formula: &FormulaRaw) -> Result<(FamilySpec, 
             Err(e) => return at_power(e.0),
         }
     };
+    let parsed = match &formula.a {
+        None => parsed,
+        Some(a) if !parsed.phases().iter().any(|p| p.kind.takes_a()) => {
+            return cx.err(
+                a.span(),
+                format!(
+                    "`a` is the coefficient of the families that take one (redshift-rider-1, ...); `{parsed}` has none"
+                ),
+            );
+        }
+        Some(a) => match *a.get_ref() {
+            [re, im] if re.is_finite() && im.is_finite() => parsed.with_a([re, im]),
+            _ => return cx.err(a.span(), "`a` must be two finite numbers [re, im]"),
+        },
+    };
     let family = match (&formula.c, kind) {
         (Some(c), _) => FamilySpec::Julia { c: cx.pair(c, "Julia parameter c")? },
         (None, "julia") => {

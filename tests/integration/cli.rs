@@ -525,6 +525,27 @@ fn same_bytes(name: &str, scene: &str) {
     assert!(exrs.windows(2).all(|w| w[0] == w[1]), "EXR bytes depend on --threads");
 }
 
+/// A sum's coefficient a goes with the image: `--stats` names it, the PNG's scene holds it
+/// and re-renders to the same bytes, and another a draws another picture.
+#[test]
+fn a_sums_coefficient_goes_with_the_image() {
+    let dir = scratch("cli-sum-a");
+    let args = ["render", "--formula", "redshift-rider-2", "--size", "48x36", "--zoom", "0.8", "--center=0,0"];
+    let o = deepfield(&[&args[..], &["--formula-a=-0.5,0.3", "--stats", "-o", "a.png"]].concat(), &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stats = String::from_utf8_lossy(&o.stdout);
+    assert!(stats.contains("redshift-rider-2 with a = -0.5+0.3i"), "{stats}");
+    let embedded = deepfield::io::read_png_scene(&dir.join("a.png")).unwrap().expect("scene chunk");
+    assert!(embedded.contains("a = [-0.5, 0.3]"), "{embedded}");
+    let o = deepfield(&["render", "a.png", "-o", "b.png"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = deepfield(&[&args[..], &["-o", "c.png"]].concat(), &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let read = |f: &str| std::fs::read(dir.join(f)).unwrap();
+    assert_eq!(read("a.png"), read("b.png"), "re-rendering the embedded scene changed the image");
+    assert_ne!(read("a.png"), read("c.png"), "a = 1 drew the picture of a = -0.5 + 0.3i");
+}
+
 #[test]
 fn png_round_trip_reproduces_the_image() {
     let dir = scratch("cli-roundtrip");
@@ -786,6 +807,21 @@ fn formula_families_are_checked_and_refused_where_they_do_not_apply() {
     rejects("bad-family", Some("version = 1\n[formula]\nkind = \"burning-boat\"\n"), &[], "scene.toml:3:8");
     rejects("bad-power", Some("version = 1\n[formula]\nkind = \"buffalo\"\npower = 9\n"), &[], "scene.toml:4:9");
     rejects("bad-power-flag", None, &["--formula", "celtic", "--power", "7"], "powers 2 to 5, not 7");
+    // The coefficient a: only with a family that takes one, and finite.
+    rejects(
+        "a-without-sum",
+        Some("version = 1\n[formula]\nkind = \"celtic\"\na = [0.5, 0.0]\n"),
+        &[],
+        "scene.toml:4:5",
+    );
+    rejects(
+        "a-infinite",
+        Some("version = 1\n[formula]\nkind = \"redshift-rider-1\"\na = [inf, 0.0]\n"),
+        &[],
+        "scene.toml:4:5",
+    );
+    rejects("a-flag", None, &["--formula", "redshift-rider-4", "--formula-a", "1,x"], "not RE,IM");
+    rejects("a-flag-family", None, &["--formula-a", "1,2"], "has none");
     rejects("gpu-family", None, &["--formula", "burning-ship", "--engine", "gpu"], "z^2 + c only, not burning-ship");
     rejects(
         "interior-family",

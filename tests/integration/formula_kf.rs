@@ -3,7 +3,8 @@
 //! `with_map!`) against `compare::kf_maps`, which writes KF 2.15's reference lines term by
 //! term, at a grid of points with parts exactly zero, negative and of mixed sizes:
 //!
-//! - f64 (`M::apply`): within 1e-14 of the terms' size, (|x| + |y|)^p, of the exact value
+//! - f64 (`M::apply`): within 1e-14 of the terms' size, (|x| + |y|)^p (plus |a| (|x| + |y|)²
+//!   for a sum a z² ± z^p), of the exact value
 //!   (KF's expansion at 4000 bits, where every operation on these inputs is exact);
 //! - big floats at 200 bits (`M::apply_big`), at inputs that are not f64 values: within a
 //!   few units of the 200th bit of the terms' size of the exact value, as KF's expansion
@@ -57,15 +58,19 @@ fn points() -> Vec<[f64; 2]> {
 /// Checks one (family, power); returns (worst big-float error in units of 2^-200 of the
 /// terms' size, points whose Jacobian was compared).
 fn check<M: Map>(phase: Phase) -> (f64, usize) {
+    let map = M::of(&phase);
     let p = phase.power as i32;
     let zero = Float::from(0u32);
     let (mut worst, mut compared) = (0.0f64, 0);
     for (k, z) in points().into_iter().enumerate() {
-        let size = (z[0].abs() + z[1].abs()).powi(p);
+        // The terms' size: (|x| + |y|)^p, plus |a| (|x| + |y|)² for a sum a z² ± z^p.
+        let t = z[0].abs() + z[1].abs();
+        let a = if phase.kind.sum().is_some() { phase.a.get()[0].hypot(phase.a.get()[1]) } else { 0.0 };
+        let size = t.powi(p) + a * t * t;
         let (x, y) = (big(z[0]), big(z[1]));
         // f64 against the exact value.
         let exact = kf_step(phase, [&x, &y], [&zero, &zero], EXACT).expect("a row of KINDS");
-        let got = M::apply(z);
+        let got = map.apply(z);
         for i in 0..2 {
             let e = (got[i] - to_f64(&exact[i])).abs();
             assert!(e <= 1e-14 * size, "{phase} f64 at {z:?}: {got:?}, KF {:?}", exact.clone().map(|v| to_f64(&v)));
@@ -80,7 +85,7 @@ fn check<M: Map>(phase: Phase) -> (f64, usize) {
         let (wx, wy) = (widen(z[0], 2 * k as u32), widen(z[1], 2 * k as u32 + 1));
         let exact = kf_step(phase, [&wx, &wy], [&zero, &zero], EXACT).expect("a row of KINDS");
         let kf200 = kf_step(phase, [&wx, &wy], [&zero, &zero], 200).expect("a row of KINDS");
-        let ours = M::apply_big(&BigC { re: wx.clone(), im: wy.clone(), bits: 200 });
+        let ours = map.apply_big(&BigC { re: wx.clone(), im: wy.clone(), bits: 200 });
         let ulp = size * 2f64.powi(-200);
         for (i, o) in [ours.re, ours.im].iter().enumerate() {
             let (e, e_kf) = (gap(o, &exact[i]), gap(&kf200[i], &exact[i]));
@@ -96,8 +101,8 @@ fn check<M: Map>(phase: Phase) -> (f64, usize) {
             continue;
         }
         compared += 1;
-        let ours = M::jacobian(z);
-        let dsize = p as f64 * (z[0].abs() + z[1].abs()).powi(p - 1);
+        let ours = map.jacobian(z);
+        let dsize = p as f64 * t.powi(p - 1) + 2.0 * a * t;
         for r in 0..2 {
             for s in 0..2 {
                 let want = to_f64(&j.m[r][s]);
@@ -117,18 +122,23 @@ fn every_row_of_kinds_is_kalles_fraktalers_formula() {
     let mut rows = 0;
     for k in KINDS {
         for power in k.min_power..=k.max_power {
-            let phase = Phase { kind: k.kind, power };
-            let (worst, compared) =
-                deepfield::with_map!(phase, M => check::<M>(phase), panic!("{phase} has no compiled map"));
-            eprintln!(
-                "{phase} (KF type {}): worst {worst:.2} ulps at 200 bits, Jacobian at {compared} points",
-                k.kf_type
-            );
-            assert!(compared >= points().len() / 3, "{phase}: only {compared} points without a kink");
+            // The user's coefficient a (KF's FactorAR, FactorAI) at its default and others.
+            let coefs: &[[f64; 2]] =
+                if k.kind.takes_a() { &[[1.0, 0.0], [-0.6, 0.45], [0.0, 2.5]] } else { &[[1.0, 0.0]] };
+            for &a in coefs {
+                let phase = Phase::new(k.kind, power).with_a(a);
+                let (worst, compared) =
+                    deepfield::with_map!(phase, M => check::<M>(phase), panic!("{phase} has no compiled map"));
+                eprintln!(
+                    "{phase} a = {a:?} (KF type {}): worst {worst:.2} ulps at 200 bits, Jacobian at {compared} points",
+                    k.kf_type
+                );
+                assert!(compared >= points().len() / 3, "{phase}: only {compared} points without a kink");
+            }
             rows += 1;
         }
     }
     // Types 0 to 4 (by power), 5-9, 10-13, 15-22, 27-30, then the quasi families 14, 23-26,
-    // 31-32 and 34-39, then the products 33, 40, 51 and 54-68.
-    assert_eq!(rows, 9 + 4 * 4 + 5 + 4 + 8 + 4 + 1 + 4 + 2 + 6 + 18);
+    // 31-32 and 34-39, then the products 33, 40, 51 and 54-68, then the sums 42-50.
+    assert_eq!(rows, 9 + 4 * 4 + 5 + 4 + 8 + 4 + 1 + 4 + 2 + 6 + 18 + 9);
 }

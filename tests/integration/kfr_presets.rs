@@ -36,8 +36,10 @@ fn preset_fixtures_convert_or_are_refused_by_name() {
     // The preset's hybrid is conj(z)³, not KF's built-in Mandelbar³ (-Re z³ + i Im z³).
     let e = no("formulas_04-3-Mandelbar.kfr");
     assert!(e.contains("none of deepfield's families") && e.contains("Mandelbar"), "{e}");
-    let e = no("formulas_42-3-TheRedshiftRider-1.kfr");
-    assert!(e.contains("combines two operators") && e.contains("TheRedshiftRider 1: a * z^2 + z^3 + c"), "{e}");
+    // TheRedshiftRider 1's line z^2 + z^3 is a z² + z³ with a = 1.
+    assert_eq!(ok("formulas_42-3-TheRedshiftRider-1.kfr"), ("redshift-rider-1".into(), None));
+    let e = no("formulas_41-2-HPDZ-Buffalo.kfr");
+    assert!(e.contains("combines two operators") && e.contains("HPDZ Buffalo"), "{e}");
     // A product of z² and (|x| + i|y|)²: SimonBrot 4th and Mothbrot 2×2 are one map.
     assert_eq!(ok("formulas_58-4-Mothbrot-4th-2x2-aka-Simonbrot-4th.kfr").0, "mothbrot-2x2");
 }

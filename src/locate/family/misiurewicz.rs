@@ -146,7 +146,7 @@ mod tests {
     /// orbit, by plain cubing, is preperiodic with exactly (2, 1).
     #[test]
     fn a_cubic_misiurewicz_point() {
-        let f = Formula::single(Phase { kind: Kind::Mandelbrot, power: 3 });
+        let f = Formula::single(Phase::new(Kind::Mandelbrot, 3));
         let c = newton(f, &BigC::from_f64(0.33, 1.28, 200), 2, 1, 100).expect("converges");
         let [x, y] = c.to_fe().map(FloatExp::to_f64);
         assert!((x - 0.340_625_019_316_606_4).abs() < 1e-13 && (y - 1.271_229_878_418_705_7).abs() < 1e-13, "{x} {y}");

@@ -133,6 +133,8 @@ pub fn check_conformal(formula: Formula) -> Result<(), FindError> {
         "not conformal (its folds or the negation of one part make its derivative a real 2x2 matrix, and its preperiodic parameters are not isolated points in general)"
     } else if formula.phases().len() > 1 {
         "a hybrid (its phases shift along the orbit, so z^d's symmetry that the candidates use does not hold)"
+    } else if formula.phases()[0].kind.sum().is_some() {
+        "a sum a z^2 ± z^q (it lacks z^d's symmetry, which the candidates use)"
     } else {
         return Ok(());
     };
@@ -186,7 +188,7 @@ mod tests {
     use crate::formula::{Kind, Phase};
 
     fn formula(kind: Kind, power: u32) -> Formula {
-        Formula::single(Phase { kind, power })
+        Formula::single(Phase::new(kind, power))
     }
 
     /// The first-order distances |J_n⁻¹ z_n| from `c` to a root of z_n = 0, n = 1 ..= p, by
@@ -280,6 +282,17 @@ mod tests {
             let found = search(f, &descended(f));
             assert!(found >= 1, "{f}: no mini in any descended view");
         }
+    }
+
+    /// A sum a z² ± z^q with a complex a: the minis found in descended views are periodic
+    /// points of their period (`check`, by KF's own expansion), and its Misiurewicz points
+    /// are refused by name.
+    #[test]
+    fn nuclei_of_a_sum_with_a_coefficient() {
+        let f = Formula::parse("redshift-rider-2", None).unwrap().with_a([0.8, 0.3]);
+        let found = search(f, &descended(f));
+        assert!(found >= 1, "{f}: no mini in any descended view");
+        assert!(matches!(check_conformal(f), Err(FindError::NotConformal { .. })));
     }
 
     /// |z_(k+p) - z_k| / |z'_(k+p) - z'_k| for every k + p <= n, by KF's expansions in dual

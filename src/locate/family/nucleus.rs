@@ -234,7 +234,7 @@ mod tests {
     /// -1.754877666246692760049508896358528691894...), from off the axis.
     #[test]
     fn the_burning_ship_period_3_miniship() {
-        let ship = Formula::single(Phase { kind: Kind::BurningShip, power: 2 });
+        let ship = Formula::single(Phase::new(Kind::BurningShip, 2));
         let Newton::Root(c) = newton(ship, &BigC::from_f64(-1.755, 1e-4, 256), 3, 100, None).0 else { panic!() };
         let [x, y] = c.to_fe().map(FloatExp::to_f64);
         assert!((x + 1.754_877_666_246_693).abs() < 1e-15 && y.abs() < 1e-30, "{x} {y}");

@@ -14,8 +14,8 @@
 
 use malachite_float::Float;
 
-use crate::formula::Phase;
 use crate::formula::map::{FOLD_BOTH, FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE, fold_big};
+use crate::formula::{Phase, sum};
 use crate::num::FloatExp;
 use crate::num::bigcomplex::BigC;
 
@@ -125,6 +125,12 @@ pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
     if let Some(factors) = phase.kind.factors() {
         return product_step(factors, z);
     }
+    if let Some(neg) = phase.kind.sum() {
+        // A sum a z² ± z^Q is complex-analytic: its derivative is one complex number.
+        let f = crate::with_map!(phase, m: M => m.apply_big(z), unreachable!("a sum has compiled code"));
+        let a = sum::derivative_big(phase.power, neg, phase.a.get(), z);
+        return (f, Derivative::Composition { a, flip_in: [false; 2], flip_out: [false; 2] });
+    }
     let (fold_in, p, fold_out, sign) = phase.kind.shape(phase.power);
     let negative = |x: &Float| *x < 0u32;
     let flip_in = [fold_in & FOLD_RE != 0 && negative(&z.re), fold_in & FOLD_IM != 0 && negative(&z.im)];
@@ -156,7 +162,6 @@ pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
 mod tests {
     use super::*;
     use crate::formula::kind::KINDS;
-    use crate::formula::map::Map;
 
     /// The value is the engines' big-float map to the bit, and the derivative is the
     /// engines' f64 Jacobian (`Map::jacobian`), for every family at every power.
@@ -164,13 +169,13 @@ mod tests {
     fn the_step_is_the_engines_map_and_its_jacobian() {
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let phase = Phase { kind: k.kind, power: p };
+                let phase = Phase::new(k.kind, p);
                 for z in [[0.3, -0.7], [-1.1, 0.2], [-0.4, -0.35], [0.05, 0.9]] {
                     let zb = BigC::from_f64(z[0], z[1], 160);
                     let (f, d) = step(phase, &zb);
-                    let want = crate::with_map!(phase, M => M::apply_big(&zb), unreachable!());
+                    let want = crate::with_map!(phase, m: M => m.apply_big(&zb), unreachable!());
                     assert_eq!(f, want, "{phase} {z:?}");
-                    let j = crate::with_map!(phase, M => M::jacobian(z), unreachable!());
+                    let j = crate::with_map!(phase, m: M => m.jacobian(z), unreachable!());
                     let m = d.matrix();
                     for (r, row) in m.iter().enumerate() {
                         for (c, v) in row.iter().enumerate() {

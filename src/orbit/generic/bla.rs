@@ -53,7 +53,7 @@ use rayon::prelude::*;
 use super::der::{MatFe, to_fe};
 use super::reference::Track;
 use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y};
-use crate::formula::{Formula, Stepper};
+use crate::formula::{Formula, Stepper, sum};
 use crate::num::{FloatExp, Real};
 use crate::orbit::bla::dips;
 
@@ -284,6 +284,12 @@ fn merge(x: &Wide, y: &Wide, dc_max: FloatExp) -> Wide {
 
 /// The radius of the single step from Z = `z` with the map of iteration `n`.
 fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2], how: &Build) -> f64 {
+    let ph = formula.phase(n);
+    if let Some(neg) = ph.kind.sum() {
+        // A sum of two powers: its own bound on the nonlinear terms (`formula::sum`).
+        let r = sum::bla_radius(ph.power, neg, ph.a.get(), z, how.eps);
+        return r.min((how.escape_radius - z[0].hypot(z[1])).max(0.0)).max(0.0);
+    }
     let (fin, p, fout, _) = {
         let ph = formula.phase(n);
         ph.kind.shape(ph.power)

@@ -49,7 +49,7 @@ use super::perturb::{Exit, LEAST, Sample, max_exp};
 use crate::formula::end::Orbit;
 use crate::formula::map::{Map, Num, Ops};
 use crate::formula::phase::MAX_PHASES;
-use crate::formula::{Cycle, Single, Stepper};
+use crate::formula::{Cycle, Phase, Single, Stepper};
 use crate::num::FloatExp;
 use crate::orbit::{Counters, Numbers};
 use crate::simd_level::{LaneJob, SimdLevel};
@@ -265,7 +265,7 @@ struct Job<'a, M: Map, const DER: bool> {
     out: &'a mut [Orbit],
     counters: &'a mut Counters,
     cancel: &'a AtomicBool,
-    _map: M,
+    map: M,
 }
 
 impl<M: Map, const DER: bool> LaneJob for Job<'_, M, DER> {
@@ -273,8 +273,8 @@ impl<M: Map, const DER: bool> LaneJob for Job<'_, M, DER> {
 
     #[inline(always)]
     fn run<S: Simd, const L: usize>(self, _: S) {
-        let Job { engine, offsets, out, counters, cancel, .. } = self;
-        engine.lanes::<M, DER, L>(offsets, out, counters, cancel);
+        let Job { engine, offsets, out, counters, cancel, map } = self;
+        engine.lanes::<M, DER, L>(map, offsets, out, counters, cancel);
     }
 }
 
@@ -299,7 +299,8 @@ impl<const DER: bool> LaneJob for CycleJob<'_, DER> {
 }
 
 /// A hybrid's pass of one phase over the lanes ([`Engine::pass`] with that phase's family).
-type PassFn<S, const L: usize> = fn(S, &Engine, &mut Lanes<L>, &Consts, Landing, u32, &mut Tally<L>, &mut Run<'_>);
+type PassFn<S, const L: usize> =
+    fn(S, &Engine, &Phase, &mut Lanes<L>, &Consts, Landing, u32, &mut Tally<L>, &mut Run<'_>);
 
 /// One phase's pass, out of line (one function per family in the table, so that no loop
 /// holds every family's code), its body compiled under the level's target features by
@@ -308,6 +309,7 @@ type PassFn<S, const L: usize> = fn(S, &Engine, &mut Lanes<L>, &Consts, Landing,
 fn cycle_pass<S: Simd, M: Map, const DER: bool, const L: usize>(
     simd: S,
     engine: &Engine,
+    phase: &Phase,
     s: &mut Lanes<L>,
     consts: &Consts,
     land: Landing,
@@ -323,17 +325,17 @@ fn cycle_pass<S: Simd, M: Map, const DER: bool, const L: usize>(
         then: u32,
         tally: &'a mut Tally<L>,
         run: &'a mut Run<'b>,
-        _map: M,
+        map: M,
     }
     impl<M: Map, const DER: bool, const L: usize> WithSimd for Op<'_, '_, M, DER, L> {
         type Output = ();
         #[inline(always)]
         fn with_simd<S: Simd>(self, _: S) {
-            let Op { engine, s, consts, land, then, tally, run, .. } = self;
-            engine.pass::<M, DER, L>(s, consts, land, tally, run, &OutOfLine { consts, then });
+            let Op { engine, s, consts, land, then, tally, run, map } = self;
+            engine.pass::<M, DER, L>(&map, s, consts, land, tally, run, &OutOfLine { consts, then });
         }
     }
-    simd.vectorize(Op::<M, DER, L> { engine, s, consts, land, then, tally, run, _map: M::default() });
+    simd.vectorize(Op::<M, DER, L> { engine, s, consts, land, then, tally, run, map: M::of(phase) });
 }
 
 impl Engine {
@@ -352,10 +354,10 @@ impl Engine {
         if phases.len() > 1 {
             return self.orbits_cycle::<DER>(simd, offsets, out, counters, cancel);
         }
-        crate::with_map!(phases[0], M => {
-            let job = Job::<M, DER> { engine: self, offsets, out, counters, cancel, _map: M::default() };
+        crate::with_map!(phases[0], m: M => {
+            let job = Job::<M, DER> { engine: self, offsets, out, counters, cancel, map: m };
             if let Err(Job { offsets, out, counters, cancel, .. }) = simd.run_lanes(job) {
-                self.each::<_, DER>(&Single(M::default()), offsets, out, counters, cancel);
+                self.each::<_, DER>(&Single(m), offsets, out, counters, cancel);
             }
         }, unreachable!("a validated formula has compiled code"))
     }
@@ -569,6 +571,7 @@ impl Engine {
     #[inline(always)]
     fn lanes<M: Map, const DER: bool, const L: usize>(
         &self,
+        map: M,
         offsets: &[[f64; 2]],
         out: &mut [Orbit],
         counters: &mut Counters,
@@ -580,14 +583,14 @@ impl Engine {
         // A single family has one track, or two for a Julia set (the centre's orbit and the
         // orbit of 0).
         debug_assert!(self.tracks.len() <= 2);
-        let st = Single(M::default());
+        let st = Single(map);
         let (mut s, mut run, mut tally) = self.begin::<_, DER, L>(&st, offsets, out, cancel);
         let consts = self.consts();
         let events = InLine { st, consts: &consts };
         let land = self.landing(&s.base, &s.gates, 0);
         let mut passes = 0u64;
         while tally.active > 0 {
-            self.pass::<M, DER, L>(&mut s, &consts, land, &mut tally, &mut run, &events);
+            self.pass::<M, DER, L>(&map, &mut s, &consts, land, &mut tally, &mut run, &events);
             passes += 1;
             if passes.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
                 break;
@@ -626,7 +629,17 @@ impl Engine {
         let (mut g, mut count) = (0u32, 0u64);
         while tally.active > 0 {
             let then = if g + 1 == self.period { 0 } else { g + 1 };
-            (passes[g as usize])(simd, self, &mut s, &consts, lands[g as usize], then, &mut tally, &mut run);
+            (passes[g as usize])(
+                simd,
+                self,
+                &phases[g as usize],
+                &mut s,
+                &consts,
+                lands[g as usize],
+                then,
+                &mut tally,
+                &mut run,
+            );
             g = then;
             count += 1;
             if count.is_multiple_of(CANCEL_EVERY) && cancel.load(Ordering::Relaxed) {
@@ -698,6 +711,7 @@ impl Engine {
     #[inline(always)]
     fn pass<M: Map, const DER: bool, const L: usize>(
         &self,
+        map: &M,
         s: &mut Lanes<L>,
         consts: &Consts,
         land: Landing,
@@ -735,7 +749,7 @@ impl Engine {
             bx[k] = pick(r, fx[k], s.dx[k]);
             by[k] = pick(r, fy[k], s.dy[k]);
         }
-        let step = M::delta_n([ax, ay], [bx, by]);
+        let step = map.delta_n([ax, ay], [bx, by]);
         let nx = step[0].add(s.cx);
         let ny = step[1].add(s.cy);
         // With the derivative, `Jac::step` at z = Z + δ (the rebase's step too): J' = Jf J
@@ -744,7 +758,7 @@ impl Engine {
         let mut jn = [[[0.0; L]; 2]; 2];
         let mut jac_ok = [!0u64; L];
         if DER {
-            let jf = M::jacobian_n([fx, fy]);
+            let jf = map.jacobian_n([fx, fy]);
             let (lo, hi) = Jac::RANGE;
             for k in 0..L {
                 let e = |r: usize, c: usize| jf[r][0][k] * s.jm[0][c][k] + jf[r][1][k] * s.jm[1][c][k];

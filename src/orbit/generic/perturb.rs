@@ -426,12 +426,12 @@ mod tests {
         };
         for k in KINDS {
             for p in k.min_power..=k.max_power {
-                let formula = Formula::single(Phase { kind: k.kind, power: p });
+                let formula = Formula::single(Phase::new(k.kind, p));
                 let low = f64::from_bits(((1023 - (1022 / p as i32 - 56)) as u64) << 52);
                 let lg = low.log2();
                 let (mut answered, mut tried) = (0, 0);
-                crate::with_map!(formula.phases()[0], M => {
-                    let st = Single(M::default());
+                crate::with_map!(formula.phases()[0], m: M => {
+                    let st = Single(m);
                     for j in 0..3000 {
                         let e = |r: f64| if j % 3 == 0 { lg + r * 8.0 } else { lg + r * (8.0 - lg) };
                         let sign = |r: f64| if r < 0.5 { -1.0 } else { 1.0 };

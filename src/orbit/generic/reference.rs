@@ -122,6 +122,10 @@ fn power_big(formula: &Formula, n: u32, z: &BigC) -> BigC {
         // A product folds u = Z^PRE.
         return z.pow(pre);
     }
+    if phase.kind.sum().is_some() {
+        // A sum folds nothing: its highest power, which no step reads.
+        return z.pow(phase.power);
+    }
     let (fin, p, _, _) = phase.kind.shape(phase.power);
     fold_big(fin, z.clone()).pow(p)
 }
@@ -131,6 +135,9 @@ fn power_big(formula: &Formula, n: u32, z: &BigC) -> BigC {
 /// in f64).
 fn near_fold(formula: &Formula, n: u32, z: [FloatExp; 2], fz: [FloatExp; 2]) -> bool {
     let phase = formula.phase(n);
+    if phase.kind.sum().is_some() {
+        return false;
+    }
     if let Some((pre, _, _)) = phase.kind.factors() {
         if pre == 1 {
             return false;

@@ -328,7 +328,11 @@ fn preperiodic(formula: Formula, julia: Option<&BigC>, k: u32, turns: u32, bits:
 
 /// A view of `formula` centred on a preperiodic point (see [`preperiodic`]), `digits` deep.
 fn preperiodic_view(formula: &str, julia: Option<[&str; 2]>, digits: i32, max_iter: u32) -> View {
-    let formula = Formula::parse(formula, None).unwrap();
+    preperiodic_view_of(Formula::parse(formula, None).unwrap(), julia, digits, max_iter)
+}
+
+/// [`preperiodic_view`] of a formula given as a value (with its coefficient a).
+fn preperiodic_view_of(formula: Formula, julia: Option<[&str; 2]>, digits: i32, max_iter: u32) -> View {
     let bits = (digits as f64 * std::f64::consts::LOG2_10) as u64 + 64;
     let jd = julia.map(|j| dec(&j));
     let jb = jd.as_ref().map(|j| BigC::from_decimals(&j[0], &j[1], bits));
@@ -361,6 +365,51 @@ const FAMILIES: [&str; 12] = [
     "simonbrot2-4th",
     "mothbrot-2x1,mandelbrot^3",
 ];
+
+/// The sums a z² ± z^q with coefficients other than Kalles Fraktaler's default 1: real,
+/// complex, and the fixed 2 of type 44.
+fn sums() -> [(String, Formula); 4] {
+    let f = |name: &str, a: Option<[f64; 2]>| {
+        let formula = Formula::parse(name, None).unwrap();
+        let formula = a.map_or(formula, |a| formula.with_a(a));
+        (format!("{formula} a = {:?}", formula.phases()[0].a), formula)
+    };
+    [
+        f("redshift-rider-1", None),
+        f("redshift-rider-2", Some([-0.6, 0.45])),
+        f("redshift-rider-3", None),
+        f("redshift-rider-8", Some([1.3, -0.2])),
+    ]
+}
+
+/// The sums, shallow, deep, past 1e-320 and as Julia sets, against big floats and on every
+/// SIMD level.
+#[test]
+fn sums_match_big_floats_on_every_level() {
+    for (name, formula) in sums() {
+        for digits in [4, 45, 330] {
+            let view = preperiodic_view_of(formula, None, digits, 3000);
+            check_view(&format!("{name} 1e-{digits}"), &view, 5);
+            let julia = preperiodic_view_of(formula, Some(["-0.2", "0.1"]), digits.min(40), 2000);
+            check_view(&format!("{name} julia 1e-{digits}"), &julia, 5);
+            for view in [&view, &julia] {
+                for (bla, der) in [(Some(DEFAULT_BLA), false), (Some(DEFAULT_BLA), true)] {
+                    let spec = view.spec(bla, der);
+                    let (want, _) = engine_at(view, &spec, SimdLevel::Scalar);
+                    for simd in SimdLevel::usable() {
+                        let (got, _) = engine_at(view, &spec, simd);
+                        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                            let at = format!("{name} 1e-{digits} {simd:?} der {der} sample {k}");
+                            assert_eq!(g.n, w.n, "{at}");
+                            assert_eq!(g.z.map(f64::to_bits), w.z.map(f64::to_bits), "{at}");
+                            assert_eq!(g.dz.map(f64::to_bits), w.dz.map(f64::to_bits), "{at}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
 
 #[test]
 fn shallow_views_match_big_floats() {

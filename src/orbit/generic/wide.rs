@@ -7,7 +7,8 @@
 //! that a fold's `diffabs` decides on, and where |Z| is so small that its powers underflow
 //! the binomial expansion loses its linear term. This step is the same composition (fold,
 //! power, fold, negation, as in `formula::map`) read from the phase's shape at run time and
-//! evaluated wholly in FloatExp (a product family's, `formula::product`, likewise): it runs only at the few wide indices of an orbit, where
+//! evaluated wholly in FloatExp (a product family's, `formula::product`, and a sum's,
+//! `formula::sum`, likewise): it runs only at the few wide indices of an orbit, where
 //! interpreting the shape costs nothing that matters.
 
 use crate::formula::Phase;
@@ -59,6 +60,9 @@ pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d:
     if let Some(factors) = phase.kind.factors() {
         return product_delta(factors, z, u, d);
     }
+    if let Some(neg) = phase.kind.sum() {
+        return sum_delta(phase.a.get(), phase.power, neg, z, d);
+    }
     let (fin, p, fout, sign) = phase.kind.shape(phase.power);
     let dw = fold_delta(fin, z, d);
     let w = fold(fin, z);
@@ -109,6 +113,15 @@ fn product_delta(
     cadd(cmul(dp, cadd(q, dq)), cmul(p, dq))
 }
 
+/// f(Z + d) - f(Z) for the sum a Z² ± Z^Q (`formula::sum`): a ((Z + d)² - Z²) ± ((Z + d)^Q -
+/// Z^Q), each difference by the binomial expansion.
+fn sum_delta(a: [f64; 2], q: u32, neg: bool, z: [FloatExp; 2], d: [FloatExp; 2]) -> [FloatExp; 2] {
+    let (_, s) = power_delta(z, d, 2);
+    let (_, t) = power_delta(z, d, q);
+    let s = cmul([FloatExp::from(a[0]), FloatExp::from(a[1])], s);
+    if neg { [s[0] - t[0], s[1] - t[1]] } else { cadd(s, t) }
+}
+
 /// An f64 value with the signs of `v`'s parts (a part below f64's range becomes the least
 /// normal f64 of its sign): what a Jacobian at `v` needs, whose folds read only signs where
 /// a part is that small.
@@ -140,8 +153,10 @@ mod tests {
             "cubic-quasi-perpendicular",
             "4th-celtic-false-quasi-heart",
             "4th-imag-quasi-perpendicular",
+            "redshift-rider-1",
+            "redshift-rider-9",
         ] {
-            let phase = Formula::parse(name, None).unwrap().phases()[0];
+            let phase = Formula::parse(name, None).unwrap().with_a([-0.6, 1.1]).phases()[0];
             for (z, d) in [
                 (
                     [FloatExp::from(-1.25), FloatExp::exp10(-400.0)],
@@ -163,7 +178,7 @@ mod tests {
                     };
                     BigC { re: f(v[0]), im: f(v[1]), bits }
                 };
-                let step = |v: &BigC| crate::with_map!(phase, M => <M as crate::formula::map::Map>::apply_big(v), unreachable!());
+                let step = |v: &BigC| crate::with_map!(phase, m: M => m.apply_big(v), unreachable!());
                 let want = step(&big(z).add(&big(d))).sub(&step(&big(z))).to_fe();
                 let scale = want[0].abs().max(want[1].abs());
                 for k in 0..2 {

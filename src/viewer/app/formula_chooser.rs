@@ -1,6 +1,7 @@
 //! The formula chooser: a family from [`KINDS`] (by the name users write, Kalles Fraktaler's
 //! as hover text), its power within the powers the family comes in, or any formula typed as
-//! text (a hybrid: `burning-ship,mandelbrot^3`) and read by [`Formula::parse`]. What is
+//! text (a hybrid: `burning-ship,mandelbrot^3`) and read by [`Formula::parse`], and the
+//! coefficient a of a formula that takes one. What is
 //! chosen is a [`Formula`] for the app to give the document; text the parser refuses is
 //! said under the field and changes nothing.
 
@@ -51,7 +52,7 @@ impl FormulaChooser {
                         if r.clicked() && single.map(|p| p.kind) != Some(info.kind) {
                             let power = single.map_or(info.min_power, |p| p.power);
                             let power = if info.kind.has_power(power) { power } else { info.kind.default_power() };
-                            chosen = Some(Formula::single(Phase { kind: info.kind, power }));
+                            chosen = Some(keep_a(Formula::single(Phase::new(info.kind, power)), current));
                         }
                     }
                 })
@@ -76,7 +77,7 @@ impl FormulaChooser {
                                 if ui.selectable_label(power == p.power, power.to_string()).clicked()
                                     && power != p.power
                                 {
-                                    chosen = Some(Formula::single(Phase { kind: p.kind, power }));
+                                    chosen = Some(keep_a(Formula::single(Phase::new(p.kind, power)), current));
                                 }
                             }
                         })
@@ -87,6 +88,21 @@ impl FormulaChooser {
                 .on_disabled_hover_text(format!("{} comes in power {} only", info.name, info.min_power));
             }
         });
+        // The coefficient a of the families that take one (a z² ± z^p).
+        if let Some([re, im]) = current.a() {
+            ui.horizontal(|ui| {
+                let label = ui.label("a");
+                let (mut r, mut i) = (re, im);
+                let hover = "the coefficient a of a z^2 ± z^p + c (Kalles Fraktaler's FactorAR, FactorAI)";
+                let a = ui.add(egui::DragValue::new(&mut r).speed(0.001).prefix("re ")).labelled_by(label.id);
+                let b = ui.add(egui::DragValue::new(&mut i).speed(0.001).prefix("im ")).labelled_by(label.id);
+                a.on_hover_text(hover);
+                b.on_hover_text(hover);
+                if (r, i) != (re, im) && r.is_finite() && i.is_finite() {
+                    chosen = Some(current.with_a([r, i]));
+                }
+            });
+        }
         let r = ui
             .horizontal(|ui| {
                 let label = ui.label("formula");
@@ -114,6 +130,7 @@ impl FormulaChooser {
         match Formula::parse(&self.text, None) {
             Ok(f) => {
                 self.error = None;
+                let f = keep_a(f, current);
                 (f != current).then_some(f)
             }
             Err(e) => {
@@ -126,6 +143,14 @@ impl FormulaChooser {
     /// The formula chosen was refused by the scene: says why under the field.
     pub(super) fn refused(&mut self, why: String) {
         self.error = Some(why);
+    }
+}
+
+/// `formula` with the coefficient a of `current`, where both take one.
+fn keep_a(formula: Formula, current: Formula) -> Formula {
+    match current.a() {
+        Some(a) => formula.with_a(a),
+        None => formula,
     }
 }
 
