@@ -108,7 +108,8 @@ fn formulas_table() -> String {
     out.push_str(
         "\njulia: z^2 + c's Julia set (--julia-c RE,IM); --julia-c gives any family its Julia form.\n\
          Hybrids: phases joined by ',', each NAME or NAME^P, iteration n using phase n mod their number\n\
-         (burning-ship,mandelbrot^3).\n",
+         (burning-ship,mandelbrot^3).\n\
+         a: the coefficient of the redshift-rider families (--formula-a RE,IM; default 1,0).\n",
     );
     out
 }

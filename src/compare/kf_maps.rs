@@ -186,6 +186,7 @@ pub fn defined(phase: Phase) -> bool {
         K::RedshiftRider4 | K::RedshiftRider5 => p == 4,
         K::RedshiftRider6 | K::RedshiftRider7 => p == 5,
         K::RedshiftRider8 | K::RedshiftRider9 => p == 6,
+        K::HpdzBuffalo => p == 2,
     }
 }
 
@@ -419,6 +420,12 @@ fn expand<T: Num>(ev: &mut Ev, phase: Phase, [x, y]: [&T; 2], [cr, ci]: [&T; 2])
         (K::Mothbrot3x3, 6) => mothbrot(ev, [x, y], (3, 3), [cr, ci]),
         (K::Mothbrot4x2, 6) => mothbrot(ev, [x, y], (4, 2), [cr, ci]),
         (K::Mothbrot5x1, 6) => mothbrot(ev, [x, y], (5, 1), [cr, ci]),
+        // Type 41. Xrn = (Xr2 - Xi2) - abs(Xr) + Cr; Xin = abs(Xr * Xi) * 2 - abs(Xi) + Ci.
+        (K::HpdzBuffalo, 2) => {
+            let re = sub(&d2(), &ev.abs(x.clone()));
+            let im = sub(&k(2, &ev.abs(m(x, y))), &ev.abs(y.clone()));
+            [plus(re, cr), plus(im, ci)]
+        }
         // Types 42 to 50.
         (K::RedshiftRider1, 3) => redshift([x, y], Some(phase.a.get()), 3, false, [cr, ci], b),
         (K::RedshiftRider2, 3) => redshift([x, y], Some(phase.a.get()), 3, true, [cr, ci], b),

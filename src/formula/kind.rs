@@ -100,6 +100,8 @@ pub enum Kind {
     CelticRealQuasiHeart4,
     /// z³ (|x| + i|y|)³ + c, Mothbrot 3×3 under its other name (type 40).
     SimonBrot6,
+    /// W² - W + c, W = |x| + i|y| (type 41).
+    HpdzBuffalo,
     /// a z² + z³ + c (type 42).
     RedshiftRider1,
     /// a z² - z³ + c (type 43).
@@ -178,11 +180,23 @@ pub struct KindInfo {
     /// For a product family ([`super::product`]): (PRE, A, B) of u^A (|Re u| + i|Im u|)^B,
     /// u = z^PRE; its fold and sign fields are then [`PRODUCT`], which no composition has.
     pub factors: Option<(u32, u32, u32)>,
-    /// For a family of two terms ([`super::sum`]), a z² + z^p (false) or a z² - z^p (true);
-    /// its fold and sign fields are then [`PRODUCT`].
-    pub sum: Option<bool>,
+    /// For a family of two terms ([`super::sum`]), its shape; its fold and sign fields are
+    /// then [`PRODUCT`].
+    pub sum: Option<SumShape>,
     /// Where the family's coefficient a comes from.
     pub coef: Coefficient,
+}
+
+/// A family of two terms ([`super::sum`]): a W² + W^q, or a W² - W^q where `neg`, with W = z
+/// folded by `fold_in`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SumShape {
+    /// The fold of z before both terms.
+    pub fold_in: u8,
+    /// The second term's power (1 to 6).
+    pub q: u32,
+    /// Whether the second term is subtracted.
+    pub neg: bool,
 }
 
 /// Where a family's coefficient a comes from.
@@ -255,22 +269,22 @@ const fn prow(
     }
 }
 
-/// The row of a family of two terms ([`super::sum`]): a z² + z^q, or a z² - z^q where `neg`,
-/// of power q.
+/// The row of a family of two terms ([`super::sum`]), a W² ± W^q, W = z folded by
+/// `fold_in`, of power max(2, q).
 const fn srow(
     kind: Kind,
     name: &'static str,
     kf_name: &'static str,
     kf_type: u32,
-    q: u32,
-    neg: bool,
+    (fold_in, q, neg): (u8, u32, bool),
     coef: Coefficient,
 ) -> KindInfo {
+    let p = if q > 2 { q } else { 2 };
     KindInfo {
-        sum: Some(neg),
+        sum: Some(SumShape { fold_in, q, neg }),
         coef,
         sign3: PRODUCT,
-        ..row(kind, name, kf_name, kf_type, (q, q), PRODUCT, PRODUCT, PRODUCT)
+        ..row(kind, name, kf_name, kf_type, (p, p), PRODUCT, PRODUCT, PRODUCT)
     }
 }
 
@@ -282,7 +296,7 @@ const BY_Y: u8 = FOLD_IM | IM_BY_Y;
 const BY_XY: u8 = FOLD_IM | IM_BY_X | IM_BY_Y;
 
 /// Every family, in Kalles Fraktaler's order.
-pub const KINDS: [KindInfo; 66] = [
+pub const KINDS: [KindInfo; 67] = [
     row(K::Mandelbrot, "mandelbrot", "Mandelbrot", 0, (2, 10), FOLD_NONE, FOLD_NONE, SIGN_NONE),
     row(K::BurningShip, "burning-ship", "Burning Ship", 1, (2, 5), FOLD_BOTH, FOLD_NONE, SIGN_NONE),
     row(K::Buffalo, "buffalo", "Buffalo", 2, (2, 5), FOLD_NONE, FOLD_BOTH, SIGN_NONE),
@@ -570,13 +584,13 @@ pub const KINDS: [KindInfo; 66] = [
         SIGN_NONE,
     ),
     prow(K::SimonBrot6, "simonbrot-6th", "SimonBrot 6th", 40, (1, 3, 3)),
+    srow(K::HpdzBuffalo, "hpdz-buffalo", "HPDZ Buffalo", 41, (FOLD_BOTH, 1, true), Coefficient::Fixed(1)),
     srow(
         K::RedshiftRider1,
         "redshift-rider-1",
         "TheRedshiftRider 1: a * z^2 + z^3 + c",
         42,
-        3,
-        false,
+        (FOLD_NONE, 3, false),
         Coefficient::User,
     ),
     srow(
@@ -584,8 +598,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-2",
         "TheRedshiftRider 2: a * z^2 - z^3 + c",
         43,
-        3,
-        true,
+        (FOLD_NONE, 3, true),
         Coefficient::User,
     ),
     srow(
@@ -593,8 +606,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-3",
         "TheRedshiftRider 3: 2 * z^2 - z^3 + c",
         44,
-        3,
-        true,
+        (FOLD_NONE, 3, true),
         Coefficient::Fixed(2),
     ),
     srow(
@@ -602,8 +614,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-4",
         "TheRedshiftRider 4: a * z^2 + z^4 + c",
         45,
-        4,
-        false,
+        (FOLD_NONE, 4, false),
         Coefficient::User,
     ),
     srow(
@@ -611,8 +622,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-5",
         "TheRedshiftRider 5: a * z^2 - z^4 + c",
         46,
-        4,
-        true,
+        (FOLD_NONE, 4, true),
         Coefficient::User,
     ),
     srow(
@@ -620,8 +630,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-6",
         "TheRedshiftRider 6: a * z^2 + z^5 + c",
         47,
-        5,
-        false,
+        (FOLD_NONE, 5, false),
         Coefficient::User,
     ),
     srow(
@@ -629,8 +638,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-7",
         "TheRedshiftRider 7: a * z^2 - z^5 + c",
         48,
-        5,
-        true,
+        (FOLD_NONE, 5, true),
         Coefficient::User,
     ),
     srow(
@@ -638,8 +646,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-8",
         "TheRedshiftRider 8: a * z^2 + z^6 + c",
         49,
-        6,
-        false,
+        (FOLD_NONE, 6, false),
         Coefficient::User,
     ),
     srow(
@@ -647,8 +654,7 @@ pub const KINDS: [KindInfo; 66] = [
         "redshift-rider-9",
         "TheRedshiftRider 9: a * z^2 - z^6 + c",
         50,
-        6,
-        true,
+        (FOLD_NONE, 6, true),
         Coefficient::User,
     ),
     prow(K::SimonBrot2, "simonbrot2-4th", "SimonBrot2 4th", 51, (2, 1, 1)),
@@ -727,9 +733,9 @@ impl Kind {
         self.info().coef == Coefficient::User
     }
 
-    /// Some(negated) for a family of two terms ([`KindInfo::sum`]), None otherwise.
+    /// The shape of a family of two terms ([`KindInfo::sum`]), None otherwise.
     #[inline(always)]
-    pub fn sum(self) -> Option<bool> {
+    pub fn sum(self) -> Option<SumShape> {
         self.info().sum
     }
 
@@ -742,12 +748,18 @@ impl Kind {
     /// The map at power `p` in words, derived from its four steps (what `deepfield formulas`
     /// prints): `|Re w| - i Im w + c, w = (|x| + iy)^2`.
     pub fn definition(self, p: u32) -> String {
-        if let Some(neg) = self.sum() {
+        if let Some(SumShape { fold_in, q, neg }) = self.sum() {
             let a = match self.info().coef {
-                Coefficient::Fixed(v) => v.to_string(),
-                _ => "a".into(),
+                Coefficient::Fixed(1) => String::new(),
+                Coefficient::Fixed(v) => format!("{v} "),
+                _ => "a ".into(),
             };
-            return format!("{a} z^2 {} z^{p} + c", if neg { "-" } else { "+" });
+            let op = if neg { "-" } else { "+" };
+            let second = if q == 1 { "W".to_string() } else { format!("W^{q}") };
+            return match fold_in {
+                FOLD_NONE => format!("{a}z^2 {op} {} + c", second.replace('W', "z")),
+                _ => format!("{a}W^2 {op} {second} + c, W = |x| + i|y|"),
+            };
         }
         if let Some((pre, a, b)) = self.factors() {
             let power = |w: &str, n: u32| if n == 1 { w.to_string() } else { format!("{w}^{n}") };
@@ -808,7 +820,8 @@ mod tests {
             assert_eq!(Kind::from_name(a.name), Some(a.kind));
             assert_eq!(Kind::from_kf_type(a.kf_type), Some(a.kind));
         }
-        assert_eq!(Kind::from_kf_type(41), None, "HPDZ Buffalo is refused");
+        assert_eq!(Kind::from_kf_type(52), None, "the general quadratics are refused");
+        assert_eq!(Kind::from_kf_type(41), Some(Kind::HpdzBuffalo));
         assert_eq!(Kind::from_kf_type(44), Some(Kind::RedshiftRider3));
         assert!(Kind::RedshiftRider1.takes_a() && !Kind::RedshiftRider3.takes_a() && !Kind::Mandelbrot.takes_a());
         assert_eq!(Kind::from_kf_type(33), Some(Kind::SimonBrot4));
@@ -826,5 +839,8 @@ mod tests {
         assert_eq!(Kind::Mothbrot2x3.definition(5), "z^2 (|x| + i|y|)^3 + c");
         assert_eq!(Kind::Mothbrot1x1.definition(2), "z (|x| + i|y|) + c");
         assert_eq!(Kind::SimonBrot2.definition(4), "u (|Re u| + i|Im u|) + c, u = z^2");
+        assert_eq!(Kind::RedshiftRider2.definition(3), "a z^2 - z^3 + c");
+        assert_eq!(Kind::RedshiftRider3.definition(3), "2 z^2 - z^3 + c");
+        assert_eq!(Kind::HpdzBuffalo.definition(2), "W^2 - W + c, W = |x| + i|y|");
     }
 }

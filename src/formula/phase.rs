@@ -298,7 +298,7 @@ impl Stepper for Cycle {
 /// Runs `$body` with `$M` the [`Map`] type of `$phase` (a [`Phase`]; with `m: M =>`, `m`
 /// its map, [`Map::of`] the phase), or `$none` when the
 /// phase is not one the table of families holds (a test checks none is missing). The list
-/// is every (Q, negated) of a sum, every (PRE, A, B) of a product family and every (fold in,
+/// is every (fold in, Q, negated) of a sum, every (PRE, A, B) of a product family and every (fold in,
 /// power, fold out, sign) of a composition that the table of families uses.
 #[macro_export]
 macro_rules! with_map {
@@ -313,8 +313,9 @@ macro_rules! with_map {
     }};
     ($phase:expr, $M:ident => $body:expr, $none:expr) => {
         $crate::__map_arms!($phase, $M, $body, $none;
-            // the sums a z^2 ± z^Q: (Q, negated)
-            [(3, false), (3, true), (4, false), (4, true), (5, false), (5, true), (6, false), (6, true)];
+            // the sums a W^2 ± W^Q: (fold in, Q, negated)
+            [(0, 3, false), (0, 3, true), (0, 4, false), (0, 4, true), (0, 5, false), (0, 5, true), (0, 6, false),
+             (0, 6, true), (3, 1, true)];
             // the products u^A (|Re u| + i|Im u|)^B, u = z^PRE: (PRE, A, B)
             [(1, 2, 2), (1, 3, 3), (2, 1, 1), (1, 1, 1), (1, 1, 2), (1, 2, 1), (1, 1, 3), (1, 3, 1),
              (1, 1, 4), (1, 2, 3), (1, 3, 2), (1, 4, 1), (1, 1, 5), (1, 2, 4), (1, 4, 2), (1, 5, 1)];
@@ -350,13 +351,13 @@ macro_rules! with_map {
 #[macro_export]
 macro_rules! __map_arms {
     ($phase:expr, $M:ident, $body:expr, $none:expr;
-     [ $( ($q:literal, $neg:literal) ),* ];
+     [ $( ($fi:literal, $q:literal, $neg:literal) ),* ];
      [ $( ($pre:literal, $a:literal, $b:literal) ),* ];
      $( ($i:literal, $p:literal, $o:literal, $s:literal) ),* ) => {{
         let phase: $crate::formula::Phase = $phase;
         match (phase.kind.sum(), phase.kind.factors()) {
-            $( (Some($neg), _) if phase.power == $q => {
-                type $M = $crate::formula::sum::Sum<$q, $neg>;
+            $( (Some($crate::formula::kind::SumShape { fold_in: $fi, q: $q, neg: $neg }), _) => {
+                type $M = $crate::formula::sum::Sum<$fi, $q, $neg>;
                 $body
             } )*
             (Some(_), _) => $none,

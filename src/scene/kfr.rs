@@ -34,8 +34,8 @@
 //!
 //! What is checked, because deepfield cannot draw it and silently dropping it would give a
 //! different picture: the formula must be one of deepfield's families (a `FractalType` KF
-//! 2.15 has but deepfield does not is refused by KF's name, e.g. "FractalType 42
-//! (TheRedshiftRider 1: a * z^2 + z^3 + c) is not one deepfield draws"), at a power the
+//! 2.15 has but deepfield does not is refused by KF's name, e.g. "FractalType 52
+//! (General Quadratic Minus) is not one deepfield draws"), at a power the
 //! family comes in; a hybrid must be a cycle of whole families; `SeedR`/`SeedI` must be 0
 //! (KF's seed is the starting z_0 of the orbit, not a Julia parameter).
 //!
@@ -610,7 +610,9 @@ Version: 2150500\r\n";
         let e = err("Re: 0\nIm: 0\nZoom: 1\nPower: 3\nFractalType: 52\n");
         assert_eq!(e.message, "FractalType 52 (General Quadratic Minus) is not one deepfield draws");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((5, 14)));
-        for (t, name) in [(41, "HPDZ Buffalo"), (52, "General Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")] {
+        for (t, name) in
+            [(53, "General Quadratic Plus"), (69, "General Abs Quadratic Minus"), (71, "z^2 exp(2 a / z) + c")]
+        {
             let e = err(&format!("Re: 0\nIm: 0\nZoom: 1\nFractalType: {t}\n"));
             assert!(e.message.contains(name), "{t}: {e}");
         }
@@ -633,9 +635,9 @@ Version: 2150500\r\n";
         let (kind, power) = formula_of(&format!("{base}HybridFormula: 0/1|1,1,0,0,4,1,0;{none};0\n"));
         assert_eq!((kind.as_str(), power), ("burning-ship", Some(4)), "one phase is a single family");
         // An operator, pointed at where it is; the FractalType's name comes with it.
-        let e = err(&format!("{base}FractalType: 41\nHybridFormula: 0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1\n")
+        let e = err(&format!("{base}FractalType: 52\nHybridFormula: 0/1|0,0,0,0,3,1,0;0,0,0,0,2,1,0;0\n")
             .replace("FractalType: 0\n", ""));
-        assert!(e.message.contains("combines two operators") && e.message.contains("HPDZ Buffalo"), "{e}");
+        assert!(e.message.contains("combines two operators") && e.message.contains("General Quadratic Minus"), "{e}");
         assert_eq!(e.position.map(|p| (p.line, p.column)), Some((7, 20)));
         // KF draws FractalType when the hybrid is missing or fails its own check.
         let (kind, _) =
@@ -702,7 +704,7 @@ Version: 2150500\r\n";
     fn unsupported_keys_are_refused() {
         let base = "Re: 0\nIm: 0\nZoom: 1\n";
         for (line, needle) in [
-            ("FractalType: 41", "HPDZ Buffalo"),
+            ("FractalType: 70", "General Abs Quadratic Plus"),
             ("Power: 3\nFractalType: 42\nFactorAI: 1e999", "FactorAI"),
             ("Power: 11", "powers 2 to 10"),
             ("FractalType: x", "whole number"),

@@ -17,8 +17,7 @@ use crate::formula::{Formula, Kind, Phase};
 use crate::source::SourceError;
 
 /// KF 2.15's formula types that are none of deepfield's families, with KF's names.
-pub const REFUSED: [(u32, &str); 6] = [
-    (41, "HPDZ Buffalo"),
+pub const REFUSED: [(u32, &str); 5] = [
     (52, "General Quadratic Minus"),
     (53, "General Quadratic Plus"),
     (69, "General Abs Quadratic Minus"),
@@ -114,9 +113,10 @@ pub(super) fn formula(kfr: &Kfr<'_>) -> Result<Chosen, SourceError> {
 /// picture about conj(c) is the mirror image of the picture about c.
 pub(super) fn symmetric(formula: &Formula) -> bool {
     formula.phases().iter().all(|p| {
-        if p.kind.sum().is_some() {
-            // a z² ± z^p at conj(z) is conj(conj(a) z² ± z^p): the mirror image for real a.
-            return p.a.get()[1] == 0.0;
+        if let Some(s) = p.kind.sum() {
+            // a W² ± W^p at conj(z) is conj(conj(a) W² ± W^p) when W(conj z) = conj W, which
+            // a fold of y breaks: the mirror image for real a and no such fold.
+            return p.a.get()[1] == 0.0 && s.fold_in & FOLD_IM == 0;
         }
         if p.kind.factors().is_some() {
             // z^a (|x| + i|y|)^b at conj(z) is conj(z^a) (|x| + i|y|)^b.

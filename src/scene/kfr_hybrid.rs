@@ -27,9 +27,10 @@
 //! alone, is a product family (`formula::product`: Mothbrot, SimonBrot, SimonBrot2).
 //! A group of one line A z² + z^q or A z² - z^q (q = 3 to 6) is a sum family
 //! (`formula::sum`: TheRedshiftRider) with a = A; a formula has one a, so a hybrid whose
-//! sums have different factors is refused.
+//! sums have different factors is refused. The line (|x| + i|y|)² - (|x| + i|y|) is HPDZ
+//! Buffalo (a sum with its W folded).
 //! Anything else is refused with what it is: a line combining two operators otherwise
-//! (HPDZ Buffalo), a factor other than 1, a constant, two
+//! (z³ + z²), a factor other than 1, a constant, two
 //! powers in one iteration, or a map no family has. The sequence of groups must repeat
 //! from the first iteration with at most [`MAX_PHASES`] iterations per cycle (groups
 //! before the loop start are allowed when they equal the loop's end).
@@ -40,7 +41,7 @@
 
 use std::fmt;
 
-use crate::formula::kind::KINDS;
+use crate::formula::kind::{KINDS, SumShape};
 use crate::formula::map::{SIGN_IM, SIGN_RE};
 use crate::formula::phase::MAX_PHASES;
 use crate::formula::{Formula, Phase};
@@ -263,19 +264,21 @@ fn product_phase(steps: &Steps, one: Operator, two: Operator) -> Option<Phase> {
         .map(|k| Phase::new(k.kind, k.min_power))
 }
 
-/// The sum family a `+` or `-` line is, as the only line of its group: A z² then z^q (no
-/// fold or negation, the second operator's factor 1), KF's TheRedshiftRider presets, which
-/// is `redshift-rider-*` with a = A (KF's type 44, 2 z² - z³, is then the row of a z² - z³
-/// with a = 2: the same map).
+/// The sum family a `+` or `-` line is, as the only line of its group: A W² then W^q, the
+/// same folds on both and no negation, the second operator's factor 1. KF's TheRedshiftRider
+/// presets are W = z, `redshift-rider-*` with a = A (KF's type 44, 2 z² - z³, is then the
+/// row of a z² - z³ with a = 2: the same map); its HPDZ Buffalo preset is W = |x| + i|y|,
+/// W² - W, whose A must be its fixed 1.
 fn sum_phase(one: Operator, two: Operator, minus: bool) -> Option<Phase> {
-    if one.abs != 0 || one.neg != 0 || one.pow != 2 || two.abs != 0 || two.neg != 0 || two.mul != [1.0, 0.0] {
+    if one.abs != two.abs || one.neg != 0 || two.neg != 0 || one.pow != 2 || two.mul != [1.0, 0.0] {
         return None;
     }
-    let q = u32::try_from(two.pow).ok()?;
-    KINDS
-        .iter()
-        .find(|k| k.sum == Some(minus) && k.min_power == q && k.kind.takes_a())
-        .map(|k| Phase::new(k.kind, q).with_a(one.mul))
+    let shape = SumShape { fold_in: one.abs, q: u32::try_from(two.pow).ok()?, neg: minus };
+    let rows = || KINDS.iter().filter(|k| k.sum == Some(shape));
+    match rows().find(|k| k.kind.takes_a()) {
+        Some(k) => Some(Phase::new(k.kind, k.min_power).with_a(one.mul)),
+        None => rows().map(|k| Phase::new(k.kind, k.min_power)).find(|p| p.a.get() == one.mul),
+    }
 }
 
 /// One group's iteration as a phase.
@@ -499,6 +502,9 @@ mod tests {
             refused(&format!("0/1|1,1,0,0,1,1,0;{NONE};0|0,0,0,0,2,1,0;0,0,0,0,3,1,0;0")).message.contains("combines")
         );
         assert!(refused("0/1|0,0,0,0,2,1,0;0,0,0,0,7,1,0;0").message.contains("combines two operators"));
+        // HPDZ Buffalo: (|x| + i|y|)^2 - (|x| + i|y|), whose factor is its fixed 1.
+        assert_eq!(a("0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1"), ("hpdz-buffalo".into(), None));
+        assert!(refused("0/1|1,1,0,0,2,2,0;1,1,0,0,1,1,0;1").message.contains("combines two operators"));
     }
 
     /// KF's Mothbrot and SimonBrot presets: a line multiplying z^a by (|x| + i|y|)^b, on z or
@@ -570,12 +576,12 @@ mod tests {
     #[test]
     fn operators_factors_and_constants_are_refused_by_what_they_are() {
         // z^3 + z^2 (the order of TheRedshiftRider's terms turned), a product of a partial
-        // fold, HPDZ Buffalo.
+        // fold, HPDZ Buffalo's line with one fold taken away.
         let e = refused("0/1|0,0,0,0,3,1,0;0,0,0,0,2,1,0;0");
         assert!(e.message.contains("`(x + iy)^3 + (x + iy)^2` combines two operators"), "{e}");
         let e = refused("0/1|0,0,0,0,2,1,0;1,0,0,0,2,1,0;2");
         assert!(e.message.contains("(x + iy)^2 * (|x| + iy)^2"), "{e}");
-        let e = refused("0/1|1,1,0,0,2,1,0;1,1,0,0,1,1,0;1");
+        let e = refused("0/1|1,1,0,0,2,1,0;1,0,0,0,1,1,0;1");
         assert!(e.message.contains(" - "), "{e}");
         let e = refused("0/1|0,0,0,0,2,2,0;0,0,0,0,0,0,0;0");
         assert!(e.message.contains("multiplies by 2"), "{e}");

@@ -38,8 +38,8 @@ fn preset_fixtures_convert_or_are_refused_by_name() {
     assert!(e.contains("none of deepfield's families") && e.contains("Mandelbar"), "{e}");
     // TheRedshiftRider 1's line z^2 + z^3 is a z² + z³ with a = 1.
     assert_eq!(ok("formulas_42-3-TheRedshiftRider-1.kfr"), ("redshift-rider-1".into(), None));
-    let e = no("formulas_41-2-HPDZ-Buffalo.kfr");
-    assert!(e.contains("combines two operators") && e.contains("HPDZ Buffalo"), "{e}");
+    // HPDZ Buffalo's line (|x| + i|y|)^2 - (|x| + i|y|) is W² - W with W folded.
+    assert_eq!(ok("formulas_41-2-HPDZ-Buffalo.kfr"), ("hpdz-buffalo".into(), None));
     // A product of z² and (|x| + i|y|)²: SimonBrot 4th and Mothbrot 2×2 are one map.
     assert_eq!(ok("formulas_58-4-Mothbrot-4th-2x2-aka-Simonbrot-4th.kfr").0, "mothbrot-2x2");
 }

@@ -125,11 +125,14 @@ pub fn step(phase: Phase, z: &BigC) -> (BigC, Derivative) {
     if let Some(factors) = phase.kind.factors() {
         return product_step(factors, z);
     }
-    if let Some(neg) = phase.kind.sum() {
-        // A sum a z² ± z^Q is complex-analytic: its derivative is one complex number.
+    if let Some(s) = phase.kind.sum() {
+        // A sum a W² ± W^Q is complex-analytic in W: its derivative is one complex number
+        // after the fold's flips.
         let f = crate::with_map!(phase, m: M => m.apply_big(z), unreachable!("a sum has compiled code"));
-        let a = sum::derivative_big(phase.power, neg, phase.a.get(), z);
-        return (f, Derivative::Composition { a, flip_in: [false; 2], flip_out: [false; 2] });
+        let negative = |x: &Float| *x < 0u32;
+        let flip_in = [s.fold_in & FOLD_RE != 0 && negative(&z.re), s.fold_in & FOLD_IM != 0 && negative(&z.im)];
+        let a = sum::derivative_big(s.q, s.neg, phase.a.get(), &flipped(z, flip_in));
+        return (f, Derivative::Composition { a, flip_in, flip_out: [false; 2] });
     }
     let (fold_in, p, fold_out, sign) = phase.kind.shape(phase.power);
     let negative = |x: &Float| *x < 0u32;

@@ -285,9 +285,16 @@ fn merge(x: &Wide, y: &Wide, dc_max: FloatExp) -> Wide {
 /// The radius of the single step from Z = `z` with the map of iteration `n`.
 fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2], how: &Build) -> f64 {
     let ph = formula.phase(n);
-    if let Some(neg) = ph.kind.sum() {
-        // A sum of two powers: its own bound on the nonlinear terms (`formula::sum`).
-        let r = sum::bla_radius(ph.power, neg, ph.a.get(), z, how.eps);
+    if let Some(shape) = ph.kind.sum() {
+        // A sum of two powers: its own bound on the nonlinear terms (`formula::sum`), and the
+        // fold lines of a fold before it.
+        let mut r = sum::bla_radius(shape, ph.a.get(), z, how.eps);
+        if shape.fold_in & FOLD_RE != 0 {
+            r = r.min(z[0].abs() * SAFE);
+        }
+        if shape.fold_in & FOLD_IM != 0 {
+            r = r.min(z[1].abs() * SAFE);
+        }
         return r.min((how.escape_radius - z[0].hypot(z[1])).max(0.0)).max(0.0);
     }
     let (fin, p, fout, _) = {

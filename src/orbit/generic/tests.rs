@@ -367,8 +367,8 @@ const FAMILIES: [&str; 12] = [
 ];
 
 /// The sums a z² ± z^q with coefficients other than Kalles Fraktaler's default 1: real,
-/// complex, and the fixed 2 of type 44.
-fn sums() -> [(String, Formula); 4] {
+/// complex, and the fixed 2 of type 44; and HPDZ Buffalo, W² - W with W = |x| + i|y|.
+fn sums() -> [(String, Formula); 5] {
     let f = |name: &str, a: Option<[f64; 2]>| {
         let formula = Formula::parse(name, None).unwrap();
         let formula = a.map_or(formula, |a| formula.with_a(a));
@@ -379,6 +379,7 @@ fn sums() -> [(String, Formula); 4] {
         f("redshift-rider-2", Some([-0.6, 0.45])),
         f("redshift-rider-3", None),
         f("redshift-rider-8", Some([1.3, -0.2])),
+        f("hpdz-buffalo", None),
     ]
 }
 

@@ -12,6 +12,7 @@
 //! interpreting the shape costs nothing that matters.
 
 use crate::formula::Phase;
+use crate::formula::kind::SumShape;
 use crate::formula::map::{FOLD_IM, FOLD_RE, IM_BY_X, IM_BY_Y, SIGN_IM, SIGN_RE, binomial};
 use crate::num::FloatExp;
 use crate::num::real::{cadd, cmul};
@@ -60,8 +61,8 @@ pub(super) fn delta(phase: Phase, z: [FloatExp; 2], u: Option<[FloatExp; 2]>, d:
     if let Some(factors) = phase.kind.factors() {
         return product_delta(factors, z, u, d);
     }
-    if let Some(neg) = phase.kind.sum() {
-        return sum_delta(phase.a.get(), phase.power, neg, z, d);
+    if let Some(shape) = phase.kind.sum() {
+        return sum_delta(phase.a.get(), shape, z, d);
     }
     let (fin, p, fout, sign) = phase.kind.shape(phase.power);
     let dw = fold_delta(fin, z, d);
@@ -113,11 +114,13 @@ fn product_delta(
     cadd(cmul(dp, cadd(q, dq)), cmul(p, dq))
 }
 
-/// f(Z + d) - f(Z) for the sum a Z² ± Z^Q (`formula::sum`): a ((Z + d)² - Z²) ± ((Z + d)^Q -
-/// Z^Q), each difference by the binomial expansion.
-fn sum_delta(a: [f64; 2], q: u32, neg: bool, z: [FloatExp; 2], d: [FloatExp; 2]) -> [FloatExp; 2] {
-    let (_, s) = power_delta(z, d, 2);
-    let (_, t) = power_delta(z, d, q);
+/// f(Z + d) - f(Z) for the sum a W² ± W^Q, W = Z folded (`formula::sum`): a ((W + e)² -
+/// W²) ± ((W + e)^Q - W^Q), e the folded delta, each difference by the binomial expansion.
+fn sum_delta(a: [f64; 2], shape: SumShape, z: [FloatExp; 2], d: [FloatExp; 2]) -> [FloatExp; 2] {
+    let SumShape { fold_in, q, neg } = shape;
+    let (w, e) = (fold(fold_in, z), fold_delta(fold_in, z, d));
+    let (_, s) = power_delta(w, e, 2);
+    let (_, t) = power_delta(w, e, q);
     let s = cmul([FloatExp::from(a[0]), FloatExp::from(a[1])], s);
     if neg { [s[0] - t[0], s[1] - t[1]] } else { cadd(s, t) }
 }
@@ -155,6 +158,7 @@ mod tests {
             "4th-imag-quasi-perpendicular",
             "redshift-rider-1",
             "redshift-rider-9",
+            "hpdz-buffalo",
         ] {
             let phase = Formula::parse(name, None).unwrap().with_a([-0.6, 1.1]).phases()[0];
             for (z, d) in [
