@@ -371,6 +371,25 @@ pub(super) fn fold<N: Num>(fold: u8, z: [N; 2]) -> [N; 2] {
     [x, y]
 }
 
+/// The delta of the parts `fold` names folded, against the unfolded value `z`: |Z + d| - |Z|
+/// by [`diffabs`] for those, d itself for the others.
+#[inline(always)]
+pub(super) fn fold_delta<R: Real>(fold: u8, z: [f64; 2], d: [R; 2]) -> [R; 2] {
+    [
+        if fold & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
+        if fold & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
+    ]
+}
+
+/// [`fold_delta`] in [`Num`]s, lane by lane.
+#[inline(always)]
+pub(super) fn fold_delta_n<N: Num>(fold: u8, z: [N; 2], d: [N; 2]) -> [N; 2] {
+    [
+        if fold & FOLD_RE != 0 { z[0].diffabs(d[0]) } else { d[0] },
+        if fold & FOLD_IM != 0 { z[1].diffabs(d[1]) } else { d[1] },
+    ]
+}
+
 /// Negates the part `sign` names.
 #[inline(always)]
 fn signed<N: Num>(sign: u8, z: [N; 2]) -> [N; 2] {
@@ -464,10 +483,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
 
     #[inline(always)]
     fn delta<R: Real>(&self, z: [f64; 2], d: [R; 2]) -> [R; 2] {
-        let dw = [
-            if IN & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
-            if IN & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
-        ];
+        let dw = fold_delta(IN, z, d);
         let w = fold(IN, z);
         let du = power_delta::<P, R>(w, dw);
         let du = if OUT == FOLD_NONE {
@@ -496,10 +512,7 @@ impl<const IN: u8, const P: u32, const OUT: u8, const SIGN: u8> Map for Ops<IN, 
 
     #[inline(always)]
     fn delta_n<N: Num>(&self, z: [N; 2], d: [N; 2]) -> [N; 2] {
-        let dw = [
-            if IN & FOLD_RE != 0 { z[0].diffabs(d[0]) } else { d[0] },
-            if IN & FOLD_IM != 0 { z[1].diffabs(d[1]) } else { d[1] },
-        ];
+        let dw = fold_delta_n(IN, z, d);
         let w = fold(IN, z);
         let du = power_delta_n::<P, N>(w, dw);
         let du = if OUT == FOLD_NONE {

@@ -8,7 +8,7 @@
 //!
 //! After the fold the map is complex-analytic in W, so everything the engines need follows
 //! from complex arithmetic: the perturbed step is a ((W + e)² - W²) ± ((W + e)^Q - W^Q), e =
-//! the folded delta by [`diffabs`] (exact through the fold lines), each difference by the
+//! the folded delta by `diffabs` (exact through the fold lines), each difference by the
 //! binomial expansion (nothing cancels), and the Jacobian is the complex derivative
 //! g = 2 a W ± Q W^(Q-1) after the fold's reflection, the matrix of g times diag(sgn x,
 //! sgn y) for the parts folded.
@@ -22,7 +22,8 @@
 
 use super::kind::SumShape;
 use super::map::{
-    FOLD_IM, FOLD_NONE, FOLD_RE, Map, Num, diffabs, fold, fold_big, nmul, power, power_delta, power_delta_n,
+    FOLD_IM, FOLD_NONE, FOLD_RE, Map, Num, fold, fold_big, fold_delta, fold_delta_n, nmul, power, power_delta,
+    power_delta_n,
 };
 use super::phase::Phase;
 use crate::num::bigcomplex::BigC;
@@ -79,10 +80,7 @@ impl<const IN: u8, const Q: u32, const NEG: bool> Map for Sum<IN, Q, NEG> {
 
     #[inline(always)]
     fn delta<R: Real>(&self, z: [f64; 2], d: [R; 2]) -> [R; 2] {
-        let e = [
-            if IN & FOLD_RE != 0 { diffabs(z[0], d[0]) } else { d[0] },
-            if IN & FOLD_IM != 0 { diffabs(z[1], d[1]) } else { d[1] },
-        ];
+        let e = fold_delta(IN, z, d);
         let w = fold(IN, z);
         let a = [R::from_f64(self.a[0]), R::from_f64(self.a[1])];
         let s = cmul(a, power_delta::<2, R>(w, e));
@@ -92,10 +90,7 @@ impl<const IN: u8, const Q: u32, const NEG: bool> Map for Sum<IN, Q, NEG> {
 
     #[inline(always)]
     fn delta_n<N: Num>(&self, z: [N; 2], d: [N; 2]) -> [N; 2] {
-        let e = [
-            if IN & FOLD_RE != 0 { z[0].diffabs(d[0]) } else { d[0] },
-            if IN & FOLD_IM != 0 { z[1].diffabs(d[1]) } else { d[1] },
-        ];
+        let e = fold_delta_n(IN, z, d);
         let w = fold(IN, z);
         let a = [N::splat(self.a[0]), N::splat(self.a[1])];
         combine::<NEG, N>(nmul(a, power_delta_n::<2, N>(w, e)), power_delta_n::<Q, N>(w, e))
