@@ -24,7 +24,7 @@ pub struct Product<const PRE: u32, const A: u32, const B: u32>;
 
 /// n w^(n-1) for one sample or several in lanes: the complex derivative of w^n.
 #[inline(always)]
-fn slope<N: Num>(n: u32, w: [N; 2]) -> [N; 2] {
+pub(super) fn slope<N: Num>(n: u32, w: [N; 2]) -> [N; 2] {
     let mut a = [N::splat(1.0), N::splat(0.0)];
     for _ in 1..n {
         a = nmul(a, w);

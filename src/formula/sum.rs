@@ -20,12 +20,12 @@
 //! connectedness locus of the family, which would follow every critical orbit.
 //! `docs/formulas.md` says so where it lists the families.
 
-use super::kind::SumShape;
 use super::map::{
     FOLD_IM, FOLD_NONE, FOLD_RE, Map, Num, fold, fold_big, fold_delta, fold_delta_n, nmul, power, power_delta,
     power_delta_n,
 };
 use super::phase::Phase;
+use super::product::slope;
 use crate::num::bigcomplex::BigC;
 use crate::num::real::{Real, cadd, cmul};
 
@@ -35,17 +35,6 @@ use crate::num::real::{Real, cadd, cmul};
 pub struct Sum<const IN: u8, const Q: u32, const NEG: bool> {
     /// a = re + i im.
     pub a: [f64; 2],
-}
-
-/// Q z^(Q-1), the complex derivative of z^Q, for one sample or several in lanes.
-#[inline(always)]
-fn slope<const Q: u32, N: Num>(z: [N; 2]) -> [N; 2] {
-    let mut w = [N::splat(1.0), N::splat(0.0)];
-    for _ in 1..Q {
-        w = nmul(w, z);
-    }
-    let k = N::splat(Q as f64);
-    [w[0].mul(k), w[1].mul(k)]
 }
 
 /// `s` plus `t` (`NEG` false) or minus `t`.
@@ -101,7 +90,7 @@ impl<const IN: u8, const Q: u32, const NEG: bool> Map for Sum<IN, Q, NEG> {
         let one = N::splat(1.0);
         let w = fold(IN, z);
         let a = [N::splat(self.a[0]), N::splat(self.a[1])];
-        let g = combine::<NEG, N>(nmul(a, slope::<2, N>(w)), slope::<Q, N>(w));
+        let g = combine::<NEG, N>(nmul(a, slope::<N>(2, w)), slope::<N>(Q, w));
         // The fold's reflection first: column j times the sign of the part it folds.
         let si = if IN & FOLD_RE != 0 { z[0].sgn() } else { one };
         let sj = if IN & FOLD_IM != 0 { z[1].sgn() } else { one };
@@ -118,33 +107,18 @@ pub fn derivative_big(q: u32, neg: bool, a: [f64; 2], w: &BigC) -> BigC {
     if neg { s.sub(&t) } else { s.add(&t) }
 }
 
-/// The radius within which one perturbed step from Z = `z` is linear to `eps` of its
+/// The radius within which one perturbed step from Z (|Z| = `az`) is linear to `eps` of its
 /// linear part, apart from the fold lines (which the caller keeps the delta off): the
-/// dropped terms are a e² and Σ_(k>=2) C(Q,k) W^(Q-k) e^k (|e| = |d| off the fold lines),
-/// which for |d| <= |Z| stay below |d|² (|a| + |Z|^(Q-2) (2^Q - 1 - Q)) (the binomial row's
-/// sum from k = 2, with |d|^(k-2) <= |Z|^(k-2); nothing for Q = 1), and the linear part is
-/// |g| |d| exactly (a complex number after a reflection). So the step holds for |d| <
-/// min(|Z|, eps |g| / that bracket); it is 0 at a critical point, where no linear step is
-/// valid.
-pub fn bla_radius(shape: SumShape, a: [f64; 2], z: [f64; 2], eps: f64) -> f64 {
-    let SumShape { fold_in, q, neg } = shape;
-    let az = z[0].hypot(z[1]);
-    // g at W, the folded point (|W| = |Z|).
-    let [x, y] = [
-        if fold_in & FOLD_RE != 0 { z[0].abs() } else { z[0] },
-        if fold_in & FOLD_IM != 0 { z[1].abs() } else { z[1] },
-    ];
-    let mut w = [1.0, 0.0];
-    for _ in 1..q {
-        w = [w[0] * x - w[1] * y, w[0] * y + w[1] * x];
-    }
-    let t = [q as f64 * w[0], q as f64 * w[1]];
-    let s = [2.0 * (a[0] * x - a[1] * y), 2.0 * (a[0] * y + a[1] * x)];
-    let g = if neg { [s[0] - t[0], s[1] - t[1]] } else { [s[0] + t[0], s[1] + t[1]] };
-    let lin = g[0].hypot(g[1]);
+/// dropped terms are a e² and Σ_(k>=2) C(q,k) W^(q-k) e^k (|e| = |d| off the fold lines),
+/// which for |d| <= |Z| stay below |d|² (|a| + |Z|^(q-2) (2^q - 1 - q)) (the binomial row's
+/// sum from k = 2, with |d|^(k-2) <= |Z|^(k-2); nothing for q = 1), and the linear part is
+/// |g| |d| exactly (`g_abs`, the modulus of the complex derivative g = 2 a W ± q W^(q-1):
+/// the Jacobian is g after a reflection). So the step holds for |d| < min(|Z|, eps |g| /
+/// that bracket); it is 0 at a critical point, where no linear step is valid.
+pub fn bla_radius(q: u32, a: [f64; 2], az: f64, g_abs: f64, eps: f64) -> f64 {
     let rows = (1u64 << q) as f64 - 1.0 - q as f64;
     let higher = if rows > 0.0 { az.powi(q as i32 - 2) * rows } else { 0.0 };
-    let r = eps * lin / (a[0].hypot(a[1]) + higher);
+    let r = eps * g_abs / (a[0].hypot(a[1]) + higher);
     if r.is_finite() { r.min(az) } else { 0.0 }
 }
 
@@ -211,20 +185,19 @@ mod tests {
     fn the_radius_bounds_the_nonlinear_terms() {
         fn one<const IN: u8, const Q: u32, const NEG: bool>(a: [f64; 2], z: [f64; 2], eps: f64) {
             let m = Sum::<IN, Q, NEG> { a };
-            let shape = SumShape { fold_in: IN, q: Q, neg: NEG };
-            let mut r = bla_radius(shape, a, z, eps);
+            let jac = m.jacobian(z);
+            let mut r = bla_radius(Q, a, z[0].hypot(z[1]), jac[0][0].hypot(jac[1][0]), eps);
             assert!(r > 0.0, "{a:?} {z:?}");
             if IN != FOLD_NONE {
                 r = r.min(z[0].abs()).min(z[1].abs()) * 0.999;
             }
-            let jac = m.jacobian(z);
             for angle in 0..8 {
                 let t = angle as f64 * 0.785;
                 let d = [r * t.cos(), r * t.sin()];
                 let full = m.delta::<f64>(z, d);
                 let lin = [jac[0][0] * d[0] + jac[0][1] * d[1], jac[1][0] * d[0] + jac[1][1] * d[1]];
                 let err = (full[0] - lin[0]).hypot(full[1] - lin[1]);
-                assert!(err <= eps * lin[0].hypot(lin[1]) * (1.0 + 1e-9), "{a:?} {z:?} {shape:?}");
+                assert!(err <= eps * lin[0].hypot(lin[1]) * (1.0 + 1e-9), "{a:?} {z:?} {IN} {Q} {NEG}");
             }
         }
         let eps = 1e-3;
@@ -240,8 +213,11 @@ mod tests {
         // 2 a z - 3 z² = 0 at z = 2a/3; 2W - 1 = 0 at W = 1/2.
         let a = [0.9, -0.3];
         let c = [2.0 * a[0] / 3.0, 2.0 * a[1] / 3.0];
-        assert!(bla_radius(SumShape { fold_in: FOLD_NONE, q: 3, neg: true }, a, c, eps) < 1e-15);
-        assert_eq!(bla_radius(SumShape { fold_in: FOLD_BOTH, q: 1, neg: true }, [1.0, 0.0], [-0.5, 0.0], eps), 0.0);
+        let g = |j: crate::formula::map::Mat2| j[0][0].hypot(j[1][0]);
+        let at_c = Sum::<FOLD_NONE, 3, true> { a }.jacobian(c);
+        assert!(bla_radius(3, a, c[0].hypot(c[1]), g(at_c), eps) < 1e-15);
+        let at_half = Sum::<FOLD_BOTH, 1, true> { a: [1.0, 0.0] }.jacobian([-0.5, 0.0]);
+        assert_eq!(bla_radius(1, [1.0, 0.0], 0.5, g(at_half), eps), 0.0);
         // The big-float derivative is the Jacobian's complex number.
         let m = Sum::<FOLD_NONE, 5, true> { a };
         for z in POINTS {

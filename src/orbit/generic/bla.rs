@@ -285,24 +285,18 @@ fn merge(x: &Wide, y: &Wide, dc_max: FloatExp) -> Wide {
 /// The radius of the single step from Z = `z` with the map of iteration `n`.
 fn single_radius<S: Stepper>(stepper: &S, formula: &Formula, n: u32, z: [f64; 2], how: &Build) -> f64 {
     let ph = formula.phase(n);
-    if let Some(shape) = ph.kind.sum() {
-        // A sum of two powers: its own bound on the nonlinear terms (`formula::sum`), and the
-        // fold lines of a fold before it.
-        let mut r = sum::bla_radius(shape, ph.a.get(), z, how.eps);
-        if shape.fold_in & FOLD_RE != 0 {
-            r = r.min(z[0].abs() * SAFE);
-        }
-        if shape.fold_in & FOLD_IM != 0 {
-            r = r.min(z[1].abs() * SAFE);
-        }
-        return r.min((how.escape_radius - z[0].hypot(z[1])).max(0.0)).max(0.0);
-    }
-    let (fin, p, fout, _) = {
-        let ph = formula.phase(n);
-        ph.kind.shape(ph.power)
-    };
     let az = z[0].hypot(z[1]);
-    let mut r = how.eps * az / (p - 1) as f64;
+    let (fin, p, fout, _) = ph.kind.shape(ph.power);
+    // The nonlinear terms: a power's stay below ε of the linear one for |δ| < ε |Z| / (p - 1);
+    // a sum of two powers has its own bound (`formula::sum`), against |g| |δ|, g the
+    // complex derivative (the modulus of a column of the Jacobian), and folds only before.
+    let (fin, fout, mut r) = match ph.kind.sum() {
+        Some(s) => {
+            let j = stepper.jacobian(n, z);
+            (s.fold_in, 0, sum::bla_radius(s.q, ph.a.get(), az, j[0][0].hypot(j[1][0]), how.eps))
+        }
+        None => (fin, fout, how.eps * az / (p - 1) as f64),
+    };
     // A fold before the power, or the sign of x or y that a signed fold after it reads,
     // stays put while the delta does not reach that part's zero line.
     if (fin & FOLD_RE != 0) || (fout & IM_BY_X != 0) {
