@@ -184,6 +184,12 @@ fn report(
                 },
                 d.rebases
             ));
+            if let Some((degree, m)) = d.series {
+                text.push_str(&format!(
+                    "series      degree {degree} to iteration {m}: {} samples started from it, skipping {} iterations\n",
+                    d.series_samples, d.series_iterations
+                ));
+            }
             text.push_str(&format!("interior    detection {}", d.interior_detection.describe()));
             text.push_str(&match d.interior_threshold {
                 Some(t) => format!(

@@ -27,6 +27,7 @@
 //! | | `perturb/drive.rs` | where samples enter, and how they move between number types and lanes |
 //! | | `perturb/start.rs` | a sample's start: its delta, the view-wide skip applied, its derivative |
 //! | | `perturb/skip.rs` | [`Skip`]: the BLA steps every sample of a view takes, as one polynomial |
+//! | | `perturb/series.rs` | [`Series`]: every sample's delta after many iterations as one polynomial of high degree, with bounds |
 //! | | `perturb/der.rs` | the derivative as a mantissa pair with its own exponent |
 //! | | `perturb/lanes.rs` | single steps of several samples in vector lanes (AVX2, AVX-512, NEON) |
 //! | | `perturb/lanes/burst.rs` | the lanes' bursts: plain steps with nothing but an event test, rebases taken in the lane |
@@ -66,7 +67,7 @@ use malachite_float::Float;
 use malachite_q::Rational;
 
 pub use bla::BlaTable;
-pub use perturb::{Counters, Numbers, Perturbation, Skip};
+pub use perturb::{Counters, Numbers, Perturbation, Series, Skip};
 pub use reference::Reference;
 
 use crate::cancel::Cancelled;
@@ -259,6 +260,7 @@ pub fn prepare(
     let mut bla_fe = [None, None];
     let mut bla_f64 = [None, None];
     let mut skip = None;
+    let mut series = None;
     if let Some(eps) = spec.bla {
         for (k, r) in refs.iter().enumerate() {
             // Orbits of 0 step nonlinearly from Z_0 = 0: their tables start at index 1.
@@ -274,6 +276,21 @@ pub fn prepare(
                 // Z_0 (Julia, |δ_0| = |offset|), bounded by the largest offset.
                 let bound = spec.spacing.mul_f64(spec.max_offset);
                 skip = Skip::find(&t, origin, bound, spec.max_iter, eps);
+                // Where the tables cannot merge steps for every sample, a series of high
+                // degree may still hold for most of them (z^2 + c only).
+                let beyond = skip.as_ref().map_or(origin, |k| k.m);
+                series = Series::find(
+                    r,
+                    origin,
+                    mandelbrot,
+                    bound,
+                    spec.spacing,
+                    spec.escape_radius,
+                    spec.max_iter,
+                    eps,
+                    spec.derivative,
+                    beyond,
+                );
             }
             bla_f64[k] = Some(t.to_f64());
             if spec.numbers == Numbers::FloatExp {
@@ -309,6 +326,7 @@ pub fn prepare(
         model_scale: None,
         numbers: spec.numbers,
         skip,
+        series,
         single_d2,
         turn_loop: true,
         disks: true,

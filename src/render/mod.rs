@@ -223,6 +223,14 @@ pub struct DeepStats {
     pub tail_bla_steps: u64,
     /// Rebases.
     pub rebases: u64,
+    /// The view's series (degree, the iteration it reaches), where it reaches past the BLA
+    /// skip.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub series: Option<(usize, u32)>,
+    /// Samples that started from the series, and the iterations they skipped by it.
+    pub series_samples: u64,
+    /// Iterations skipped by the series.
+    pub series_iterations: u64,
     /// Whether interior detection ran, and why (`on`, `auto-on`, `off`,
     /// `auto-exterior-centre`, `auto-minibrot-below-sample`, `auto-few-periods`,
     /// `julia-no-interior`).
@@ -623,6 +631,9 @@ pub fn render<P: Send>(
             bla_iterations: c.bla_iterations,
             tail_bla_steps: c.tail_steps,
             rebases: c.rebases,
+            series: None,
+            series_samples: c.series,
+            series_iterations: c.series_iterations,
             interior_detection: orbit::interior::Decision::Off,
             interior_threshold: None,
             interior_samples: 0,
@@ -657,6 +668,9 @@ pub fn render<P: Send>(
             bla_iterations: c.bla_iterations,
             tail_bla_steps: c.tail_steps,
             rebases: c.rebases,
+            series: d.series_reach().map(|(k, m, _)| (k, m)),
+            series_samples: c.series,
+            series_iterations: c.series_iterations,
             interior_detection: d.interior_decision(),
             interior_threshold: d.interior_check().map(|c| c.below2.to_f64()),
             interior_samples: c.interior,

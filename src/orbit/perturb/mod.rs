@@ -49,6 +49,7 @@ pub(in crate::orbit) mod der;
 mod drive;
 mod lanes;
 mod report;
+mod series;
 mod skip;
 pub(in crate::orbit) mod start;
 mod tail;
@@ -67,6 +68,7 @@ use crate::num::{FloatExp, Real};
 use crate::simd_level::SimdLevel;
 use crate::trap::{Trap, TrapState};
 use der::{DER_HI, DER_LO, DER_TINY_Z2, Der};
+pub use series::Series;
 pub use skip::Skip;
 
 /// The longest cycle interior detection's Newton test looks for, in periods of a nucleus's
@@ -115,6 +117,10 @@ pub struct Counters {
     pub rebases: u64,
     /// Samples Pauldelbrot's criterion flagged (each was fixed by rebasing).
     pub glitches: u64,
+    /// Samples that started from the view's series ([`Series`]).
+    pub series: u64,
+    /// Iterations those samples skipped by it.
+    pub series_iterations: u64,
     /// Samples interior detection stopped before the iteration limit.
     pub interior: u64,
     /// Of those, samples Newton's test found (the rest: the contraction criterion).
@@ -135,6 +141,8 @@ impl Counters {
         self.tail_steps += o.tail_steps;
         self.rebases += o.rebases;
         self.glitches += o.glitches;
+        self.series += o.series;
+        self.series_iterations += o.series_iterations;
         self.interior += o.interior;
         self.newton += o.newton;
         self.disks += o.disks;
@@ -188,6 +196,8 @@ pub struct Perturbation {
     pub(in crate::orbit) numbers: Numbers,
     /// The BLA steps every sample takes first (None: BLA off, or no step is valid for all).
     pub(in crate::orbit) skip: Option<Skip>,
+    /// The view's series, where it reaches past `skip` (see [`Series`]).
+    pub(in crate::orbit) series: Option<Series>,
     /// BLA is tried only while |δ|^2 is at most this (f64 phase); above it a sample takes
     /// single steps, which run in vector lanes (see [`single_step_threshold`]); 0 with
     /// BLA off.

@@ -1,5 +1,6 @@
 //! Where a sample starts: its delta u = origin + spacing × offset, and after the view's
-//! common BLA steps ([`super::Skip`]) the polynomial in u that stands for them, computed in
+//! series ([`super::Series`], where its bounds hold for the sample) or common BLA steps
+//! ([`super::Skip`]) the polynomial in u that stands for them, computed in
 //! f64 where that gives FloatExp's bits and in FloatExp elsewhere; its derivative; and its
 //! interior detection's state (the quadratic model's verdict, which may leave the sample
 //! out of detection from its first step).
@@ -87,7 +88,8 @@ pub(in crate::orbit) fn start_fits_f64(
 
 impl Perturbation {
     /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
-    /// after the view's common BLA steps when `skip` (counted into `counters`).
+    /// when `skip`, after the view's series where it holds for the sample, else after the
+    /// common BLA steps (counted into `counters`).
     /// `known`: the sample's [`Perturbation::start_model`] where the batch has worked it out
     /// (`Perturbation::sample_models`).
     pub(in crate::orbit) fn start(
@@ -122,7 +124,21 @@ impl Perturbation {
             (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
         };
         let mut der = [self.spacing, zero];
-        if let (true, Some(k), Some((dz, scaled))) = (skip, &self.skip, moved) {
+        let series = self.series.as_ref().filter(|_| skip).and_then(|s| s.start(d, self.spacing, self.derivative));
+        if let Some(s) = series {
+            let skipped = (s.m - start.m) as u64;
+            counters.iterations += skipped;
+            counters.series += 1;
+            counters.series_iterations += skipped;
+            start.dz = s.dz;
+            start.m = s.m;
+            start.n = s.m;
+            der = s.der;
+            if let Some(c) = self.interior.filter(|_| !plain) {
+                let [d1, d2] = s.d;
+                start.shrink = Contraction::new(norm2(cadd(d1, cmul(d2, d))), c);
+            }
+        } else if let (true, Some(k), Some((dz, scaled))) = (skip, &self.skip, moved) {
             counters.iterations += (k.m - start.m) as u64;
             counters.bla_iterations += (k.m - start.m) as u64;
             counters.bla_steps += k.steps as u64;
