@@ -668,7 +668,7 @@ pub fn render<P: Send>(
             bla_iterations: c.bla_iterations,
             tail_bla_steps: c.tail_steps,
             rebases: c.rebases,
-            series: d.series_reach().map(|(k, m, _)| (k, m)),
+            series: d.series_reach(),
             series_samples: c.series,
             series_iterations: c.series_iterations,
             interior_detection: d.interior_decision(),

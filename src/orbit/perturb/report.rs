@@ -64,11 +64,10 @@ impl Perturbation {
         self.bla_f64[0].as_ref()
     }
 
-    /// The view's series (see [`crate::orbit::Series`]): its degree and the iterations it
-    /// reaches (the far stop, and the stop every sample passes if earlier); None where the
-    /// BLA skip reaches as far or BLA is off.
-    pub fn series_reach(&self) -> Option<(usize, u32, Option<u32>)> {
-        self.series.as_ref().map(|s| (s.degree(), s.far.m, s.safe.map(|c| c.m)))
+    /// The view's series (see [`crate::orbit::Series`]): its degree and the iteration it
+    /// reaches; None where the BLA skip reaches as far or BLA is off.
+    pub fn series_reach(&self) -> Option<(usize, u32)> {
+        self.series.as_ref().map(|s| (s.degree(), s.far.m))
     }
 
     /// What was decided about interior detection, and why.

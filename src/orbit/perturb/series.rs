@@ -121,8 +121,6 @@ pub struct Checkpoint {
 pub struct Series {
     /// u = δ / s.
     inv_scale: FloatExp,
-    /// s.
-    scale: FloatExp,
     /// The tolerance `tol` (module docs).
     tol: f64,
     /// Where a sample at the view's centre would still pass.
@@ -183,11 +181,12 @@ impl Series {
         let mut n = start;
         let inv = FloatExp::ONE / scale;
         let t = 1.0 / MARGIN;
+        // The coefficients' moduli and their sum, carried from one iteration to the next.
+        let mut a: [f64; DEGREE] = std::array::from_fn(|k| abs(b[k]));
+        let mut norm: f64 = a.iter().sum();
         while n < limit {
             let z = r.get(n);
             let za = abs(z);
-            let a: [f64; DEGREE] = std::array::from_fn(|k| abs(b[k]));
-            let norm: f64 = a.iter().sum();
             // Every sample stays inside the escape circle at n (the loop would stop it).
             if za + norm + g + rem >= escape_radius {
                 break;
@@ -234,8 +233,8 @@ impl Series {
             if !(g.is_finite() && rem.is_finite()) {
                 break;
             }
-            let a: [f64; DEGREE] = std::array::from_fn(|k| abs(b[k]));
-            let norm: f64 = a.iter().sum();
+            a = std::array::from_fn(|k| abs(b[k]));
+            norm = a.iter().sum();
             let stop =
                 Checkpoint { m: n, degree: DEGREE, coef: b, norm, g, r: rem, d: [d0, [d1[0] * inv, d1[1] * inv]] };
             let lead = a[0];
@@ -261,7 +260,7 @@ impl Series {
         }
         let far = far.map(|f| f.1).filter(|f| f.m > beyond)?;
         let safe = safe.map(|s| s.1).filter(|s| s.m > beyond && s.m < far.m);
-        Some(Series { inv_scale: inv, scale, tol, far, safe })
+        Some(Series { inv_scale: inv, tol, far, safe })
     }
 
     /// A sample's start at δc (Mandelbrot) or δ_0 (Julia) `dc` for samples `spacing` apart:
@@ -286,11 +285,6 @@ impl Series {
             })
         };
         from(&self.far).or_else(|| self.safe.as_ref().and_then(from))
-    }
-
-    /// s, the offset of modulus 1 in u.
-    pub fn scale(&self) -> FloatExp {
-        self.scale
     }
 
     /// The series' degree.

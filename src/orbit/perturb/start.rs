@@ -100,12 +100,22 @@ impl Perturbation {
         counters: &mut Counters,
     ) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
-        let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
-        let (d, moved) = if self.start_in_f64(offset) {
-            start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
-        } else {
-            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
+        let arithmetic = |common| {
+            if self.start_in_f64(offset) {
+                start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
+            } else {
+                start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
+            }
         };
+        let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
+        // The series first where the view has one; the common steps' polynomial only for a
+        // sample whose series bounds fail.
+        let series_on = self.series.as_ref().filter(|_| skip);
+        let (d, mut moved) = arithmetic(if series_on.is_some() { None } else { common });
+        let series = series_on.and_then(|s| s.start(d, self.spacing, self.derivative));
+        if series_on.is_some() && series.is_none() && common.is_some() {
+            moved = arithmetic(common).1;
+        }
         // A sample whose quadratic model escapes leaves interior detection here.
         let model = known.or_else(|| self.start_model(self.model_map()?, offset));
         let plain = model == Some(Model::Escapes);
@@ -124,7 +134,6 @@ impl Perturbation {
             (Sample { dz: d, dc: [zero; 2], m: 0, which: 0, n: 0, single: false, shrink, probe }, zero)
         };
         let mut der = [self.spacing, zero];
-        let series = self.series.as_ref().filter(|_| skip).and_then(|s| s.start(d, self.spacing, self.derivative));
         if let Some(s) = series {
             let skipped = (s.m - start.m) as u64;
             counters.iterations += skipped;

@@ -130,6 +130,26 @@ fn view_wide_skip_agrees_with_stepping_each_sample() {
     }
 }
 
+/// A Mandelbrot view's spec with BLA at `eps`, escape radius 2^16, no derivative, no
+/// interior detection, f64 deltas and this CPU's SIMD level; tests set what they vary.
+fn bla_spec(center: [&str; 2], spacing: FloatExp, max_offset: f64, max_iter: u32, eps: f64) -> DeepSpec {
+    DeepSpec {
+        center: dec(center),
+        julia: None,
+        spacing,
+        max_offset,
+        max_iter,
+        escape_radius: 65536.0,
+        derivative: false,
+        bla: Some(eps),
+        interior: Detection::Off,
+        numbers: Numbers::F64,
+        simd: SimdLevel::detect(),
+        references: None,
+        dense_orbit: None,
+    }
+}
+
 fn dec(v: [&str; 2]) -> [Decimal; 2] {
     [Decimal::parse(v[0]).unwrap(), Decimal::parse(v[1]).unwrap()]
 }
@@ -359,20 +379,12 @@ fn lanes_match_one_sample_at_a_time() {
 #[test]
 fn the_turn_loops_step_is_the_one_the_search_finds() {
     let (w, h) = (32u32, 24u32);
+    let spacing = Scale::Radius(Decimal::parse("1e-102").unwrap()).spacing(h);
+    let max_offset = f64::from(w * w + h * h).sqrt() / 2.0;
     let spec = DeepSpec {
-        center: dec(EYE_MINIBROT),
-        julia: None,
-        spacing: Scale::Radius(Decimal::parse("1e-102").unwrap()).spacing(h),
-        max_offset: f64::from(w * w + h * h).sqrt() / 2.0,
-        max_iter: 100_000,
         escape_radius: 2.0,
         derivative: true,
-        bla: Some(crate::orbit::DEFAULT_BLA_TOLERANCE),
-        interior: Detection::Off,
-        numbers: Numbers::F64,
-        simd: SimdLevel::detect(),
-        references: None,
-        dense_orbit: None,
+        ..bla_spec(EYE_MINIBROT, spacing, max_offset, 100_000, crate::orbit::DEFAULT_BLA_TOLERANCE)
     };
     let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
     let r = &p.refs[0];
@@ -512,19 +524,9 @@ fn series_agrees_with_big_float_iteration() {
             let max_offset = f64::hypot(w, h) / 2.0;
             let spacing = Scale::Radius(Decimal::parse(radius).unwrap()).spacing(h as u32);
             let spec = DeepSpec {
-                center: dec(center),
                 julia: julia.map(dec),
-                spacing,
-                max_offset,
-                max_iter,
-                escape_radius: 65536.0,
                 derivative,
-                bla: Some(1e-14),
-                interior: Detection::Off,
-                numbers: Numbers::F64,
-                simd: SimdLevel::detect(),
-                references: None,
-                dense_orbit: None,
+                ..bla_spec(center, spacing, max_offset, max_iter, 1e-14)
             };
             let p = prepare(&spec, &|_, _| {}, &AtomicBool::new(false)).expect("prepared");
             let what = format!("{radius} at {center:?}, derivative {derivative}");
