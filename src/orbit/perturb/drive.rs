@@ -7,6 +7,7 @@
 
 use std::sync::atomic::AtomicBool;
 
+use super::series::Start;
 use super::*;
 
 impl Perturbation {
@@ -176,17 +177,21 @@ impl Perturbation {
     }
 
     /// Runs sample `k` from its start until it ends (written to `out`) or reaches a single
-    /// step in single-step mode, where it is returned for the vector lanes.
+    /// step in single-step mode, where it is returned for the vector lanes. `given`: its
+    /// series start where the lanes' feed worked it out beside its neighbours'
+    /// ([`Perturbation::series_starts`]).
+    #[allow(clippy::too_many_arguments)] // the sample, its series start, and where it goes
     pub(super) fn begin(
         &self,
         k: usize,
         offset: [f64; 2],
         known: Option<Model>,
+        given: Option<Option<Start>>,
         out: &mut [Orbit],
         counters: &mut Counters,
         cancel: &AtomicBool,
     ) -> Option<Held> {
-        let (start, der, _) = self.start(offset, known, true, counters);
+        let (start, der, _) = self.start_given(offset, known, true, given, counters);
         let phase = if self.starts_in_floatexp(&start) { Phase::Fe(start) } else { Phase::F64(start.convert()) };
         self.hand_over(phase, k, start.dc, der, out, counters, cancel)
     }

@@ -51,6 +51,7 @@ use std::sync::atomic::AtomicBool;
 
 use pulp::Simd;
 
+use super::series::Start;
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
 use crate::orbit::interior;
 use crate::orbit::interior::model::Model;
@@ -64,6 +65,8 @@ use crate::simd_level::SimdLevel;
 const MAX_W: usize = 8;
 /// Vectors in flight (their dependency chains overlap).
 const G: usize = 2;
+/// Samples whose series starts are worked out together ([`Perturbation::series_starts`]).
+const STARTS: usize = 8;
 
 /// `[e(0), e(1)]` for an expression `e` of the vector's index `g`: what
 /// `std::array::from_fn` (or an iterator over the vectors) would build, written out. The
@@ -280,6 +283,10 @@ pub(super) fn orbits(
     cancel: &AtomicBool,
 ) -> bool {
     let mut next = 0;
+    // The series starts of the samples from `batch` on, worked out together (each sample's
+    // alone is a chain of dependent operations: Series::starts).
+    let mut batch = 0;
+    let mut starts: Option<[Option<Start>; STARTS]> = None;
     let mut feed = |back: Option<Held>, counters: &mut Counters| -> Option<Held> {
         if let Some(h) = back
             && let Some(h) = p.resume(h, out, counters, cancel)
@@ -289,7 +296,12 @@ pub(super) fn orbits(
         while next < offsets.len() {
             let k = next;
             next += 1;
-            if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), out, counters, cancel) {
+            if k % STARTS == 0 {
+                batch = k;
+                starts = p.series_starts::<STARTS>(&offsets[k..]);
+            }
+            let given = starts.as_mut().map(|s| s[k - batch].take());
+            if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), given, out, counters, cancel) {
                 return Some(h);
             }
         }

@@ -266,16 +266,26 @@ impl Series {
     /// A sample's start at δc (Mandelbrot) or δ_0 (Julia) `dc` for samples `spacing` apart:
     /// from the farthest stop whose bounds hold for it, or None.
     pub fn start(&self, dc: [FloatExp; 2], spacing: FloatExp, derivative: bool) -> Option<Start> {
-        let u = [(dc[0] * self.inv_scale).to_f64(), (dc[1] * self.inv_scale).to_f64()];
+        let [s] = self.starts(&[dc], spacing, derivative);
+        s
+    }
+
+    /// [`Series::start`] of `N` samples at once. Horner's rule for one sample is a chain of
+    /// dependent multiplies and adds; here the `N` chains run in one loop and overlap. Each
+    /// sample's operations are the ones it would take alone, in the same order, so each
+    /// start has the same bits.
+    pub fn starts<const N: usize>(
+        &self,
+        dc: &[[FloatExp; 2]; N],
+        spacing: FloatExp,
+        derivative: bool,
+    ) -> [Option<Start>; N] {
+        let u: [[f64; 2]; N] =
+            std::array::from_fn(|j| [(dc[j][0] * self.inv_scale).to_f64(), (dc[j][1] * self.inv_scale).to_f64()]);
         // (Moduli by square roots here, not `hypot`: every value is far from f64's limits.)
-        let t = (u[0] * u[0] + u[1] * u[1]).sqrt();
-        // (A NaN offset fails too.)
-        if t.is_nan() || t > 1.0 / MARGIN {
-            return None;
-        }
+        let t: [f64; N] = std::array::from_fn(|j| (u[j][0] * u[j][0] + u[j][1] * u[j][1]).sqrt());
         let h = (spacing * self.inv_scale).to_f64();
-        let from = |at: &Checkpoint| -> Option<Start> {
-            let (p, dp) = at.eval(u);
+        let from = |at: &Checkpoint, (p, dp): ([f64; 2], [f64; 2]), t: f64| -> Option<Start> {
             let slope = (dp[0] * dp[0] + dp[1] * dp[1]).sqrt();
             at.errors(t).hold(slope, self.tol, h, derivative).then(|| Start {
                 dz: [FloatExp::from(p[0]), FloatExp::from(p[1])],
@@ -284,7 +294,18 @@ impl Series {
                 d: at.d,
             })
         };
-        from(&self.far).or_else(|| self.safe.as_ref().and_then(from))
+        let far = self.far.eval(&u);
+        std::array::from_fn(|j| {
+            // (A NaN offset fails too.)
+            if t[j].is_nan() || t[j] > 1.0 / MARGIN {
+                return None;
+            }
+            from(&self.far, (far.0[j], far.1[j]), t[j]).or_else(|| {
+                let safe = self.safe.as_ref()?;
+                let ([p], [dp]) = safe.eval(&[u[j]]);
+                from(safe, (p, dp), t[j])
+            })
+        })
     }
 
     /// The series' degree.
@@ -325,16 +346,18 @@ impl Checkpoint {
         c
     }
 
-    /// P(u) and P'(u) by Horner's rule.
+    /// P(u) and P'(u) by Horner's rule at each of `N` points, the points' chains in one loop.
     #[inline]
-    fn eval(&self, u: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    fn eval<const N: usize>(&self, u: &[[f64; 2]; N]) -> ([[f64; 2]; N], [[f64; 2]; N]) {
         // Q(u) = Σ B_k u^(k-1): P = u Q, P' = Q + u Q'.
-        let (mut q, mut dq) = (self.coef[self.degree - 1], [0.0; 2]);
+        let (mut q, mut dq) = ([self.coef[self.degree - 1]; N], [[0.0; 2]; N]);
         for k in (0..self.degree - 1).rev() {
-            dq = cadd(cmul(dq, u), q);
-            q = cadd(cmul(q, u), self.coef[k]);
+            for j in 0..N {
+                dq[j] = cadd(cmul(dq[j], u[j]), q[j]);
+                q[j] = cadd(cmul(q[j], u[j]), self.coef[k]);
+            }
         }
-        (cmul(u, q), cadd(q, cmul(u, dq)))
+        (std::array::from_fn(|j| cmul(u[j], q[j])), std::array::from_fn(|j| cadd(q[j], cmul(u[j], dq[j]))))
     }
 
     /// Bounds on |P(u) - δ(u)| and |P'(u) - δ'(u)| at |u| = t <= 0.8, the truncation's and

@@ -5,6 +5,7 @@
 //! interior detection's state (the quadratic model's verdict, which may leave the sample
 //! out of detection from its first step).
 
+use super::series::Start;
 use super::{Counters, DOWN, Der, NEVER, Numbers, Perturbation, Sample};
 use crate::num::real::{cadd, cconv, cmul, norm2};
 use crate::num::{FloatExp, Real};
@@ -99,20 +100,30 @@ impl Perturbation {
         skip: bool,
         counters: &mut Counters,
     ) -> (Sample<FloatExp>, Der, FloatExp) {
+        self.start_given(offset, known, skip, None, counters)
+    }
+
+    /// [`Perturbation::start`] with the sample's series start `given` where it was worked out
+    /// already ([`Perturbation::series_starts`], which gives the same start).
+    pub(in crate::orbit) fn start_given(
+        &self,
+        offset: [f64; 2],
+        known: Option<Model>,
+        skip: bool,
+        given: Option<Option<Start>>,
+        counters: &mut Counters,
+    ) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
-        let arithmetic = |common| {
-            if self.start_in_f64(offset) {
-                start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
-            } else {
-                start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
-            }
-        };
+        let arithmetic = |common| self.start_arithmetic(offset, common);
         let common = self.skip.as_ref().filter(|_| skip).map(|k| k.k);
         // The series first where the view has one; the common steps' polynomial only for a
         // sample whose series bounds fail.
         let series_on = self.series.as_ref().filter(|_| skip);
         let (d, mut moved) = arithmetic(if series_on.is_some() { None } else { common });
-        let series = series_on.and_then(|s| s.start(d, self.spacing, self.derivative));
+        let series = match given {
+            Some(given) if series_on.is_some() => given,
+            _ => series_on.and_then(|s| s.start(d, self.spacing, self.derivative)),
+        };
         if series_on.is_some() && series.is_none() && common.is_some() {
             moved = arithmetic(common).1;
         }
@@ -163,6 +174,30 @@ impl Perturbation {
         // Without a derivative the loop never reads it (its DER parameter is false).
         let der = if self.derivative { Der::from_fe(der, add_fe) } else { Der::UNUSED };
         (start, der, add_fe)
+    }
+
+    /// [`start_arithmetic`] for the sample at `offset`, in f64 where that gives FloatExp's bits.
+    #[allow(clippy::type_complexity)] // start_arithmetic's
+    fn start_arithmetic(
+        &self,
+        offset: [f64; 2],
+        common: Option<[[FloatExp; 2]; 2]>,
+    ) -> ([FloatExp; 2], Option<([FloatExp; 2], [FloatExp; 2])>) {
+        if self.start_in_f64(offset) {
+            start_arithmetic::<f64>(self.spacing, self.origin, offset, common, self.derivative)
+        } else {
+            start_arithmetic::<FloatExp>(self.spacing, self.origin, offset, common, self.derivative)
+        }
+    }
+
+    /// The series starts of up to `N` samples at `offsets` (the rest of the `N` unused), for
+    /// [`Perturbation::start_given`]: the view's series evaluated for all of them at once
+    /// ([`super::Series::starts`]), or None where the view has no series.
+    pub(in crate::orbit) fn series_starts<const N: usize>(&self, offsets: &[[f64; 2]]) -> Option<[Option<Start>; N]> {
+        let series = self.series.as_ref()?;
+        let dc: [[FloatExp; 2]; N] =
+            std::array::from_fn(|j| offsets.get(j).map_or([FloatExp::ZERO; 2], |&o| self.start_arithmetic(o, None).0));
+        Some(series.starts(&dc, self.spacing, self.derivative))
     }
 
     /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`],

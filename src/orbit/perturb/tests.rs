@@ -550,6 +550,7 @@ fn series_agrees_with_big_float_iteration() {
             };
             let (centre, param) = (big(center), julia.map(big));
             let (mut served, mut tried) = (0, 0);
+            let mut dcs = Vec::new();
             for k in 0..48 {
                 // Rings out to the view's corners, and the corners themselves.
                 let angle = k as f64 * 0.61803398875 * std::f64::consts::TAU;
@@ -560,6 +561,7 @@ fn series_agrees_with_big_float_iteration() {
                     [scale * max_offset * angle.cos() * 0.8, scale * max_offset * angle.sin() * 0.6]
                 };
                 let dc = [spacing.mul_f64(off[0]), spacing.mul_f64(off[1])];
+                dcs.push(dc);
                 tried += 1;
                 let Some(st) = series.start(dc, spacing, derivative) else { continue };
                 served += 1;
@@ -594,6 +596,21 @@ fn series_agrees_with_big_float_iteration() {
                 }
             }
             assert!(served * 10 >= tried * 9, "{what}: {served} of {tried} samples started from the series");
+            // Eight at a time (`Series::starts`, as the lanes' feed takes them), the same
+            // starts bit for bit, and the same refusals past the series' disk.
+            dcs.extend((0..8).map(|i| [spacing.mul_f64(max_offset * (1.2 + 0.1 * i as f64)), spacing.mul_f64(1.0)]));
+            let bits = |v: [FloatExp; 2]| v.map(|x| (x.mantissa().to_bits(), x.exponent()));
+            let key = |s: Option<super::series::Start>| s.map(|s| (bits(s.dz), bits(s.der), s.m));
+            let mut refused = 0;
+            for chunk in dcs.chunks_exact(8) {
+                let many = series.starts::<8>(chunk.try_into().expect("eight"), spacing, derivative);
+                for (dc, s) in chunk.iter().zip(many) {
+                    let one = series.start(*dc, spacing, derivative);
+                    refused += usize::from(one.is_none());
+                    assert_eq!(key(s), key(one), "{what}: δc {dc:?} in a batch of eight");
+                }
+            }
+            assert!(refused >= 8, "{what}: {refused} samples refused, the 8 past the disk among them");
         }
     }
 }
