@@ -7,7 +7,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use super::series::Start;
+use super::start::Given;
 use super::*;
 
 impl Perturbation {
@@ -186,7 +186,7 @@ impl Perturbation {
         k: usize,
         offset: [f64; 2],
         known: Option<Model>,
-        given: Option<Option<Start>>,
+        given: Option<Given>,
         out: &mut [Orbit],
         counters: &mut Counters,
         cancel: &AtomicBool,

@@ -51,7 +51,7 @@ use std::sync::atomic::AtomicBool;
 
 use pulp::Simd;
 
-use super::series::Start;
+use super::start::Given;
 use super::{Counters, DER_HI, DER_LO, DER_TINY_Z2, DOWN, Held, Numbers, Perturbation};
 use crate::orbit::interior;
 use crate::orbit::interior::model::Model;
@@ -286,7 +286,7 @@ pub(super) fn orbits(
     // The series starts of the samples from `batch` on, worked out together (each sample's
     // alone is a chain of dependent operations: Series::starts).
     let mut batch = 0;
-    let mut starts: Option<[Option<Start>; STARTS]> = None;
+    let mut starts: Option<[Given; STARTS]> = None;
     let mut feed = |back: Option<Held>, counters: &mut Counters| -> Option<Held> {
         if let Some(h) = back
             && let Some(h) = p.resume(h, out, counters, cancel)
@@ -300,7 +300,7 @@ pub(super) fn orbits(
                 batch = k;
                 starts = p.series_starts::<STARTS>(&offsets[k..]);
             }
-            let given = starts.as_mut().map(|s| s[k - batch].take());
+            let given = starts.as_mut().map(|s| (s[k - batch].0, s[k - batch].1.take()));
             if let Some(h) = p.begin(k, offsets[k], known.map(|m| m[k]), given, out, counters, cancel) {
                 return Some(h);
             }

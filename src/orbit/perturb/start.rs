@@ -87,6 +87,10 @@ pub(in crate::orbit) fn start_fits_f64(
     fits(spacing, -250, 0) && origin.iter().all(|&v| fits(v, -250, 40)) && coefficients().all(|&v| fits(v, -250, 250))
 }
 
+/// A sample's δc and its series start, worked out beside its neighbours'
+/// ([`Perturbation::series_starts`]) for [`Perturbation::start_given`].
+pub(in crate::orbit) type Given = ([FloatExp; 2], Option<Start>);
+
 impl Perturbation {
     /// A sample's starting state (FloatExp), its derivative, and what the derivative adds;
     /// when `skip`, after the view's series where it holds for the sample, else after the
@@ -110,7 +114,7 @@ impl Perturbation {
         offset: [f64; 2],
         known: Option<Model>,
         skip: bool,
-        given: Option<Option<Start>>,
+        given: Option<Given>,
         counters: &mut Counters,
     ) -> (Sample<FloatExp>, Der, FloatExp) {
         let zero = FloatExp::ZERO;
@@ -119,10 +123,12 @@ impl Perturbation {
         // The series first where the view has one; the common steps' polynomial only for a
         // sample whose series bounds fail.
         let series_on = self.series.as_ref().filter(|_| skip);
-        let (d, mut moved) = arithmetic(if series_on.is_some() { None } else { common });
-        let series = match given {
-            Some(given) if series_on.is_some() => given,
-            _ => series_on.and_then(|s| s.start(d, self.spacing, self.derivative)),
+        let (d, mut moved, series) = match given {
+            Some((d, series)) if series_on.is_some() => (d, None, series),
+            _ => {
+                let (d, moved) = arithmetic(if series_on.is_some() { None } else { common });
+                (d, moved, series_on.and_then(|s| s.start(d, self.spacing, self.derivative)))
+            }
         };
         if series_on.is_some() && series.is_none() && common.is_some() {
             moved = arithmetic(common).1;
@@ -190,14 +196,16 @@ impl Perturbation {
         }
     }
 
-    /// The series starts of up to `N` samples at `offsets` (the rest of the `N` unused), for
+    /// The δc and series starts of up to `N` samples at `offsets` (the rest of the `N` unused), for
     /// [`Perturbation::start_given`]: the view's series evaluated for all of them at once
     /// ([`super::Series::starts`]), or None where the view has no series.
-    pub(in crate::orbit) fn series_starts<const N: usize>(&self, offsets: &[[f64; 2]]) -> Option<[Option<Start>; N]> {
+    pub(in crate::orbit) fn series_starts<const N: usize>(&self, offsets: &[[f64; 2]]) -> Option<[Given; N]> {
         let series = self.series.as_ref()?;
         let dc: [[FloatExp; 2]; N] =
             std::array::from_fn(|j| offsets.get(j).map_or([FloatExp::ZERO; 2], |&o| self.start_arithmetic(o, None).0));
-        Some(series.starts(&dc, self.spacing, self.derivative))
+        let starts = series.starts(&dc, self.spacing, self.derivative);
+        let mut starts = starts.into_iter();
+        Some(dc.map(|d| (d, starts.next().flatten())))
     }
 
     /// True when a sample's start at `offset` may be computed in f64 ([`start_arithmetic`],
